@@ -1,0 +1,187 @@
+//! The communicator layer: every reduction, broadcast and gather of the program goes through the
+//! [`Comm`] trait, so that the same code runs serially ([`SerialComm`], used by unit tests, which
+//! must not initialize MPI) and under `mpirun` ([`MpiComm`]). Branch decisions are taken on
+//! reduced values ([`Comm::agree`]) so that all ranks follow the same path.
+
+use mpi::datatype::PartitionMut;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::error::{Error, Result};
+
+/// Collective operations the solver needs. Every rank must call them in the same order.
+pub trait Comm {
+    fn rank(&self) -> usize;
+    fn size(&self) -> usize;
+    /// Element-wise sum over all ranks, in place.
+    fn sum_f64(&self, v: &mut [f64]);
+    /// Element-wise maximum over all ranks, in place.
+    fn max_f64(&self, v: &mut [f64]);
+    /// Element-wise sum over all ranks, in place.
+    fn sum_u64(&self, v: &mut [u64]);
+    /// Replaces `buf` on every rank by `buf` of `root`.
+    fn broadcast_bytes(&self, root: usize, buf: &mut Vec<u8>);
+    /// The `local` slices of all ranks, in rank order, on `root` (None elsewhere).
+    fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>>;
+    fn barrier(&self);
+    /// Name and version of the MPI library ("serial" without MPI).
+    fn library(&self) -> String;
+
+    fn is_root(&self) -> bool {
+        self.rank() == 0
+    }
+
+    /// Global dot product of distributed vectors.
+    fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
+        let mut s = [a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()];
+        self.sum_f64(&mut s);
+        s[0]
+    }
+
+    /// Global Euclidean norm of a distributed vector.
+    fn norm(&self, a: &[f64]) -> f64 {
+        self.dot(a, a).sqrt()
+    }
+
+    /// Makes a rank-local result collective: if any rank failed, every rank returns the error of
+    /// the lowest failing rank (its message travels to all), so all ranks stop together.
+    fn agree<T>(&self, local: Result<T>) -> Result<T> {
+        let mut failed = vec![0u64; self.size()];
+        failed[self.rank()] = u64::from(local.is_err());
+        self.sum_u64(&mut failed);
+        let Some(first) = failed.iter().position(|&f| f != 0) else {
+            return local;
+        };
+        let mut msg = match &local {
+            Err(e) if self.rank() == first => e.to_string().into_bytes(),
+            _ => Vec::new(),
+        };
+        self.broadcast_bytes(first, &mut msg);
+        match local {
+            Err(e) if self.rank() == first => Err(e),
+            _ => Err(Error::Remote(String::from_utf8_lossy(&msg).into_owned())),
+        }
+    }
+}
+
+/// One process, no MPI.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SerialComm;
+
+impl Comm for SerialComm {
+    fn rank(&self) -> usize {
+        0
+    }
+    fn size(&self) -> usize {
+        1
+    }
+    fn sum_f64(&self, _: &mut [f64]) {}
+    fn max_f64(&self, _: &mut [f64]) {}
+    fn sum_u64(&self, _: &mut [u64]) {}
+    fn broadcast_bytes(&self, _: usize, _: &mut Vec<u8>) {}
+    fn gather_f64(&self, _: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
+        Some(vec![local.to_vec()])
+    }
+    fn barrier(&self) {}
+    fn library(&self) -> String {
+        "serial".into()
+    }
+}
+
+/// MPI through rsmpi.
+pub struct MpiComm {
+    world: SimpleCommunicator,
+}
+
+impl MpiComm {
+    pub fn new(world: SimpleCommunicator) -> Self {
+        MpiComm { world }
+    }
+
+    pub fn raw(&self) -> &SimpleCommunicator {
+        &self.world
+    }
+}
+
+impl Comm for MpiComm {
+    fn rank(&self) -> usize {
+        self.world.rank() as usize
+    }
+    fn size(&self) -> usize {
+        self.world.size() as usize
+    }
+    fn sum_f64(&self, v: &mut [f64]) {
+        let send = v.to_vec();
+        self.world.all_reduce_into(&send[..], v, mpi::collective::SystemOperation::sum());
+    }
+    fn max_f64(&self, v: &mut [f64]) {
+        let send = v.to_vec();
+        self.world.all_reduce_into(&send[..], v, mpi::collective::SystemOperation::max());
+    }
+    fn sum_u64(&self, v: &mut [u64]) {
+        let send = v.to_vec();
+        self.world.all_reduce_into(&send[..], v, mpi::collective::SystemOperation::sum());
+    }
+    fn broadcast_bytes(&self, root: usize, buf: &mut Vec<u8>) {
+        let root = self.world.process_at_rank(root as i32);
+        let mut len = [buf.len() as u64];
+        root.broadcast_into(&mut len[..]);
+        buf.resize(len[0] as usize, 0);
+        root.broadcast_into(&mut buf[..]);
+    }
+    fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
+        let r = self.world.process_at_rank(root as i32);
+        let count = [local.len() as i32];
+        if self.rank() == root {
+            let mut counts = vec![0i32; self.size()];
+            r.gather_into_root(&count[..], &mut counts[..]);
+            let displs: Vec<i32> = counts
+                .iter()
+                .scan(0, |acc, &c| {
+                    let d = *acc;
+                    *acc += c;
+                    Some(d)
+                })
+                .collect();
+            let total: i32 = counts.iter().sum();
+            let mut all = vec![0.0; total as usize];
+            {
+                let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+                r.gather_varcount_into_root(local, &mut part);
+            }
+            Some(
+                counts
+                    .iter()
+                    .zip(&displs)
+                    .map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec())
+                    .collect(),
+            )
+        } else {
+            r.gather_into(&count[..]);
+            r.gather_varcount_into(local);
+            None
+        }
+    }
+    fn barrier(&self) {
+        self.world.barrier();
+    }
+    fn library(&self) -> String {
+        mpi::environment::library_version()
+            .map(|s| s.trim_end_matches('\0').trim().lines().next().unwrap_or("").to_string())
+            .unwrap_or_else(|_| "MPI (unknown version)".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn serial_agree_passes_errors_through() {
+        let c = SerialComm;
+        assert_eq!(c.agree(Ok(3)).unwrap(), 3);
+        let e = c.agree::<()>(Err(Error::scene("a.b", "bad"))).unwrap_err();
+        assert_eq!(e.to_string(), "a.b: bad");
+        assert_eq!(c.dot(&[1.0, 2.0], &[3.0, 4.0]), 11.0);
+    }
+}

@@ -1,0 +1,50 @@
+//! The crate's typed error. Every failure a user can cause or meet ends up here, with a
+//! one-line message naming the offending key, file or phase.
+
+/// Everything that can go wrong, from reading a scene to writing the result.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene or mesh file that does not parse (`file: line:col: message`).
+    #[error("{file}: {msg}")]
+    Parse { file: String, msg: String },
+    /// A scene value that parses but is not allowed; `key` is the dotted path.
+    #[error("{key}: {msg}")]
+    Scene { key: String, msg: String },
+    /// A mesh file that is readable but unusable.
+    #[error("{file}: {msg}")]
+    Mesh { file: String, msg: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Numerical failure (factorization breakdown, NaN, no convergence), with the reason.
+    #[error("{what}: {reason}")]
+    Numerical { what: String, reason: String },
+    #[error("output {path}: {msg}")]
+    Output { path: String, msg: String },
+    /// An error raised on another MPI rank, forwarded so that every rank stops with it.
+    #[error("{0}")]
+    Remote(String),
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub fn scene(key: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Scene { key: key.into(), msg: msg.into() }
+    }
+    pub fn mesh(file: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Mesh { file: file.into(), msg: msg.into() }
+    }
+    pub fn io(path: impl Into<String>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+    pub fn numerical(what: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Numerical { what: what.into(), reason: reason.into() }
+    }
+    pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Output { path: path.into(), msg: msg.into() }
+    }
+}

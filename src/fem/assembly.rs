@@ -1,0 +1,207 @@
+//! Sparse assembly of one body's stiffness K into the lower triangle of a [`SymCsc`], with
+//! Dirichlet DOFs eliminated (their prescribed values are lifted into the right-hand side at the
+//! element level), and consistent face loads.
+
+use std::ops::Range;
+
+use super::element::{hex8_stiffness, hex_min_jacobian, quad4_nodal_areas};
+use super::material::Lame;
+use crate::error::{Error, Result};
+use crate::linalg::sparse::SymCsc;
+use crate::mesh::{Face, Mesh};
+
+/// Marks a constrained DOF in [`DofMap::free`].
+pub const FIXED: usize = usize::MAX;
+
+/// Numbering of the free DOFs of a set of nodes: node-major, component-minor; constrained DOFs
+/// carry their prescribed value.
+#[derive(Clone, Debug)]
+pub struct DofMap {
+    /// Global node range covered (one body).
+    pub nodes: Range<usize>,
+    /// Local DOF `3·(node − nodes.start) + c` → free index, or [`FIXED`].
+    pub free: Vec<usize>,
+    /// Prescribed value of every local DOF (0 where free).
+    pub prescribed: Vec<f64>,
+    pub nfree: usize,
+}
+
+impl DofMap {
+    /// `constraints`: (global node, component, value); a later entry for the same DOF wins.
+    pub fn new(nodes: Range<usize>, constraints: &[(usize, usize, f64)]) -> Self {
+        let nd = 3 * nodes.len();
+        let mut fixed = vec![false; nd];
+        let mut prescribed = vec![0.0; nd];
+        for &(v, c, val) in constraints {
+            if nodes.contains(&v) {
+                let d = 3 * (v - nodes.start) + c;
+                fixed[d] = true;
+                prescribed[d] = val;
+            }
+        }
+        let mut free = vec![FIXED; nd];
+        let mut nfree = 0;
+        for d in 0..nd {
+            if !fixed[d] {
+                free[d] = nfree;
+                nfree += 1;
+            }
+        }
+        DofMap { nodes, free, prescribed, nfree }
+    }
+
+    /// Local DOF of global node `v`, component `c`.
+    #[inline]
+    pub fn local(&self, v: usize, c: usize) -> usize {
+        3 * (v - self.nodes.start) + c
+    }
+
+    /// Free indices of the three DOFs of global node `v`.
+    pub fn node_dofs(&self, v: usize) -> [Option<usize>; 3] {
+        [0, 1, 2].map(|c| Some(self.free[self.local(v, c)]).filter(|&d| d != FIXED))
+    }
+
+    /// Nodal displacements of the body from the free values.
+    pub fn expand(&self, x: &[f64]) -> Vec<[f64; 3]> {
+        (0..self.nodes.len())
+            .map(|v| {
+                [0, 1, 2].map(|c| {
+                    let d = 3 * v + c;
+                    if self.free[d] == FIXED { self.prescribed[d] } else { x[self.free[d]] }
+                })
+            })
+            .collect()
+    }
+
+    /// Restriction of a full local DOF vector to the free DOFs.
+    pub fn restrict(&self, full: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.nfree];
+        for (d, &f) in self.free.iter().enumerate() {
+            if f != FIXED {
+                out[f] = full[d];
+            }
+        }
+        out
+    }
+}
+
+/// Node adjacency of the elements `elems` in local node numbering (CSR, sorted, without the
+/// node itself).
+pub fn node_graph(hexes: &[[usize; 8]], elems: Range<usize>, nodes: &Range<usize>) -> (Vec<usize>, Vec<usize>) {
+    let nn = nodes.len();
+    let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); nn];
+    for e in elems {
+        let h = hexes[e];
+        for &a in &h {
+            let la = a - nodes.start;
+            for &b in &h {
+                if a != b {
+                    nbr[la].push((b - nodes.start) as u32);
+                }
+            }
+        }
+    }
+    let mut xadj = Vec::with_capacity(nn + 1);
+    let mut adj = Vec::new();
+    xadj.push(0);
+    for list in &mut nbr {
+        list.sort_unstable();
+        list.dedup();
+        adj.extend(list.iter().map(|&v| v as usize));
+        xadj.push(adj.len());
+    }
+    (xadj, adj)
+}
+
+/// One body's assembled system K_ff u_f = f_f.
+pub struct BodySystem {
+    pub k: SymCsc,
+    pub f: Vec<f64>,
+    /// Node adjacency (local numbering), for the fill-reducing ordering.
+    pub graph: (Vec<usize>, Vec<usize>),
+}
+
+/// Assembles the free-DOF stiffness of body `body` and the right-hand side
+/// `f_f = loads_f − K_fc u_c`; `loads` holds nodal forces per local DOF (those on constrained
+/// DOFs are dropped).
+pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Result<BodySystem> {
+    let b = &mesh.bodies[body];
+    let (xadj, adj) = node_graph(&mesh.hexes, b.elems.clone(), &b.nodes);
+    // pattern: column of free DOF (v, c) holds free DOFs of v (components ≥ c) and of every
+    // neighbour w > v, all three components — node-major numbering makes them sorted.
+    let mut col_ptr = Vec::with_capacity(dofs.nfree + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for v in 0..b.nodes.len() {
+        for c in 0..3 {
+            let j = dofs.free[3 * v + c];
+            if j == FIXED {
+                continue;
+            }
+            for cc in c..3 {
+                let i = dofs.free[3 * v + cc];
+                if i != FIXED {
+                    row_idx.push(i);
+                }
+            }
+            for &w in adj[xadj[v]..xadj[v + 1]].iter().filter(|&&w| w > v) {
+                for cc in 0..3 {
+                    let i = dofs.free[3 * w + cc];
+                    if i != FIXED {
+                        row_idx.push(i);
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    let mut k = SymCsc::from_pattern(dofs.nfree, col_ptr, row_idx);
+    let mut f = dofs.restrict(loads);
+    for e in b.elems.clone() {
+        let x = mesh.hex_coords(e);
+        if hex_min_jacobian(&x) <= 0.0 {
+            return Err(Error::mesh(
+                format!("body {}", b.name),
+                format!("element {} is inverted or degenerate (non-positive Jacobian)", e - b.elems.start),
+            ));
+        }
+        let ke = hex8_stiffness(&x, lame);
+        let ld: [usize; 24] = std::array::from_fn(|r| dofs.local(mesh.hexes[e][r / 3], r % 3));
+        for q in 0..24 {
+            let j = dofs.free[ld[q]];
+            if j == FIXED {
+                let uc = dofs.prescribed[ld[q]];
+                if uc != 0.0 {
+                    for p in 0..24 {
+                        let i = dofs.free[ld[p]];
+                        if i != FIXED {
+                            f[i] -= ke[p][q] * uc;
+                        }
+                    }
+                }
+                continue;
+            }
+            for p in 0..24 {
+                let i = dofs.free[ld[p]];
+                if i != FIXED && i >= j {
+                    let pos = k.position(i, j).expect("assembly pattern covers every element entry");
+                    k.values[pos] += ke[p][q];
+                }
+            }
+        }
+    }
+    Ok(BodySystem { k, f, graph: (xadj, adj) })
+}
+
+/// Consistent nodal forces of a uniform traction `p` on `face` (2×2 Gauss per quad), added into
+/// `loads` (per local DOF of the body that starts at node `node0`).
+pub fn add_traction(mesh: &Mesh, face: &Face, p: [f64; 3], node0: usize, loads: &mut [f64]) {
+    for q in &face.quads {
+        let w = quad4_nodal_areas(&mesh.quad_coords(q));
+        for (a, &v) in q.nodes.iter().enumerate() {
+            for c in 0..3 {
+                loads[3 * (v - node0) + c] += w[a] * p[c];
+            }
+        }
+    }
+}

@@ -1,0 +1,6 @@
+//! Finite elements: the hex8 kernels (pure functions), the isotropic material, and the sparse
+//! assembly of one body's stiffness with Dirichlet elimination.
+
+pub mod assembly;
+pub mod element;
+pub mod material;

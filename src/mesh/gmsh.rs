@@ -1,0 +1,856 @@
+//! Gmsh 4.1 importer: reads one body (a physical volume, or every hexahedron) of an ASCII or
+//! binary `.msh` file into a [`BodyGeometry`], with one named face per named physical surface.
+//!
+//! `mshio` parses the `$Entities`, `$Nodes` and `$Elements` sections. Two small pieces are read
+//! here directly, because `mshio` drops them: the `$PhysicalNames` section, and the node tags
+//! (which `mshio` discards whenever they are contiguous, although their order still matters).
+//! Hexahedra are checked corner by corner and consistently inverted ones are reordered.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::Path;
+
+use mshio::{ElementType, MshFile, MshParserError};
+
+use super::topology::{boundary_faces, find_boundary_quad};
+use super::{BodyGeometry, FaceQuad};
+use crate::error::{Error, Result};
+
+/// Prefix of every message about a file that cannot be parsed at all.
+const UNREADABLE: &str = "not a readable Gmsh 4.1 mesh";
+
+/// Reads the hexahedra of physical volume `volume` (all hexahedra when `None`) from the Gmsh 4.1
+/// file `path`, in a compact local numbering that keeps the file's node order.
+///
+/// Every named physical surface (named by its number when it has no name) becomes a face made of
+/// the file's 4-node quadrangles that lie on the boundary of the kept hexahedra, each oriented
+/// outward of its element; surfaces with no such quadrangle are left out.
+pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(&file, e))?;
+    parse(&bytes, volume).map_err(|msg| Error::mesh(file, msg))
+}
+
+/// Everything but the file access; errors are one-line messages.
+fn parse(bytes: &[u8], volume: Option<&str>) -> Result<BodyGeometry, String> {
+    let encoding = check_header(bytes)?;
+    // mshio still has a few `unimplemented!`/overflow paths on malformed input: never let them
+    // escape as a panic.
+    let msh = std::panic::catch_unwind(|| {
+        mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e))
+    })
+    .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
+    let names = physical_names(bytes)?;
+    let tags = node_tags(bytes, encoding, &msh)?;
+    build(&msh, &names, &tags, volume)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Header, physical names and node tags (read here, not by mshio)
+
+/// How the file stores numbers, from its `$MeshFormat` header.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Encoding {
+    Ascii,
+    Binary { size_t: usize, big_endian: bool },
+}
+
+/// Checks the `$MeshFormat` header before mshio sees the file, for a clear message on other
+/// versions and for binary word sizes that mshio would panic on.
+fn check_header(bytes: &[u8]) -> Result<Encoding, String> {
+    let mut lines = bytes.split(|&b| b == b'\n');
+    let first = lines.next().unwrap_or_default();
+    if first.strip_suffix(b"\r").unwrap_or(first) != b"$MeshFormat" {
+        return Err(format!("{UNREADABLE}: it does not start with $MeshFormat"));
+    }
+    let line = lines.next().unwrap_or_default();
+    let fields: Vec<&str> = std::str::from_utf8(line)
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
+    match fields.as_slice() {
+        ["4.1", "0", _] => Ok(Encoding::Ascii),
+        ["4.1", "1", size @ ("1" | "2" | "4" | "8" | "16")] => {
+            // The header line is followed by the binary int 1, which tells the byte order.
+            let at = first.len() + 1 + line.len() + 1;
+            let one = bytes
+                .get(at..at + 4)
+                .ok_or_else(|| format!("{UNREADABLE}: truncated $MeshFormat header"))?;
+            Ok(Encoding::Binary {
+                size_t: size.parse().unwrap_or(8),
+                big_endian: one == [0, 0, 0, 1],
+            })
+        }
+        [version, ..] if *version != "4.1" => Err(format!(
+            "{UNREADABLE}: format version {}, re-export it with `-format msh41`",
+            version.chars().take(10).collect::<String>()
+        )),
+        _ => Err(format!("{UNREADABLE}: malformed $MeshFormat header")),
+    }
+}
+
+/// One line from a mshio error: what failed, inside which sections and blocks, and where.
+fn describe(bytes: &[u8], encoding: Encoding, err: &MshParserError<&[u8]>) -> String {
+    use mshio::error::MshParserErrorKind as K;
+    let trace = err.filtered_backtrace();
+    let what = trace.iter().find_map(|(_, kind)| match kind {
+        K::UnsupportedMshVersion => Some("unsupported format version".to_string()),
+        K::UnsupportedTypeSize(ty, n) => {
+            Some(format!("unsupported size {n} of binary {ty} values"))
+        }
+        K::InvalidFileHeader => Some("invalid $MeshFormat header".to_string()),
+        K::InvalidSectionHeader => Some("expected the start of a section".to_string()),
+        K::UnknownElement => Some("unknown element type".to_string()),
+        K::TooManyEntities => Some("too many entities".to_string()),
+        K::ValueOutOfRange(ty) => Some(format!("{ty} value out of range")),
+        K::InvalidTag => Some("invalid tag".to_string()),
+        K::InvalidParameter => Some("invalid parameter".to_string()),
+        K::InvalidElementDefinition => Some("invalid element definition".to_string()),
+        K::InvalidNodeDefinition => Some("invalid node definition".to_string()),
+        K::Unimplemented => Some("unsupported feature".to_string()),
+        K::Context(_) | K::NomError(_) => None,
+    });
+    // Outermost first: section, block, item (mshio's "Expected N ..." notes only repeat counts).
+    let contexts: Vec<&str> = trace
+        .iter()
+        .rev()
+        .filter_map(|(_, k)| k.context())
+        .filter(|c| !c.starts_with("Expected "))
+        .collect();
+    let rest = trace
+        .first()
+        .or(err.backtrace.first())
+        .map_or(&[][..], |(rest, _)| *rest);
+    let place = if rest.is_empty() {
+        "at the end of the file".to_string()
+    } else {
+        let offset = bytes.len().saturating_sub(rest.len());
+        match encoding {
+            Encoding::Ascii => format!(
+                "line {}",
+                bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1
+            ),
+            Encoding::Binary { .. } => format!("byte {offset}"),
+        }
+    };
+    let what = what.unwrap_or_else(|| {
+        if rest.is_empty() {
+            "unexpected end of file".to_string()
+        } else {
+            "unexpected content".to_string()
+        }
+    });
+    if contexts.is_empty() {
+        format!("{UNREADABLE}: {what} ({place})")
+    } else {
+        format!("{UNREADABLE}: {what} in {} ({place})", contexts.join(" > "))
+    }
+}
+
+/// Offset just past the line `$name` (a section start), if the file has that section.
+fn section_start(bytes: &[u8], name: &str) -> Option<usize> {
+    let tag = format!("${name}");
+    let tag = tag.as_bytes();
+    let mut from = 0;
+    while let Some(pos) = bytes[from..].windows(tag.len()).position(|w| w == tag) {
+        let at = from + pos;
+        let end = at + tag.len();
+        let line_start = at == 0 || bytes[at - 1] == b'\n';
+        let rest = &bytes[end..];
+        let eol = if rest.starts_with(b"\r\n") {
+            Some(2)
+        } else if rest.starts_with(b"\n") {
+            Some(1)
+        } else {
+            None
+        };
+        if let (true, Some(eol)) = (line_start, eol) {
+            return Some(end + eol);
+        }
+        from = at + 1;
+    }
+    None
+}
+
+/// `(dim, tag) -> name` from the `$PhysicalNames` section; empty when the section is absent.
+fn physical_names(bytes: &[u8]) -> Result<HashMap<(i32, i32), String>, String> {
+    let mut names = HashMap::new();
+    let Some(start) = section_start(bytes, "PhysicalNames") else {
+        return Ok(names);
+    };
+    let bad = |what: &str| format!("{UNREADABLE}: malformed $PhysicalNames section ({what})");
+    let mut lines = bytes[start..]
+        .split(|&b| b == b'\n')
+        .map(|l| String::from_utf8_lossy(l).trim().to_string());
+    let count: usize = lines
+        .next()
+        .and_then(|l| l.parse().ok())
+        .ok_or_else(|| bad("no count"))?;
+    for i in 0..count {
+        let line = lines.next().unwrap_or_default();
+        let parsed = (|| {
+            let mut it = line.splitn(3, char::is_whitespace);
+            let dim: i32 = it.next()?.parse().ok()?;
+            let tag: i32 = it.next()?.trim().parse().ok()?;
+            let name = it.next()?.trim().strip_prefix('"')?.strip_suffix('"')?;
+            Some(((dim, tag), name.to_string()))
+        })();
+        let (key, name) = parsed.ok_or_else(|| bad(&format!("entry {} of {count}", i + 1)))?;
+        names.insert(key, name);
+    }
+    if lines.next().as_deref() != Some("$EndPhysicalNames") {
+        return Err(bad("missing $EndPhysicalNames"));
+    }
+    Ok(names)
+}
+
+/// The node tags of the `$Nodes` section in file order (one per node of mshio's node blocks).
+fn node_tags(
+    bytes: &[u8],
+    encoding: Encoding,
+    msh: &MshFile<u64, i32, f64>,
+) -> Result<Vec<u64>, String> {
+    let Some(nodes) = &msh.data.nodes else {
+        return Ok(Vec::new());
+    };
+    let bad = || format!("{UNREADABLE}: malformed $Nodes section");
+    let start = section_start(bytes, "Nodes").ok_or_else(bad)?;
+    let sizes: Vec<usize> = nodes.node_blocks.iter().map(|b| b.nodes.len()).collect();
+    let tags = match encoding {
+        Encoding::Ascii => ascii_node_tags(&bytes[start..], &sizes),
+        Encoding::Binary { size_t, big_endian } => {
+            binary_node_tags(&bytes[start..], &sizes, size_t, big_endian)
+        }
+    };
+    tags.ok_or_else(bad)
+}
+
+fn ascii_node_tags(text: &[u8], sizes: &[usize]) -> Option<Vec<u64>> {
+    let mut tokens = text
+        .split(|b| b.is_ascii_whitespace())
+        .filter(|t| !t.is_empty());
+    let num = |t: &[u8]| -> Option<u64> { std::str::from_utf8(t).ok()?.parse().ok() };
+    if num(tokens.next()?)? != sizes.len() as u64 {
+        return None;
+    }
+    for _ in 0..3 {
+        tokens.next()?; // total nodes, min and max tag
+    }
+    let mut tags = Vec::with_capacity(sizes.iter().sum());
+    for &n in sizes {
+        for _ in 0..3 {
+            tokens.next()?; // entity dim, entity tag, parametric (0: mshio rejects parametric nodes)
+        }
+        if num(tokens.next()?)? != n as u64 {
+            return None;
+        }
+        for _ in 0..n {
+            tags.push(num(tokens.next()?)?);
+        }
+        for _ in 0..3 * n {
+            tokens.next()?;
+        }
+    }
+    Some(tags)
+}
+
+fn binary_node_tags(
+    data: &[u8],
+    sizes: &[usize],
+    size_t: usize,
+    big_endian: bool,
+) -> Option<Vec<u64>> {
+    let mut pos = 0usize;
+    let mut take = |len: usize| -> Option<&[u8]> {
+        let s = data.get(pos..pos.checked_add(len)?)?;
+        pos += len;
+        Some(s)
+    };
+    let word = |b: &[u8]| -> Option<u64> {
+        let mut buf = [0u8; 16];
+        let n = b.len();
+        if big_endian {
+            buf[16 - n..].copy_from_slice(b);
+            u64::try_from(u128::from_be_bytes(buf)).ok()
+        } else {
+            buf[..n].copy_from_slice(b);
+            u64::try_from(u128::from_le_bytes(buf)).ok()
+        }
+    };
+    if size_t > 16 || word(take(size_t)?)? != sizes.len() as u64 {
+        return None;
+    }
+    take(3 * size_t)?;
+    let mut tags = Vec::with_capacity(sizes.iter().sum());
+    for &n in sizes {
+        take(12)?; // entity dim, entity tag, parametric: 3 ints
+        if word(take(size_t)?)? != n as u64 {
+            return None;
+        }
+        for _ in 0..n {
+            tags.push(word(take(size_t)?)?);
+        }
+        take(n.checked_mul(24)?)?;
+    }
+    Some(tags)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Assembling the body
+
+/// A physical group's display name: its `$PhysicalNames` entry, or its number.
+fn group_name(names: &HashMap<(i32, i32), String>, dim: i32, tag: i32) -> String {
+    names
+        .get(&(dim, tag))
+        .cloned()
+        .unwrap_or_else(|| tag.to_string())
+}
+
+/// `"Hex8: 54, Qua4: 18"`, by element type number.
+fn type_counts(counts: &HashMap<ElementType, usize>) -> String {
+    let mut v: Vec<(ElementType, usize)> = counts.iter().map(|(&t, &c)| (t, c)).collect();
+    v.sort_by_key(|(t, _)| *t as i32);
+    if v.is_empty() {
+        return "no elements".to_string();
+    }
+    v.iter()
+        .map(|(t, c)| format!("{t:?}: {c}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn build(
+    msh: &MshFile<u64, i32, f64>,
+    names: &HashMap<(i32, i32), String>,
+    tags: &[u64],
+    volume: Option<&str>,
+) -> Result<BodyGeometry, String> {
+    let entities = msh.data.entities.as_ref();
+    let surfaces = entities.map_or(&[][..], |e| e.surfaces.as_slice());
+    let volumes = entities.map_or(&[][..], |e| e.volumes.as_slice());
+    let surf_groups: HashMap<i32, &[i32]> = surfaces
+        .iter()
+        .map(|s| (s.tag, s.physical_tags.as_slice()))
+        .collect();
+    let vol_groups: HashMap<i32, &[i32]> = volumes
+        .iter()
+        .map(|v| (v.tag, v.physical_tags.as_slice()))
+        .collect();
+
+    // Which volume entities make up the body.
+    let selected: Option<HashSet<i32>> = match volume {
+        None => None,
+        Some(name) => {
+            let mut known: BTreeMap<i32, String> = names
+                .iter()
+                .filter(|((d, _), _)| *d == 3)
+                .map(|((_, t), n)| (*t, n.clone()))
+                .collect();
+            for v in volumes {
+                for &t in &v.physical_tags {
+                    known.entry(t).or_insert_with(|| group_name(names, 3, t));
+                }
+            }
+            let wanted: HashSet<i32> = known
+                .iter()
+                .filter(|(_, n)| n.as_str() == name)
+                .map(|(t, _)| *t)
+                .collect();
+            if wanted.is_empty() {
+                let list: Vec<String> = known.values().map(|n| format!("\"{n}\"")).collect();
+                let list = if list.is_empty() {
+                    "none".to_string()
+                } else {
+                    list.join(", ")
+                };
+                return Err(format!(
+                    "no physical volume named \"{name}\" (known: {list})"
+                ));
+            }
+            Some(
+                vol_groups
+                    .iter()
+                    .filter(|(_, g)| g.iter().any(|t| wanted.contains(t)))
+                    .map(|(&e, _)| e)
+                    .collect(),
+            )
+        }
+    };
+    let in_body = |entity: i32| selected.as_ref().is_none_or(|s| s.contains(&entity));
+
+    // Elements: hexahedra of the body, other 3D types for the diagnostics, and quadrangles.
+    let mut all_counts: HashMap<ElementType, usize> = HashMap::new();
+    let mut body_3d: HashMap<ElementType, usize> = HashMap::new();
+    let mut hex_tags: Vec<(u64, &[u64])> = Vec::new();
+    let mut quads: HashMap<i32, Vec<&[u64]>> = HashMap::new();
+    for block in msh.data.elements.iter().flat_map(|e| &e.element_blocks) {
+        *all_counts.entry(block.element_type).or_default() += block.elements.len();
+        if block.entity_dim == 3 && in_body(block.entity_tag) {
+            *body_3d.entry(block.element_type).or_default() += block.elements.len();
+            if block.element_type == ElementType::Hex8 {
+                hex_tags.extend(
+                    block
+                        .elements
+                        .iter()
+                        .map(|e| (e.element_tag, e.nodes.as_slice())),
+                );
+            }
+        } else if block.entity_dim == 2 && block.element_type == ElementType::Qua4 {
+            quads
+                .entry(block.entity_tag)
+                .or_default()
+                .extend(block.elements.iter().map(|e| e.nodes.as_slice()));
+        }
+    }
+    let body = match volume {
+        Some(name) => format!("physical volume \"{name}\""),
+        None => "the file".to_string(),
+    };
+    if hex_tags.is_empty() {
+        let found = if volume.is_some() {
+            type_counts(&body_3d)
+        } else {
+            type_counts(&all_counts)
+        };
+        let what = if volume.is_some() {
+            format!("{body} contains")
+        } else {
+            "contains".to_string()
+        };
+        return Err(format!("{what} no 8-node hexahedra (found: {found})"));
+    }
+    body_3d.remove(&ElementType::Hex8);
+    if !body_3d.is_empty() {
+        return Err(format!(
+            "{body} mixes 8-node hexahedra with other 3D elements ({}); only hex8 meshes are supported",
+            type_counts(&body_3d)
+        ));
+    }
+
+    // Nodes: file index of every tag, then a compact numbering of the used ones in file order.
+    let coords: Vec<[f64; 3]> = msh
+        .data
+        .nodes
+        .iter()
+        .flat_map(|n| &n.node_blocks)
+        .flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z]))
+        .collect();
+    if coords.len() != tags.len() {
+        return Err(format!("{UNREADABLE}: malformed $Nodes section"));
+    }
+    let index: HashMap<u64, usize> = tags.iter().enumerate().map(|(i, &t)| (t, i)).collect();
+    let mut file_hexes = Vec::with_capacity(hex_tags.len());
+    let mut used = vec![false; coords.len()];
+    for &(etag, nodes) in &hex_tags {
+        let mut h = [0usize; 8];
+        for (slot, t) in h.iter_mut().zip(nodes) {
+            *slot = *index.get(t).ok_or_else(|| {
+                format!("hexahedron {etag} refers to node {t}, which is not in $Nodes")
+            })?;
+            used[*slot] = true;
+        }
+        file_hexes.push(h);
+    }
+    let mut local = vec![usize::MAX; coords.len()];
+    let mut nodes = Vec::new();
+    for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
+        local[i] = nodes.len();
+        nodes.push(*p);
+    }
+    let mut hexes: Vec<[usize; 8]> = file_hexes.iter().map(|h| h.map(|i| local[i])).collect();
+
+    // Orientation.
+    for (h, &(etag, _)) in hexes.iter_mut().zip(&hex_tags) {
+        let j = corner_jacobians(&h.map(|v| nodes[v]));
+        if j.iter().all(|&d| d > 0.0) {
+            continue;
+        }
+        if j.iter().all(|&d| d < 0.0) {
+            h.swap(1, 3);
+            h.swap(5, 7);
+        } else {
+            return Err(format!(
+                "hexahedron {etag} is degenerate or twisted (its corner Jacobians do not share one sign)"
+            ));
+        }
+    }
+
+    // Faces: named physical surfaces, in tag order, merged by name.
+    let boundary = boundary_faces(&hexes);
+    let mut groups: BTreeMap<i32, Vec<i32>> = BTreeMap::new(); // group -> surface entities
+    for ((d, t), _) in names.iter() {
+        if *d == 2 {
+            groups.entry(*t).or_default();
+        }
+    }
+    let mut entities: Vec<(&i32, &&[i32])> = surf_groups.iter().collect();
+    entities.sort_unstable();
+    for (&s, g) in entities {
+        for &t in g.iter() {
+            groups.entry(t).or_default().push(s);
+        }
+    }
+    let mut faces: Vec<(String, Vec<FaceQuad>)> = Vec::new();
+    for (tag, ents) in groups {
+        let name = group_name(names, 2, tag);
+        let mut seen: HashSet<(usize, [usize; 4])> = HashSet::new();
+        let mut list: Vec<FaceQuad> = Vec::new();
+        for q in ents.iter().filter_map(|s| quads.get(s)).flatten() {
+            let Some(loc) = quad_local(q, &index, &local) else {
+                continue;
+            };
+            if let Some(fq) = find_boundary_quad(&boundary, loc) {
+                if seen.insert((fq.elem, fq.nodes)) {
+                    list.push(fq.clone());
+                }
+            }
+        }
+        if list.is_empty() {
+            continue;
+        }
+        match faces.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, existing)) => {
+                for fq in list {
+                    if !existing.contains(&fq) {
+                        existing.push(fq);
+                    }
+                }
+            }
+            None => faces.push((name, list)),
+        }
+    }
+    Ok(BodyGeometry {
+        nodes,
+        hexes,
+        faces,
+    })
+}
+
+/// Local nodes of a file quadrangle, or `None` if one of them is not a node of the body.
+fn quad_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Option<[usize; 4]> {
+    let mut out = [0usize; 4];
+    for (o, t) in out.iter_mut().zip(q) {
+        let l = *local.get(*index.get(t)?)?;
+        if l == usize::MAX {
+            return None;
+        }
+        *o = l;
+    }
+    Some(out)
+}
+
+/// Scaled Jacobian at the eight corners of a hex8 (VTK order): the triple product of the three
+/// edges leaving the corner along +ξ, +η, +ζ, divided by the product of their lengths; values
+/// within 1e-12 of zero count as zero.
+fn corner_jacobians(p: &[[f64; 3]; 8]) -> [f64; 8] {
+    // For each corner: its neighbours along ξ, η, ζ and whether the corner sits at the + end of
+    // that direction (then the edge points backwards and its sign flips).
+    const NEIGHBOURS: [[usize; 3]; 8] = [
+        [1, 3, 4],
+        [0, 2, 5],
+        [3, 1, 6],
+        [2, 0, 7],
+        [5, 7, 0],
+        [4, 6, 1],
+        [7, 5, 2],
+        [6, 4, 3],
+    ];
+    const FLIPS: [usize; 8] = [0, 1, 2, 1, 1, 2, 3, 2];
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let mut out = [0.0; 8];
+    for (c, o) in out.iter_mut().enumerate() {
+        let [a, b, d] = NEIGHBOURS[c].map(|n| sub(p[n], p[c]));
+        let det = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0])
+            + a[2] * (b[0] * d[1] - b[1] * d[0]);
+        let scale = norm(a) * norm(b) * norm(d);
+        let s = if scale > 0.0 { det / scale } else { 0.0 };
+        let s = if FLIPS[c] % 2 == 1 { -s } else { s };
+        *o = if s.abs() <= 1e-12 || !s.is_finite() {
+            0.0
+        } else {
+            s
+        };
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mesh_file(name: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("mesh")
+            .join(name)
+    }
+
+    fn normal(g: &BodyGeometry, q: &[usize; 4]) -> [f64; 3] {
+        let p = q.map(|v| g.nodes[v]);
+        let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+        let b = [p[3][0] - p[0][0], p[3][1] - p[0][1], p[3][2] - p[0][2]];
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+
+    /// Checks face `name`: `count` quads, each normal along `sign * e_axis`, each a face of its element.
+    fn check_face(g: &BodyGeometry, name: &str, count: usize, axis: usize, sign: f64) {
+        let (_, quads) = g
+            .faces
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("no face {name}"));
+        assert_eq!(quads.len(), count, "{name}");
+        for q in quads {
+            let n = normal(g, &q.nodes);
+            assert!(n[axis] * sign > 0.0, "{name}: quad not outward");
+            assert!(
+                n[(axis + 1) % 3].abs() < 1e-12 && n[(axis + 2) % 3].abs() < 1e-12,
+                "{name}"
+            );
+            assert!(
+                q.nodes.iter().all(|v| g.hexes[q.elem].contains(v)),
+                "{name}: quad not on its element"
+            );
+        }
+    }
+
+    fn check_body(g: &BodyGeometry, zmin: f64) {
+        assert_eq!(g.nodes.len(), 7 * 4 * 4);
+        assert_eq!(g.hexes.len(), 54);
+        for p in &g.nodes {
+            assert!(
+                (0.0..=2.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]),
+                "{p:?}"
+            );
+            assert!((zmin..=zmin + 1.0).contains(&p[2]), "{p:?}");
+        }
+        for h in &g.hexes {
+            assert!(corner_jacobians(&h.map(|v| g.nodes[v]))
+                .iter()
+                .all(|&j| j > 0.0));
+        }
+        let mut used = vec![false; g.nodes.len()];
+        g.hexes.iter().flatten().for_each(|&v| used[v] = true);
+        assert!(used.iter().all(|&u| u), "unused node kept");
+    }
+
+    #[test]
+    fn reads_upper_block() {
+        let g = read(&mesh_file("two_blocks.msh"), Some("upper")).expect("upper");
+        check_body(&g, 1.0);
+        let names: Vec<&str> = g.faces.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            ["upper_top", "upper_bottom", "upper_left", "upper_right"]
+        );
+        check_face(&g, "upper_top", 18, 2, 1.0);
+        check_face(&g, "upper_bottom", 18, 2, -1.0);
+        check_face(&g, "upper_left", 9, 0, -1.0);
+        check_face(&g, "upper_right", 9, 0, 1.0);
+    }
+
+    #[test]
+    fn reads_lower_block() {
+        let g = read(&mesh_file("two_blocks.msh"), Some("lower")).expect("lower");
+        check_body(&g, 0.0);
+        let names: Vec<&str> = g.faces.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["lower_top", "lower_left"]);
+        check_face(&g, "lower_top", 18, 2, 1.0);
+        check_face(&g, "lower_left", 9, 0, -1.0);
+    }
+
+    #[test]
+    fn reads_binary_like_ascii() {
+        let a = read(&mesh_file("two_blocks.msh"), Some("upper")).expect("ascii");
+        let b = read(&mesh_file("two_blocks_binary.msh"), Some("upper")).expect("binary");
+        // ASCII files carry 16 significant digits, binary ones the exact doubles.
+        assert_eq!(a.nodes.len(), b.nodes.len());
+        for (p, q) in a.nodes.iter().zip(&b.nodes) {
+            assert!((0..3).all(|d| (p[d] - q[d]).abs() < 1e-14), "{p:?} {q:?}");
+        }
+        assert_eq!(a.hexes, b.hexes);
+        assert_eq!(a.faces.len(), b.faces.len());
+        for (fa, fb) in a.faces.iter().zip(&b.faces) {
+            assert_eq!(fa.0, fb.0);
+            assert_eq!(fa.1, fb.1);
+        }
+    }
+
+    #[test]
+    fn whole_file_without_volume() {
+        let g = read(&mesh_file("two_blocks.msh"), None).expect("all");
+        assert_eq!(g.nodes.len(), 224);
+        assert_eq!(g.hexes.len(), 108);
+        // The blocks do not share nodes, so both sides of the interface are boundary.
+        let names: Vec<&str> = g.faces.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names.len(), 6);
+        check_face(&g, "upper_bottom", 18, 2, -1.0);
+        check_face(&g, "lower_top", 18, 2, 1.0);
+    }
+
+    #[test]
+    fn unknown_volume_lists_known_ones() {
+        let e = read(&mesh_file("two_blocks.msh"), Some("nope"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("\"nope\"") && e.contains("\"upper\"") && e.contains("\"lower\""),
+            "{e}"
+        );
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn tetrahedra_only_is_refused() {
+        let e = read(&mesh_file("tet.msh"), None).unwrap_err().to_string();
+        assert!(
+            e.contains("no 8-node hexahedra") && e.contains("Tet4: 24"),
+            "{e}"
+        );
+        let e = read(&mesh_file("tet.msh"), Some("body"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no 8-node hexahedra") && e.contains("Tet4: 24"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn truncated_file_is_an_error() {
+        let bytes = std::fs::read(mesh_file("two_blocks.msh")).expect("mesh");
+        let dir = std::env::temp_dir();
+        for (i, cut) in [bytes.len() / 2, bytes.len() / 3, 40, 5, 0]
+            .into_iter()
+            .enumerate()
+        {
+            let p = dir.join(format!(
+                "tresca_feti_gmsh_truncated_{}_{i}.msh",
+                std::process::id()
+            ));
+            std::fs::write(&p, &bytes[..cut]).expect("temp file");
+            let r = read(&p, Some("upper"));
+            let _ = std::fs::remove_file(&p);
+            let e = r.unwrap_err();
+            assert!(matches!(e, Error::Mesh { .. }), "{e}");
+            let msg = e.to_string();
+            assert!(!msg.contains('\n') && msg.len() < 300, "{msg}");
+        }
+        let bytes = std::fs::read(mesh_file("two_blocks_binary.msh")).expect("mesh");
+        let p = dir.join(format!(
+            "tresca_feti_gmsh_truncated_bin_{}.msh",
+            std::process::id()
+        ));
+        std::fs::write(&p, &bytes[..bytes.len() / 2]).expect("temp file");
+        let r = read(&p, None);
+        let _ = std::fs::remove_file(&p);
+        let msg = r.unwrap_err().to_string();
+        assert!(msg.contains(UNREADABLE) && !msg.contains('\n'), "{msg}");
+    }
+
+    #[test]
+    fn garbage_and_other_versions_are_errors() {
+        for text in [
+            "hello",
+            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n",
+            "$MeshFormat\n4.1 1 3\n$EndMeshFormat\n",
+        ] {
+            let msg = parse(text.as_bytes(), None).unwrap_err();
+            assert!(msg.starts_with(UNREADABLE) && !msg.contains('\n'), "{msg}");
+        }
+        let garbage = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 x\n$EndNodes\n";
+        let msg = parse(garbage.as_bytes(), None).unwrap_err();
+        assert!(
+            msg.starts_with(UNREADABLE) && msg.contains("line 5"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn missing_file_is_io_error() {
+        let e = read(&mesh_file("does_not_exist.msh"), None).unwrap_err();
+        assert!(matches!(e, Error::Io { .. }), "{e}");
+    }
+
+    /// A single unit hex with one physical surface (its top), no `$PhysicalNames`, its nodes
+    /// listed in the permuted tag order `tags`, and hex connectivity `conn` (as tags).
+    fn one_hex(tags: [u64; 8], conn: [u64; 8], top: [u64; 4]) -> String {
+        let corners = [
+            [0, 0, 0],
+            [1, 0, 0],
+            [1, 1, 0],
+            [0, 1, 0],
+            [0, 0, 1],
+            [1, 0, 1],
+            [1, 1, 1],
+            [0, 1, 1],
+        ];
+        let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 1 1\n");
+        s += "1 0 0 1 1 1 1 1 5 0\n1 0 0 0 1 1 1 1 7 1 1\n$EndEntities\n$Nodes\n1 8 1 8\n3 1 0 8\n";
+        for t in tags {
+            s += &format!("{t}\n");
+        }
+        // Node with tag t sits at corner t-1.
+        for t in tags {
+            let c = corners[(t - 1) as usize];
+            s += &format!("{} {} {}\n", c[0], c[1], c[2]);
+        }
+        s += "$EndNodes\n$Elements\n2 2 1 2\n2 1 3 1\n1";
+        for t in top {
+            s += &format!(" {t}");
+        }
+        s += "\n3 1 5 1\n2";
+        for t in conn {
+            s += &format!(" {t}");
+        }
+        s += "\n$EndElements\n";
+        s
+    }
+
+    #[test]
+    fn permuted_dense_tags_unnamed_groups_and_inverted_hex() {
+        let tags = [3, 1, 2, 8, 7, 4, 5, 6];
+        let good = [1, 2, 3, 4, 5, 6, 7, 8];
+        let text = one_hex(tags, good, [5, 6, 7, 8]);
+        let g = parse(text.as_bytes(), Some("7")).expect("one hex");
+        assert_eq!(g.nodes.len(), 8);
+        // File order kept: local node i is the i-th listed node.
+        for (i, &t) in tags.iter().enumerate() {
+            assert_eq!(
+                g.nodes[i],
+                [
+                    [0., 0., 0.],
+                    [1., 0., 0.],
+                    [1., 1., 0.],
+                    [0., 1., 0.],
+                    [0., 0., 1.],
+                    [1., 0., 1.],
+                    [1., 1., 1.],
+                    [0., 1., 1.]
+                ][(t - 1) as usize]
+            );
+        }
+        assert_eq!(g.faces.len(), 1);
+        check_face(&g, "5", 1, 2, 1.0);
+
+        // Mirrored connectivity (all corner Jacobians negative) is reordered.
+        let mirrored = [1, 4, 3, 2, 5, 8, 7, 6];
+        let g = parse(one_hex(tags, mirrored, [5, 6, 7, 8]).as_bytes(), None).expect("mirrored");
+        assert!(corner_jacobians(&g.hexes[0].map(|v| g.nodes[v]))
+            .iter()
+            .all(|&j| j > 0.0));
+        check_face(&g, "5", 1, 2, 1.0);
+
+        // A twisted hex (two nodes swapped) is refused, naming the element.
+        let twisted = [2, 1, 3, 4, 5, 6, 7, 8];
+        let msg = parse(one_hex(tags, twisted, [5, 6, 7, 8]).as_bytes(), None).unwrap_err();
+        assert!(msg.contains("hexahedron 2"), "{msg}");
+
+        // A quad that is not on the boundary of the body is skipped: the face is omitted.
+        let g = parse(one_hex(tags, good, [1, 2, 7, 8]).as_bytes(), None).expect("skip");
+        assert!(g.faces.is_empty());
+    }
+}

@@ -1,0 +1,118 @@
+//! Meshes: hexahedral bodies with named boundary faces.
+//!
+//! Owns the [`Mesh`] (all bodies, global node and element numbering, one node set per body —
+//! bodies never share nodes), the structured box generator ([`boxgen`]), the Gmsh 4.1 importer
+//! ([`gmsh`]) and the boundary topology shared by both ([`topology`]). Node order inside a
+//! hexahedron is the VTK/Gmsh/XDMF one: bottom face 0-1-2-3 counter-clockwise seen from above,
+//! top face 4-5-6-7 above it.
+
+pub mod boxgen;
+pub mod gmsh;
+pub mod topology;
+
+use std::ops::Range;
+
+/// One quadrilateral of a named face: the element it bounds and its four nodes, ordered so that
+/// the right-hand rule gives the outward normal of that element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceQuad {
+    pub elem: usize,
+    pub nodes: [usize; 4],
+}
+
+/// A named part of a body's boundary, e.g. `upper.zmax` or a Gmsh physical surface.
+#[derive(Clone, Debug)]
+pub struct Face {
+    /// Full name, `<body>.<face>`.
+    pub name: String,
+    pub body: usize,
+    pub quads: Vec<FaceQuad>,
+}
+
+impl Face {
+    /// The distinct nodes of the face, sorted.
+    pub fn nodes(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = self.quads.iter().flat_map(|q| q.nodes).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+}
+
+/// The part of the global numbering that belongs to one body.
+#[derive(Clone, Debug)]
+pub struct BodyMesh {
+    pub name: String,
+    pub nodes: Range<usize>,
+    pub elems: Range<usize>,
+}
+
+/// A body's mesh in local numbering, as a generator or importer produces it.
+#[derive(Clone, Debug, Default)]
+pub struct BodyGeometry {
+    pub nodes: Vec<[f64; 3]>,
+    pub hexes: Vec<[usize; 8]>,
+    /// (short face name, quads in local numbering)
+    pub faces: Vec<(String, Vec<FaceQuad>)>,
+}
+
+/// All bodies of a scene in one global numbering.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub nodes: Vec<[f64; 3]>,
+    pub hexes: Vec<[usize; 8]>,
+    pub bodies: Vec<BodyMesh>,
+    pub faces: Vec<Face>,
+}
+
+impl Mesh {
+    /// Appends a body, shifting its local numbering to the global one.
+    pub fn push_body(&mut self, name: &str, geom: BodyGeometry) {
+        let n0 = self.nodes.len();
+        let e0 = self.hexes.len();
+        let body = self.bodies.len();
+        self.nodes.extend_from_slice(&geom.nodes);
+        self.hexes.extend(geom.hexes.iter().map(|h| h.map(|v| v + n0)));
+        for (fname, quads) in geom.faces {
+            self.faces.push(Face {
+                name: format!("{name}.{fname}"),
+                body,
+                quads: quads
+                    .into_iter()
+                    .map(|q| FaceQuad { elem: q.elem + e0, nodes: q.nodes.map(|v| v + n0) })
+                    .collect(),
+            });
+        }
+        self.bodies.push(BodyMesh {
+            name: name.to_string(),
+            nodes: n0..self.nodes.len(),
+            elems: e0..self.hexes.len(),
+        });
+    }
+
+    pub fn face(&self, name: &str) -> Option<&Face> {
+        self.faces.iter().find(|f| f.name == name)
+    }
+
+    pub fn face_names(&self) -> Vec<&str> {
+        self.faces.iter().map(|f| f.name.as_str()).collect()
+    }
+
+    /// Body index of every element.
+    pub fn elem_body(&self) -> Vec<usize> {
+        let mut out = vec![0; self.hexes.len()];
+        for (b, body) in self.bodies.iter().enumerate() {
+            out[body.elems.clone()].fill(b);
+        }
+        out
+    }
+
+    /// Corner coordinates of element `e`.
+    pub fn hex_coords(&self, e: usize) -> [[f64; 3]; 8] {
+        self.hexes[e].map(|v| self.nodes[v])
+    }
+
+    pub fn quad_coords(&self, q: &FaceQuad) -> [[f64; 3]; 4] {
+        q.nodes.map(|v| self.nodes[v])
+    }
+}

@@ -1,0 +1,639 @@
+//! The HDF5 result file, written by one process (default file access, no MPI-IO).
+//!
+//! Layout:
+//!
+//! | path | type | shape |
+//! |---|---|---|
+//! | `/mesh/coordinates` | f64 | nnodes × 3 |
+//! | `/mesh/hexahedra` | i64 | nelems × 8 |
+//! | `/fields/<name>` | f64 or i32 | `len` (ncomp = 1) or `len × ncomp` |
+//!
+//! Each field dataset carries a string attribute `center` (`"node"` or `"cell"`). Every entry of
+//! [`OutputData::attributes`] is a variable-length UTF-8 string attribute on the root group.
+//! Datasets are contiguous and uncompressed. The file and the `/fields` group track creation
+//! order, so [`read`] gives fields and attributes back in the order they were written (files
+//! from elsewhere that do not track it come back sorted by name).
+//!
+//! [`write`] writes the file in place; [`super::write_all`] gives it a temporary name and
+//! renames it only when every output file succeeded.
+
+use std::path::{Path, PathBuf};
+
+use ::hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
+use ::hdf5::types::{IntSize, TypeDescriptor, VarLenAscii, VarLenUnicode};
+use ::hdf5::{Attribute, Dataset, File, Group, H5Type, IndexType, IterationOrder, Location};
+
+use super::{Center, Field, OutputData, Values};
+use crate::error::{Error, Result};
+
+const MESH: &str = "mesh";
+const FIELDS: &str = "fields";
+const COORDINATES: &str = "coordinates";
+const HEXAHEDRA: &str = "hexahedra";
+const CENTER_ATTR: &str = "center";
+
+/// Writes `data` to the HDF5 file `path` (replacing it); a partly written file is removed.
+///
+/// Fails on inconsistent data (a field whose length does not match the node/cell count, a hex
+/// referencing a missing node, an unusable field name, a string with an interior NUL) before
+/// anything is created.
+pub fn write(path: &Path, data: &OutputData) -> Result<()> {
+    let shown = path.display().to_string();
+    validate(data).map_err(|msg| Error::output(&shown, msg))?;
+    let result = write_file(path, data);
+    if result.is_err() {
+        let _ = std::fs::remove_file(path);
+    }
+    result
+}
+
+/// Reads a file written by [`write`] back.
+///
+/// Fields and attributes come back in creation order when the file tracks it (files written
+/// by [`write`] do), otherwise sorted by name. Float fields of any width are read as f64,
+/// signed integer fields up to 32 bits (and unsigned up to 16) as i32; the `center` attribute
+/// is required on every field. Root attributes must be variable-length strings.
+pub fn read(path: &Path) -> Result<OutputData> {
+    let shown = path.display().to_string();
+    read_file(path).map_err(|msg| Error::output(shown, msg))
+}
+
+// ---------------------------------------------------------------------------------------------
+// writing
+
+/// Checks everything that would otherwise fail half-way through writing.
+fn validate(data: &OutputData) -> std::result::Result<(), String> {
+    let nnodes = data.coordinates.len();
+    let nelems = data.hexahedra.len();
+    if let Some((e, hex)) = data
+        .hexahedra
+        .iter()
+        .enumerate()
+        .find(|(_, h)| h.iter().any(|&n| n >= nnodes))
+    {
+        return Err(format!(
+            "hexahedron {e} references node {hex:?} beyond the {nnodes} nodes"
+        ));
+    }
+    let mut names = std::collections::HashSet::new();
+    for f in &data.fields {
+        check_link_name(&f.name).map_err(|m| format!("field {:?}: {m}", f.name))?;
+        if !names.insert(f.name.as_str()) {
+            return Err(format!("field {:?} appears twice", f.name));
+        }
+        if f.ncomp == 0 {
+            return Err(format!("field {:?}: ncomp is 0", f.name));
+        }
+        let expected = match f.center {
+            Center::Node => nnodes,
+            Center::Cell => nelems,
+        };
+        let got = values_len(&f.values);
+        if got != expected * f.ncomp {
+            return Err(format!(
+                "field {:?}: {got} values, expected {expected} {}s × {} components",
+                f.name,
+                center_str(f.center),
+                f.ncomp
+            ));
+        }
+    }
+    let mut names = std::collections::HashSet::new();
+    for (name, value) in &data.attributes {
+        if name.is_empty() {
+            return Err("empty attribute name".into());
+        }
+        if name.contains('\0') || value.contains('\0') {
+            return Err(format!(
+                "attribute {name:?}: name or value contains a NUL character"
+            ));
+        }
+        if !names.insert(name.as_str()) {
+            return Err(format!("attribute {name:?} appears twice"));
+        }
+    }
+    Ok(())
+}
+
+/// A dataset name must be one link: non-empty, no `/`, not `.`, no NUL.
+fn check_link_name(name: &str) -> std::result::Result<(), &'static str> {
+    if name.is_empty() || name == "." || name.contains('/') || name.contains('\0') {
+        Err("a field name must be non-empty, not \".\", and contain no '/' or NUL")
+    } else {
+        Ok(())
+    }
+}
+
+fn values_len(v: &Values) -> usize {
+    match v {
+        Values::F64(x) => x.len(),
+        Values::I32(x) => x.len(),
+    }
+}
+
+fn center_str(c: Center) -> &'static str {
+    match c {
+        Center::Node => "node",
+        Center::Cell => "cell",
+    }
+}
+
+/// Turns an hdf5 error into a one-line message prefixed by what was being done.
+fn ctx(what: impl std::fmt::Display) -> impl FnOnce(::hdf5::Error) -> Error {
+    move |e| {
+        Error::output(
+            String::new(),
+            format!("{what}: {}", one_line(&e.to_string())),
+        )
+    }
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn write_file(tmp: &Path, data: &OutputData) -> Result<()> {
+    let file = File::with_options()
+        .with_fcpl(|p| {
+            p.attr_creation_order(AttrCreationOrder::Indexed)
+                .link_creation_order(LinkCreationOrder::Indexed)
+        })
+        .create(tmp)
+        .map_err(ctx("cannot create file"))?;
+    write_contents(&file, data)?;
+    // Every child handle is dropped by now, so this really closes (and flushes) the file.
+    file.close().map_err(ctx("closing file"))
+}
+
+fn write_contents(file: &File, data: &OutputData) -> Result<()> {
+    let mesh = file.create_group(MESH).map_err(ctx("creating /mesh"))?;
+    let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
+    write_dataset(&mesh, COORDINATES, &[data.coordinates.len(), 3], &coords)?;
+    let hexes = data
+        .hexahedra
+        .iter()
+        .flatten()
+        .map(|&n| i64::try_from(n))
+        .collect::<std::result::Result<Vec<i64>, _>>()
+        .map_err(|_| Error::output(String::new(), "node index does not fit in i64"))?;
+    write_dataset(&mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], &hexes)?;
+    drop(mesh);
+
+    let fields = file
+        .create_group_builder()
+        .with_gcpl(|p| {
+            p.link_creation_order(LinkCreationOrder::Indexed)
+                .attr_creation_order(AttrCreationOrder::Indexed)
+        })
+        .create(FIELDS)
+        .map_err(ctx("creating /fields"))?;
+    for f in &data.fields {
+        let len = values_len(&f.values) / f.ncomp;
+        let shape = if f.ncomp == 1 {
+            vec![len]
+        } else {
+            vec![len, f.ncomp]
+        };
+        let ds = match &f.values {
+            Values::F64(v) => write_dataset(&fields, &f.name, &shape, v)?,
+            Values::I32(v) => write_dataset(&fields, &f.name, &shape, v)?,
+        };
+        write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
+            .map_err(|m| Error::output(String::new(), format!("field {:?}: {m}", f.name)))?;
+    }
+    drop(fields);
+
+    for (name, value) in &data.attributes {
+        write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m))?;
+    }
+    Ok(())
+}
+
+fn write_dataset<T: H5Type>(
+    group: &Group,
+    name: &str,
+    shape: &[usize],
+    v: &[T],
+) -> Result<Dataset> {
+    let what = || format!("dataset {}/{name}", group.name());
+    let ds = group
+        .new_dataset::<T>()
+        .shape(shape.to_vec())
+        .create(name)
+        .map_err(|e| ctx(format!("creating {}", what()))(e))?;
+    // hdf5-metno would pass a dangling pointer for an empty slice; nothing to write anyway.
+    if !v.is_empty() {
+        ds.write_raw(v)
+            .map_err(|e| ctx(format!("writing {}", what()))(e))?;
+    }
+    Ok(ds)
+}
+
+/// Writes a scalar variable-length UTF-8 string attribute on `loc`.
+fn write_str_attr(loc: &Location, name: &str, value: &str) -> std::result::Result<(), String> {
+    let v: VarLenUnicode = value
+        .parse()
+        .map_err(|e| format!("attribute {name:?}: {e}"))?;
+    let attr = loc
+        .new_attr::<VarLenUnicode>()
+        .shape(())
+        .create(name)
+        .map_err(|e| format!("creating attribute {name:?}: {}", one_line(&e.to_string())))?;
+    attr.write_scalar(&v)
+        .map_err(|e| format!("writing attribute {name:?}: {}", one_line(&e.to_string())))
+}
+
+// ---------------------------------------------------------------------------------------------
+// reading
+
+type R<T> = std::result::Result<T, String>;
+
+fn h5e(what: impl std::fmt::Display) -> impl FnOnce(::hdf5::Error) -> String {
+    move |e| format!("{what}: {}", one_line(&e.to_string()))
+}
+
+fn read_file(path: &Path) -> R<OutputData> {
+    let file = File::open(path).map_err(h5e("cannot open"))?;
+    let mesh = file.group(MESH).map_err(h5e("opening /mesh"))?;
+
+    let (shape, coords) = read_f64(
+        &mesh
+            .dataset(COORDINATES)
+            .map_err(h5e("opening /mesh/coordinates"))?,
+    )
+    .map_err(|m| format!("/mesh/coordinates: {m}"))?;
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(format!(
+            "/mesh/coordinates: shape {shape:?}, expected n × 3"
+        ));
+    }
+    let coordinates = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+
+    let ds = mesh
+        .dataset(HEXAHEDRA)
+        .map_err(h5e("opening /mesh/hexahedra"))?;
+    let shape = ds.shape();
+    if shape.len() != 2 || shape[1] != 8 {
+        return Err(format!("/mesh/hexahedra: shape {shape:?}, expected n × 8"));
+    }
+    let raw: Vec<i64> = read_raw(&ds).map_err(h5e("reading /mesh/hexahedra"))?;
+    let hexahedra = raw
+        .chunks_exact(8)
+        .map(|c| {
+            let mut h = [0usize; 8];
+            for (dst, &src) in h.iter_mut().zip(c) {
+                *dst = usize::try_from(src)
+                    .map_err(|_| format!("/mesh/hexahedra: negative node index {src}"))?;
+            }
+            Ok(h)
+        })
+        .collect::<R<Vec<_>>>()?;
+
+    let fields_group = file.group(FIELDS).map_err(h5e("opening /fields"))?;
+    let names = link_names(&fields_group).map_err(h5e("listing /fields"))?;
+    let mut fields = Vec::with_capacity(names.len());
+    for name in names {
+        fields.push(read_field(&fields_group, &name).map_err(|m| format!("/fields/{name}: {m}"))?);
+    }
+
+    let root = file.group("/").map_err(h5e("opening /"))?;
+    let mut attributes = Vec::new();
+    for name in attr_names(&root).map_err(h5e("listing root attributes"))? {
+        let attr = root
+            .attr(&name)
+            .map_err(h5e(format!("opening attribute {name:?}")))?;
+        let value = read_str_attr(&attr).map_err(|m| format!("attribute {name:?}: {m}"))?;
+        attributes.push((name, value));
+    }
+    Ok(OutputData {
+        coordinates,
+        hexahedra,
+        fields,
+        attributes,
+    })
+}
+
+/// Link names in creation order, or by name where the group does not track creation order.
+fn link_names(g: &Group) -> ::hdf5::Result<Vec<String>> {
+    let tracked = g
+        .gcpl()
+        .map(|p| p.get_link_creation_order().ok())
+        .ok()
+        .flatten();
+    let ordered = matches!(
+        tracked,
+        Some(LinkCreationOrder::Indexed | LinkCreationOrder::Tracked)
+    );
+    let index = if ordered {
+        IndexType::CreationOrder
+    } else {
+        IndexType::Name
+    };
+    g.member_names_by(index, IterationOrder::Increasing)
+}
+
+/// Attribute names in creation order, or by name where the group does not track it.
+///
+/// Asks the group's own creation property list: the one `H5Fget_create_plist` gives for the
+/// file reports attribute creation order as untracked even when the root group tracks it.
+fn attr_names(g: &Group) -> ::hdf5::Result<Vec<String>> {
+    let tracked = g
+        .gcpl()
+        .map(|p| p.get_attr_creation_order().ok())
+        .ok()
+        .flatten();
+    let ordered = matches!(
+        tracked,
+        Some(AttrCreationOrder::Indexed | AttrCreationOrder::Tracked)
+    );
+    let index = if ordered {
+        IndexType::CreationOrder
+    } else {
+        IndexType::Name
+    };
+    g.attr_names_by(index, IterationOrder::Increasing)
+}
+
+fn read_raw<T: H5Type>(ds: &Dataset) -> ::hdf5::Result<Vec<T>> {
+    // Avoid handing HDF5 a dangling pointer for an empty dataset.
+    if ds.size() == 0 {
+        Ok(Vec::new())
+    } else {
+        ds.read_raw()
+    }
+}
+
+fn read_f64(ds: &Dataset) -> R<(Vec<usize>, Vec<f64>)> {
+    match ds
+        .dtype()
+        .and_then(|t| t.to_descriptor())
+        .map_err(h5e("datatype"))?
+    {
+        TypeDescriptor::Float(_) => {}
+        other => return Err(format!("datatype {other:?}, expected a float")),
+    }
+    Ok((ds.shape(), read_raw(ds).map_err(h5e("reading"))?))
+}
+
+fn read_field(group: &Group, name: &str) -> R<Field> {
+    let ds = group.dataset(name).map_err(h5e("opening"))?;
+    let shape = ds.shape();
+    let ncomp = match shape.as_slice() {
+        [_] => 1,
+        [_, n] if *n > 0 => *n,
+        _ => return Err(format!("shape {shape:?}, expected len or len × ncomp")),
+    };
+    let values = match ds
+        .dtype()
+        .and_then(|t| t.to_descriptor())
+        .map_err(h5e("datatype"))?
+    {
+        TypeDescriptor::Float(_) => Values::F64(read_raw(&ds).map_err(h5e("reading"))?),
+        TypeDescriptor::Integer(IntSize::U1 | IntSize::U2 | IntSize::U4)
+        | TypeDescriptor::Unsigned(IntSize::U1 | IntSize::U2) => {
+            Values::I32(read_raw(&ds).map_err(h5e("reading"))?)
+        }
+        other => return Err(format!("unsupported datatype {other:?}")),
+    };
+    let attr = ds
+        .attr(CENTER_ATTR)
+        .map_err(h5e("no \"center\" attribute"))?;
+    let center = match read_str_attr(&attr)
+        .map_err(|m| format!("attribute \"center\": {m}"))?
+        .as_str()
+    {
+        "node" => Center::Node,
+        "cell" => Center::Cell,
+        other => {
+            return Err(format!(
+                "attribute \"center\" is {other:?}, expected \"node\" or \"cell\""
+            ))
+        }
+    };
+    Ok(Field {
+        name: name.to_owned(),
+        center,
+        ncomp,
+        values,
+    })
+}
+
+/// Reads a scalar variable-length string attribute (UTF-8 or ASCII).
+fn read_str_attr(attr: &Attribute) -> R<String> {
+    if !attr.is_scalar() {
+        return Err(format!(
+            "shape {:?}, expected a scalar string",
+            attr.shape()
+        ));
+    }
+    match attr
+        .dtype()
+        .and_then(|t| t.to_descriptor())
+        .map_err(h5e("datatype"))?
+    {
+        TypeDescriptor::VarLenUnicode => Ok(attr
+            .read_scalar::<VarLenUnicode>()
+            .map_err(h5e("reading"))?
+            .as_str()
+            .to_owned()),
+        TypeDescriptor::VarLenAscii => Ok(attr
+            .read_scalar::<VarLenAscii>()
+            .map_err(h5e("reading"))?
+            .as_str()
+            .to_owned()),
+        other => Err(format!(
+            "datatype {other:?}, expected a variable-length string"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> PathBuf {
+        std::env::temp_dir().join(format!("tresca_feti_h5_{}_{name}", std::process::id()))
+    }
+
+    /// Two hexahedra side by side along x: 12 nodes.
+    fn sample() -> OutputData {
+        let mut coordinates = Vec::new();
+        for x in 0..3 {
+            for y in 0..2 {
+                for z in 0..2 {
+                    coordinates.push([x as f64 * 0.1, y as f64 + 1e-300, -(z as f64) / 3.0]);
+                }
+            }
+        }
+        let id = |x: usize, y: usize, z: usize| x * 4 + y * 2 + z;
+        let hex = |x: usize| {
+            [
+                id(x, 0, 0),
+                id(x + 1, 0, 0),
+                id(x + 1, 1, 0),
+                id(x, 1, 0),
+                id(x, 0, 1),
+                id(x + 1, 0, 1),
+                id(x + 1, 1, 1),
+                id(x, 1, 1),
+            ]
+        };
+        let big: String = (0..50 * 1024)
+            .map(|i| char::from(b'a' + (i % 26) as u8))
+            .collect();
+        OutputData {
+            coordinates,
+            hexahedra: vec![hex(0), hex(1)],
+            fields: vec![
+                Field {
+                    name: "displacement".into(),
+                    center: Center::Node,
+                    ncomp: 3,
+                    values: Values::F64((0..36).map(|i| i as f64 * 1.25e-7 - 3.0).collect()),
+                },
+                Field {
+                    name: "von_mises".into(),
+                    center: Center::Cell,
+                    ncomp: 1,
+                    values: Values::F64(vec![std::f64::consts::PI, f64::MIN_POSITIVE]),
+                },
+                Field {
+                    name: "subdomain".into(),
+                    center: Center::Cell,
+                    ncomp: 1,
+                    values: Values::I32(vec![-7, i32::MAX]),
+                },
+                Field {
+                    name: "a field with spaces, ünïcode".into(),
+                    center: Center::Node,
+                    ncomp: 2,
+                    values: Values::I32((0..24).collect()),
+                },
+            ],
+            // Deliberately not in name order: creation order must survive.
+            attributes: vec![
+                ("version".into(), "tresca-feti 0.1.0 — ✓".into()),
+                ("report".into(), big),
+            ],
+        }
+    }
+
+    fn assert_same(a: &OutputData, b: &OutputData) {
+        assert_eq!(a.coordinates, b.coordinates);
+        assert_eq!(a.hexahedra, b.hexahedra);
+        assert_eq!(a.fields.len(), b.fields.len());
+        for (fa, fb) in a.fields.iter().zip(&b.fields) {
+            assert_eq!(fa.name, fb.name);
+            assert_eq!(fa.center, fb.center);
+            assert_eq!(fa.ncomp, fb.ncomp);
+            assert_eq!(fa.values, fb.values);
+        }
+        // Compared piecewise: a failing assert_eq! on a 50 KB string floods the output.
+        let names = |d: &OutputData| {
+            d.attributes
+                .iter()
+                .map(|(n, v)| (n.clone(), v.len()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(names(a), names(b));
+        for ((name, va), (_, vb)) in a.attributes.iter().zip(&b.attributes) {
+            assert!(va == vb, "attribute {name:?} differs");
+        }
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let data = sample();
+        let path = tmp("round_trip.h5");
+        write(&path, &data).unwrap();
+        let back = read(&path).unwrap();
+        assert_same(&data, &back);
+        assert_eq!(back.attributes[1].1.len(), 50 * 1024);
+
+        // Overwriting an existing file works and replaces it.
+        let mut smaller = data.clone();
+        smaller.fields.truncate(1);
+        smaller.attributes.pop();
+        write(&path, &smaller).unwrap();
+        assert_same(&smaller, &read(&path).unwrap());
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn many_attributes_keep_their_order() {
+        // More than the 8 compact attributes: the root group switches to dense storage.
+        let mut data = sample();
+        data.attributes = (0..20)
+            .rev()
+            .map(|i| (format!("k{i:02}"), format!("v{i}")))
+            .collect();
+        data.fields = (0..12)
+            .rev()
+            .map(|i| Field {
+                name: format!("f{i:02}"),
+                center: Center::Cell,
+                ncomp: 1,
+                values: Values::I32(vec![i, -i]),
+            })
+            .collect();
+        let path = tmp("many.h5");
+        write(&path, &data).unwrap();
+        assert_same(&data, &read(&path).unwrap());
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn empty_mesh_round_trips() {
+        let data = OutputData::default();
+        let path = tmp("empty.h5");
+        write(&path, &data).unwrap();
+        assert_same(&data, &read(&path).unwrap());
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn inconsistent_data_is_rejected_before_writing() {
+        let path = tmp("bad.h5");
+        let mut data = sample();
+        data.fields[1].values = Values::F64(vec![1.0; 3]);
+        let err = write(&path, &data).unwrap_err().to_string();
+        assert!(err.contains("bad.h5") && err.contains("von_mises"), "{err}");
+        assert!(!path.exists());
+
+        let mut data = sample();
+        data.hexahedra[1][7] = 12;
+        assert!(write(&path, &data)
+            .unwrap_err()
+            .to_string()
+            .contains("hexahedron 1"));
+        let mut data = sample();
+        data.fields[0].name = "a/b".into();
+        assert!(write(&path, &data).is_err());
+        let mut data = sample();
+        data.attributes.push(("nul".into(), "a\0b".into()));
+        assert!(write(&path, &data).is_err());
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn errors_name_the_file() {
+        let missing = tmp("does_not_exist.h5");
+        let err = read(&missing).unwrap_err().to_string();
+        assert!(
+            err.starts_with("output ") && err.contains("does_not_exist.h5"),
+            "{err}"
+        );
+        assert!(!err.contains('\n'), "{err}");
+
+        let dir = tmp("no_such_dir").join("x.h5");
+        let err = write(&dir, &sample()).unwrap_err().to_string();
+        assert!(err.contains("x.h5") && !err.contains('\n'), "{err}");
+
+        // Not an HDF5 file.
+        let junk = tmp("junk.h5");
+        std::fs::write(&junk, b"not hdf5").unwrap();
+        let err = read(&junk).unwrap_err().to_string();
+        assert!(err.contains("junk.h5") && !err.contains('\n'), "{err}");
+        std::fs::remove_file(&junk).unwrap();
+    }
+}

@@ -1,0 +1,99 @@
+//! Results on disk: one HDF5 file with an XDMF sidecar for ParaView, and a JSON report.
+//!
+//! Owns the [`OutputData`] description (mesh + named node/cell fields + string attributes) that
+//! the pipeline fills, and the writers. Files are written under a temporary name and renamed
+//! only when everything succeeded, so a failed run leaves no result file behind.
+
+pub mod hdf5;
+pub mod xdmf;
+
+/// Where a field lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Center {
+    Node,
+    Cell,
+}
+
+/// Values of a field, row-major `len × ncomp`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values {
+    F64(Vec<f64>),
+    I32(Vec<i32>),
+}
+
+/// A named field on the mesh: `/fields/<name>` in the HDF5 file.
+#[derive(Clone, Debug)]
+pub struct Field {
+    pub name: String,
+    pub center: Center,
+    /// Components per node/cell (1 = scalar, 3 = vector).
+    pub ncomp: usize,
+    pub values: Values,
+}
+
+/// Everything one result file holds.
+#[derive(Clone, Debug, Default)]
+pub struct OutputData {
+    /// `/mesh/coordinates`, nnodes × 3.
+    pub coordinates: Vec<[f64; 3]>,
+    /// `/mesh/hexahedra`, nelems × 8, VTK/XDMF node order.
+    pub hexahedra: Vec<[usize; 8]>,
+    pub fields: Vec<Field>,
+    /// String attributes on the root group (resolved scene, versions, timings, report).
+    pub attributes: Vec<(String, String)>,
+}
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// `<path with extension ext>` beside `h5`.
+pub fn sibling(h5: &Path, ext: &str) -> PathBuf {
+    h5.with_extension(ext)
+}
+
+fn tmp(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".tmp");
+    PathBuf::from(s)
+}
+
+/// Writes the HDF5 file, the XDMF sidecar (if `xdmf`) and the JSON report (if given), each
+/// first under `<name>.tmp`; only when all succeeded are they renamed to their final names.
+/// On failure the temporary files are removed. Returns the final paths.
+pub fn write_all(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<Vec<PathBuf>> {
+    if let Some(dir) = h5.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display().to_string(), e))?;
+    }
+    let mut targets = vec![h5.to_path_buf()];
+    if xdmf {
+        targets.push(sibling(h5, "xdmf"));
+    }
+    if report.is_some() {
+        targets.push(sibling(h5, "json"));
+    }
+    let temps: Vec<PathBuf> = targets.iter().map(|p| tmp(p)).collect();
+    let result = (|| -> Result<()> {
+        hdf5::write(&temps[0], data)?;
+        let mut i = 1;
+        if xdmf {
+            let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            xdmf::write(&temps[i], &name, data)?;
+            i += 1;
+        }
+        if let Some(r) = report {
+            let text = serde_json::to_string_pretty(r).map_err(|e| Error::output(targets[i].display().to_string(), e.to_string()))?;
+            std::fs::write(&temps[i], text + "\n").map_err(|e| Error::io(temps[i].display().to_string(), e))?;
+        }
+        for (t, p) in temps.iter().zip(&targets) {
+            std::fs::rename(t, p).map_err(|e| Error::io(p.display().to_string(), e))?;
+        }
+        Ok(())
+    })();
+    if result.is_err() {
+        for t in &temps {
+            let _ = std::fs::remove_file(t);
+        }
+    }
+    result.map(|_| targets)
+}

@@ -1,0 +1,426 @@
+//! The XDMF 3 sidecar that lets ParaView (and VisIt) open the HDF5 result file.
+//!
+//! One uniform grid: `Hexahedron` topology from `/mesh/hexahedra`, `XYZ` geometry from
+//! `/mesh/coordinates`, and one `Attribute` per field from `/fields/<name>`: `Scalar` for one
+//! component, `Vector` for 3, `Tensor6` for 6, `Tensor` for 9, `Matrix` otherwise. The heavy
+//! data stays in the HDF5 file, named relative to the XDMF file. Names are XML-escaped, so the
+//! output is well-formed whatever the field names are.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::{Center, OutputData, Values};
+use crate::error::{Error, Result};
+
+/// Writes the XDMF description of `data` to `xdmf_path`; `h5_file_name` is the HDF5 file
+/// written by [`super::hdf5::write`], relative to the directory of `xdmf_path` (normally its
+/// bare file name).
+pub fn write(xdmf_path: &Path, h5_file_name: &str, data: &OutputData) -> Result<()> {
+    let shown = xdmf_path.display().to_string();
+    let text = render(h5_file_name, data).map_err(|m| Error::output(&shown, m))?;
+    std::fs::write(xdmf_path, text.as_bytes()).map_err(|e| Error::io(&shown, e))
+}
+
+/// The XDMF document as a string.
+fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
+    if h5.is_empty() || h5.contains(':') {
+        // XDMF splits `file:/path` at the colon.
+        return Err(format!(
+            "HDF5 file name {h5:?} must be non-empty and contain no ':'"
+        ));
+    }
+    let h5 = escape(h5)?;
+    let nnodes = data.coordinates.len();
+    let nelems = data.hexahedra.len();
+    let mut s = String::new();
+    // Writing into a String cannot fail: the fmt::Results below are ignored on purpose.
+    let _ = writeln!(s, r#"<?xml version="1.0" encoding="utf-8"?>"#);
+    let _ = writeln!(
+        s,
+        r#"<Xdmf xmlns:xi="http://www.w3.org/2001/XInclude" Version="3.0">"#
+    );
+    let _ = writeln!(s, "  <Domain>");
+    let _ = writeln!(s, r#"    <Grid Name="mesh" GridType="Uniform">"#);
+    let _ = writeln!(
+        s,
+        r#"      <Topology TopologyType="Hexahedron" NumberOfElements="{nelems}">"#
+    );
+    data_item(
+        &mut s,
+        &format!("{nelems} 8"),
+        "Int",
+        8,
+        &h5,
+        "/mesh/hexahedra",
+    );
+    let _ = writeln!(s, "      </Topology>");
+    let _ = writeln!(s, r#"      <Geometry GeometryType="XYZ">"#);
+    data_item(
+        &mut s,
+        &format!("{nnodes} 3"),
+        "Float",
+        8,
+        &h5,
+        "/mesh/coordinates",
+    );
+    let _ = writeln!(s, "      </Geometry>");
+    for f in &data.fields {
+        let (number_type, precision, nvalues) = match &f.values {
+            Values::F64(v) => ("Float", 8, v.len()),
+            Values::I32(v) => ("Int", 4, v.len()),
+        };
+        if f.ncomp == 0 || nvalues % f.ncomp != 0 {
+            return Err(format!(
+                "field {:?}: {nvalues} values do not split into {} components",
+                f.name, f.ncomp
+            ));
+        }
+        let len = nvalues / f.ncomp;
+        let (center, expected) = match f.center {
+            Center::Node => ("Node", nnodes),
+            Center::Cell => ("Cell", nelems),
+        };
+        if len != expected {
+            return Err(format!(
+                "field {:?}: {len} tuples on a mesh with {expected} {}s",
+                f.name,
+                center.to_lowercase()
+            ));
+        }
+        let attribute_type = match f.ncomp {
+            1 => "Scalar",
+            3 => "Vector",
+            6 => "Tensor6",
+            9 => "Tensor",
+            _ => "Matrix",
+        };
+        let dims = if f.ncomp == 1 {
+            format!("{len}")
+        } else {
+            format!("{len} {}", f.ncomp)
+        };
+        let name = escape(&f.name)?;
+        let _ = writeln!(
+            s,
+            r#"      <Attribute Name="{name}" AttributeType="{attribute_type}" Center="{center}">"#
+        );
+        data_item(
+            &mut s,
+            &dims,
+            number_type,
+            precision,
+            &h5,
+            &format!("/fields/{name}"),
+        );
+        let _ = writeln!(s, "      </Attribute>");
+    }
+    let _ = writeln!(s, "    </Grid>");
+    let _ = writeln!(s, "  </Domain>");
+    let _ = writeln!(s, "</Xdmf>");
+    Ok(s)
+}
+
+/// One `<DataItem>` referencing `h5:path`; `h5` and `path` are already escaped.
+fn data_item(s: &mut String, dims: &str, number_type: &str, precision: u32, h5: &str, path: &str) {
+    let _ = writeln!(
+        s,
+        r#"        <DataItem Dimensions="{dims}" NumberType="{number_type}" Precision="{precision}" Format="HDF">{h5}:{path}</DataItem>"#
+    );
+}
+
+/// Escapes `raw` for use in XML text or a double-quoted attribute value; characters XML 1.0
+/// cannot carry at all (most control characters) are an error.
+fn escape(raw: &str) -> std::result::Result<String, String> {
+    let mut out = String::with_capacity(raw.len());
+    for c in raw.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            // Kept literally they would be normalized to spaces inside attribute values.
+            '\t' | '\n' | '\r' => {
+                let _ = write!(out, "&#{};", c as u32);
+            }
+            c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => {
+                return Err(format!(
+                    "name {raw:?} contains a character XML cannot represent"
+                ));
+            }
+            c => out.push(c),
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::Field;
+
+    /// A minimal well-formedness check: balanced, properly nested tags, quoted attributes,
+    /// valid entity references, no stray `<` or `&` in text. Returns the element names in
+    /// document order.
+    fn check_xml(doc: &str) -> std::result::Result<Vec<String>, String> {
+        fn check_entities(t: &str) -> std::result::Result<(), String> {
+            let mut rest = t;
+            while let Some(i) = rest.find('&') {
+                let after = &rest[i + 1..];
+                let end = after.find(';').ok_or_else(|| format!("bare & in {t:?}"))?;
+                let ent = &after[..end];
+                let ok = matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos")
+                    || ent
+                        .strip_prefix('#')
+                        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()));
+                if !ok {
+                    return Err(format!("bad entity &{ent};"));
+                }
+                rest = &after[end + 1..];
+            }
+            if t.contains('<') {
+                return Err(format!("stray < in {t:?}"));
+            }
+            Ok(())
+        }
+        let mut stack: Vec<String> = Vec::new();
+        let mut names = Vec::new();
+        let mut rest = doc;
+        let mut seen_root = false;
+        loop {
+            let Some(open) = rest.find('<') else {
+                check_entities(rest)?;
+                if !rest.trim().is_empty() && stack.is_empty() {
+                    return Err("text after the root element".into());
+                }
+                break;
+            };
+            check_entities(&rest[..open])?;
+            rest = &rest[open..];
+            if let Some(r) = rest.strip_prefix("<?") {
+                let end = r.find("?>").ok_or("unterminated <?")?;
+                rest = &r[end + 2..];
+                continue;
+            }
+            if let Some(r) = rest.strip_prefix("<!--") {
+                let end = r.find("-->").ok_or("unterminated comment")?;
+                rest = &r[end + 3..];
+                continue;
+            }
+            // Find the closing '>' outside quoted attribute values.
+            let mut quote = None;
+            let mut close = None;
+            for (i, b) in rest.bytes().enumerate().skip(1) {
+                match (quote, b) {
+                    (None, b'"' | b'\'') => quote = Some(b),
+                    (Some(q), b) if b == q => quote = None,
+                    (Some(_), b'<') => return Err("< inside attribute value".into()),
+                    (None, b'>') => {
+                        close = Some(i);
+                        break;
+                    }
+                    _ => {}
+                }
+            }
+            let close = close.ok_or("unterminated tag")?;
+            let tag = &rest[1..close];
+            rest = &rest[close + 1..];
+            if let Some(name) = tag.strip_prefix('/') {
+                let top = stack
+                    .pop()
+                    .ok_or_else(|| format!("</{name}> without opening tag"))?;
+                if top != name.trim() {
+                    return Err(format!("</{name}> closes <{top}>"));
+                }
+                continue;
+            }
+            let self_closing = tag.ends_with('/');
+            let tag = tag.trim_end_matches('/');
+            let name_end = tag.find(char::is_whitespace).unwrap_or(tag.len());
+            let name = &tag[..name_end];
+            if name.is_empty()
+                || !name
+                    .chars()
+                    .all(|c| c.is_alphanumeric() || ":_-.".contains(c))
+            {
+                return Err(format!("bad element name {name:?}"));
+            }
+            if stack.is_empty() {
+                if seen_root {
+                    return Err("two root elements".into());
+                }
+                seen_root = true;
+            }
+            // Attributes: name="value" pairs, each name once.
+            let mut attrs = tag[name_end..].trim();
+            let mut attr_names = std::collections::HashSet::new();
+            while !attrs.is_empty() {
+                let eq = attrs
+                    .find('=')
+                    .ok_or_else(|| format!("attribute without value in <{name}>"))?;
+                let an = attrs[..eq].trim();
+                if an.is_empty() || an.contains(char::is_whitespace) || !attr_names.insert(an) {
+                    return Err(format!("bad or repeated attribute {an:?} in <{name}>"));
+                }
+                let v = attrs[eq + 1..].trim_start();
+                let q = v
+                    .chars()
+                    .next()
+                    .filter(|c| *c == '"' || *c == '\'')
+                    .ok_or("unquoted attribute")?;
+                let vend = v[1..].find(q).ok_or("unterminated attribute value")?;
+                check_entities(&v[1..1 + vend])?;
+                attrs = v[vend + 2..].trim_start();
+            }
+            names.push(name.to_owned());
+            if !self_closing {
+                stack.push(name.to_owned());
+            }
+        }
+        if !stack.is_empty() {
+            return Err(format!("unclosed elements {stack:?}"));
+        }
+        if !seen_root {
+            return Err("no root element".into());
+        }
+        Ok(names)
+    }
+
+    fn sample() -> OutputData {
+        let mut coordinates = Vec::new();
+        for x in 0..3 {
+            for y in 0..2 {
+                for z in 0..2 {
+                    coordinates.push([x as f64, y as f64, z as f64]);
+                }
+            }
+        }
+        let id = |x: usize, y: usize, z: usize| x * 4 + y * 2 + z;
+        let hex = |x: usize| {
+            [
+                id(x, 0, 0),
+                id(x + 1, 0, 0),
+                id(x + 1, 1, 0),
+                id(x, 1, 0),
+                id(x, 0, 1),
+                id(x + 1, 0, 1),
+                id(x + 1, 1, 1),
+                id(x, 1, 1),
+            ]
+        };
+        OutputData {
+            coordinates,
+            hexahedra: vec![hex(0), hex(1)],
+            fields: vec![
+                Field {
+                    name: "displacement".into(),
+                    center: Center::Node,
+                    ncomp: 3,
+                    values: Values::F64(vec![0.0; 36]),
+                },
+                Field {
+                    name: "von <Mises> & \"co\"".into(),
+                    center: Center::Cell,
+                    ncomp: 1,
+                    values: Values::F64(vec![1.0, 2.0]),
+                },
+                Field {
+                    name: "subdomain".into(),
+                    center: Center::Cell,
+                    ncomp: 1,
+                    values: Values::I32(vec![0, 1]),
+                },
+                Field {
+                    name: "stress".into(),
+                    center: Center::Cell,
+                    ncomp: 6,
+                    values: Values::F64(vec![0.0; 12]),
+                },
+                Field {
+                    name: "grad".into(),
+                    center: Center::Cell,
+                    ncomp: 9,
+                    values: Values::F64(vec![0.0; 18]),
+                },
+                Field {
+                    name: "pair".into(),
+                    center: Center::Node,
+                    ncomp: 2,
+                    values: Values::I32(vec![0; 24]),
+                },
+            ],
+            attributes: vec![("scene".into(), "x".repeat(100))],
+        }
+    }
+
+    fn tmp(name: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!("tresca_feti_xdmf_{}_{name}", std::process::id()))
+    }
+
+    #[test]
+    fn xdmf_is_well_formed_and_complete() {
+        let data = sample();
+        let path = tmp("ok.xdmf");
+        write(&path, "r&d result.h5", &data).unwrap();
+        let doc = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+
+        let names = check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
+        assert_eq!(names.iter().filter(|n| *n == "Grid").count(), 1);
+        assert_eq!(
+            names.iter().filter(|n| *n == "Attribute").count(),
+            data.fields.len()
+        );
+        assert_eq!(
+            names.iter().filter(|n| *n == "DataItem").count(),
+            data.fields.len() + 2
+        );
+
+        assert!(doc.contains(r#"<Topology TopologyType="Hexahedron" NumberOfElements="2">"#));
+        assert!(doc.contains(r#"Dimensions="2 8" NumberType="Int" Precision="8" Format="HDF">r&amp;d result.h5:/mesh/hexahedra<"#));
+        assert!(doc.contains(r#"<Geometry GeometryType="XYZ">"#));
+        assert!(doc.contains(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/mesh/coordinates<"#));
+        assert!(
+            doc.contains(r#"<Attribute Name="displacement" AttributeType="Vector" Center="Node">"#)
+        );
+        assert!(doc.contains(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/fields/displacement<"#));
+        assert!(doc.contains(r#"<Attribute Name="von &lt;Mises&gt; &amp; &quot;co&quot;" AttributeType="Scalar" Center="Cell">"#));
+        assert!(doc.contains(r#"Dimensions="2" NumberType="Float" Precision="8""#));
+        assert!(
+            doc.contains(r#"<Attribute Name="subdomain" AttributeType="Scalar" Center="Cell">"#)
+        );
+        assert!(doc.contains(r#"Dimensions="2" NumberType="Int" Precision="4" Format="HDF">r&amp;d result.h5:/fields/subdomain<"#));
+        assert!(doc.contains(r#"<Attribute Name="stress" AttributeType="Tensor6" Center="Cell">"#));
+        assert!(doc.contains(r#"Dimensions="2 6""#));
+        assert!(doc.contains(r#"<Attribute Name="grad" AttributeType="Tensor" Center="Cell">"#));
+        assert!(doc.contains(r#"<Attribute Name="pair" AttributeType="Matrix" Center="Node">"#));
+        assert!(doc.contains(r#"Dimensions="12 2" NumberType="Int" Precision="4""#));
+    }
+
+    #[test]
+    fn checker_rejects_malformed() {
+        assert!(check_xml("<a><b></a></b>").is_err());
+        assert!(check_xml("<a x=\"1\">&</a>").is_err());
+        assert!(check_xml("<a x=\"<\"/>").is_err());
+        assert!(check_xml("<a>").is_err());
+        assert!(check_xml("<a/><b/>").is_err());
+        assert!(check_xml("<?xml version=\"1.0\"?><a x='1' y=\"&amp;\"><b/>t&lt;</a>").is_ok());
+    }
+
+    #[test]
+    fn bad_input_is_an_error_and_writes_nothing() {
+        let mut data = sample();
+        data.fields[1].values = Values::F64(vec![1.0; 3]);
+        let path = tmp("bad.xdmf");
+        let err = write(&path, "r.h5", &data).unwrap_err().to_string();
+        assert!(err.contains("bad.xdmf") && err.contains("von"), "{err}");
+        assert!(!path.exists());
+
+        let err = write(&path, "c:r.h5", &sample()).unwrap_err().to_string();
+        assert!(err.contains("':'"), "{err}");
+        let mut data = sample();
+        data.fields[0].name = "a\u{1}b".into();
+        assert!(write(&path, "r.h5", &data).is_err());
+        assert!(!path.exists());
+    }
+}

@@ -1,0 +1,397 @@
+//! One pipeline of named, timed phases (scene → mesh → assemble → factorize → solve → stress →
+//! gather → output), generic over the communicator. Bodies are distributed over the ranks
+//! (body b on rank b mod P); each rank assembles and factorizes only its own bodies, rank 0
+//! gathers the fields and writes the files. Every phase ends with [`Comm::agree`], so an error on
+//! any rank stops all ranks with the same message.
+//!
+//! At this stage contact is not solved: a scene with active contact pairs is refused with a
+//! message saying so, and each body is an independent linear-elastic problem.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde_json::json;
+
+use crate::comm::Comm;
+use crate::error::{Error, Result};
+use crate::fem::assembly::{assemble_body, DofMap};
+use crate::fem::element::hex8_center_stress;
+use crate::fem::material::von_mises;
+use crate::linalg::cholesky::{Cholesky, Ordering};
+use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
+use crate::model::{self, Model};
+use crate::output::{self, Center, Field, OutputData, Values};
+use crate::scene::LoadedScene;
+
+/// Wall time of each phase, the maximum over the ranks.
+#[derive(Clone, Debug, Default)]
+pub struct Timings {
+    pub phases: Vec<(String, f64)>,
+}
+
+impl Timings {
+    /// Runs one phase on every rank, records its time (max over ranks) and makes its result
+    /// collective.
+    pub fn phase<C: Comm, T>(&mut self, comm: &C, name: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        let t0 = Instant::now();
+        let r = f();
+        let mut t = [t0.elapsed().as_secs_f64()];
+        let r = comm.agree(r);
+        comm.max_f64(&mut t);
+        self.phases.push((name.to_string(), t[0]));
+        r
+    }
+
+    pub fn total(&self) -> f64 {
+        self.phases.iter().map(|p| p.1).sum()
+    }
+
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut m = serde_json::Map::new();
+        for (k, v) in &self.phases {
+            m.insert(k.clone(), json!(v));
+        }
+        m.insert("total".into(), json!(self.total()));
+        serde_json::Value::Object(m)
+    }
+}
+
+/// Figures of one body's linear solve.
+#[derive(Clone, Debug, Default)]
+pub struct BodyStats {
+    pub name: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub free_dofs: usize,
+    pub nnz_k: usize,
+    pub nnz_l: usize,
+    /// ‖K u − f‖ / ‖f‖ of the free DOFs.
+    pub residual: f64,
+    pub rank: usize,
+}
+
+/// The fields on rank 0 (empty on other ranks).
+#[derive(Clone, Debug, Default)]
+pub struct Solution {
+    pub displacement: Vec<[f64; 3]>,
+    pub von_mises: Vec<f64>,
+    pub bodies: Vec<BodyStats>,
+}
+
+/// What `solve` reports back to the command line.
+#[derive(Clone, Debug)]
+pub struct Summary {
+    pub report: serde_json::Value,
+    pub files: Vec<PathBuf>,
+    /// The computed fields (on rank 0).
+    pub solution: Solution,
+}
+
+/// Rank that owns body `b`.
+pub fn owner(b: usize, size: usize) -> usize {
+    b % size
+}
+
+struct BodyResult {
+    u: Vec<[f64; 3]>,
+    vm: Vec<f64>,
+    stats: BodyStats,
+}
+
+/// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
+/// everything on rank 0.
+pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, t: &mut Timings) -> Result<Solution> {
+    let mesh = &model.mesh;
+    let mine: Vec<usize> = (0..mesh.bodies.len()).filter(|&b| owner(b, comm.size()) == comm.rank()).collect();
+    let systems = t.phase(comm, "assemble", || {
+        mine.iter()
+            .map(|&b| {
+                let body = &mesh.bodies[b];
+                let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+                let loads = &model.loads[3 * body.nodes.start..3 * body.nodes.end];
+                assemble_body(mesh, b, model.lame[b], &dofs, loads).map(|s| (dofs, s))
+            })
+            .collect::<Result<Vec<_>>>()
+    })?;
+    let factors = t.phase(comm, "factorize", || {
+        mine.iter()
+            .zip(&systems)
+            .map(|(&b, (dofs, sys))| {
+                let body = &mesh.bodies[b];
+                let (xadj, adj) = &sys.graph;
+                let node_perm = nested_dissection(xadj, adj)?;
+                let perm = expand_to_dofs(&node_perm, dofs.nfree, |v| dofs.node_dofs(body.nodes.start + v));
+                Cholesky::factorize(&sys.k, Ordering::Custom(perm))
+                    .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))
+            })
+            .collect::<Result<Vec<_>>>()
+    })?;
+    let solved = t.phase(comm, "solve", || {
+        mine.iter()
+            .zip(&systems)
+            .zip(&factors)
+            .map(|((&b, (dofs, sys)), chol)| {
+                let body = &mesh.bodies[b];
+                let mut x = sys.f.clone();
+                chol.solve_in_place(&mut x);
+                let kx = sys.k.mul(&x);
+                let fnorm = norm(&sys.f);
+                let rnorm = norm(&kx.iter().zip(&sys.f).map(|(a, b)| a - b).collect::<Vec<_>>());
+                let residual = if fnorm > 0.0 { rnorm / fnorm } else { rnorm };
+                if !residual.is_finite() || residual > 1e-6 {
+                    return Err(Error::numerical(
+                        format!("body \"{}\"", body.name),
+                        format!("linear solve is inaccurate (relative residual {residual:.1e}): the stiffness is singular or ill-conditioned; is the body held against rigid motion?"),
+                    ));
+                }
+                let stats = BodyStats {
+                    name: body.name.clone(),
+                    nodes: body.nodes.len(),
+                    elements: body.elems.len(),
+                    free_dofs: dofs.nfree,
+                    nnz_k: sys.k.nnz(),
+                    nnz_l: chol.nnz_l(),
+                    residual,
+                    rank: comm.rank(),
+                };
+                Ok((b, dofs.expand(&x), stats))
+            })
+            .collect::<Result<Vec<_>>>()
+    })?;
+    let results = t.phase(comm, "stress", || {
+        Ok(solved
+            .into_iter()
+            .map(|(b, u, stats)| {
+                let body = &mesh.bodies[b];
+                let vm = body
+                    .elems
+                    .clone()
+                    .map(|e| {
+                        let ue = mesh.hexes[e].map(|v| u[v - body.nodes.start]);
+                        von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[b]))
+                    })
+                    .collect();
+                BodyResult { u, vm, stats }
+            })
+            .collect::<Vec<_>>())
+    })?;
+    t.phase(comm, "gather", || Ok(gather(comm, model, &results)))
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+const STATS_LEN: usize = 5;
+
+/// Packs each rank's bodies into one f64 message and unpacks all of them on rank 0.
+fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
+    let mut buf = Vec::new();
+    for r in mine {
+        buf.extend(r.u.iter().flatten());
+        buf.extend(&r.vm);
+        let s = &r.stats;
+        buf.extend([s.free_dofs as f64, s.nnz_k as f64, s.nnz_l as f64, s.residual, s.rank as f64]);
+    }
+    let Some(all) = comm.gather_f64(0, &buf) else {
+        return Solution::default();
+    };
+    let mesh = &model.mesh;
+    let mut sol = Solution {
+        displacement: vec![[0.0; 3]; mesh.nodes.len()],
+        von_mises: vec![0.0; mesh.hexes.len()],
+        bodies: vec![BodyStats::default(); mesh.bodies.len()],
+    };
+    let mut cursor = vec![0usize; comm.size()];
+    for (b, body) in mesh.bodies.iter().enumerate() {
+        let r = owner(b, comm.size());
+        let data = &all[r];
+        let mut p = cursor[r];
+        for v in body.nodes.clone() {
+            sol.displacement[v] = [data[p], data[p + 1], data[p + 2]];
+            p += 3;
+        }
+        sol.von_mises[body.elems.clone()].copy_from_slice(&data[p..p + body.elems.len()]);
+        p += body.elems.len();
+        let s = &data[p..p + STATS_LEN];
+        sol.bodies[b] = BodyStats {
+            name: body.name.clone(),
+            nodes: body.nodes.len(),
+            elements: body.elems.len(),
+            free_dofs: s[0] as usize,
+            nnz_k: s[1] as usize,
+            nnz_l: s[2] as usize,
+            residual: s[3],
+            rank: s[4] as usize,
+        };
+        cursor[r] = p + STATS_LEN;
+    }
+    sol
+}
+
+/// Checks that the scene can be solved by this build.
+fn supported(ls: &LoadedScene, model: &Model) -> Result<()> {
+    if ls.scene.contact.enabled && !model.contact.is_empty() {
+        return Err(Error::scene(
+            "contact",
+            "solving contact is not implemented yet; run with --set contact.enabled=false to solve the bodies without contact",
+        ));
+    }
+    if ls.scene.decomposition.subdomains != 1 {
+        return Err(Error::scene(
+            "decomposition.subdomains",
+            "only 1 subdomain per body is implemented yet (the TFETI decomposition is not)",
+        ));
+    }
+    Ok(())
+}
+
+/// `tresca-feti solve`: the whole pipeline, files written by rank 0.
+pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>) -> Result<Summary> {
+    let mut t = Timings::default();
+    let ls = t.phase(comm, "scene", || {
+        let mut ls = crate::scene::load(scene_path, overrides)?;
+        if let Some(o) = out {
+            ls.scene.output.path = Some(o);
+        }
+        Ok(ls)
+    })?;
+    let model = t.phase(comm, "mesh", || model::build(&ls))?;
+    t.phase(comm, "check", || supported(&ls, &model))?;
+    let sol = solve_elastic(comm, &model, &mut t)?;
+    let h5 = ls.output_path();
+    let mut report = report(comm, &ls, &model, &sol, &t);
+    let before_output = t.clone();
+    let files = t.phase(comm, "output", || {
+        if !comm.is_root() {
+            return Ok(vec![]);
+        }
+        let data = output_data(&ls, &model, &sol, &before_output, &report);
+        output::write_all(&h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&report))
+    })?;
+    report["timings"] = t.to_json();
+    Ok(Summary { report, files, solution: sol })
+}
+
+fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, t: &Timings) -> serde_json::Value {
+    let mesh = &model.mesh;
+    let (umax, at) = sol
+        .displacement
+        .iter()
+        .enumerate()
+        .map(|(v, u)| ((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt(), v))
+        .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
+    let body_of_node = mesh.bodies.iter().position(|b| b.nodes.contains(&at)).unwrap_or(0);
+    let vm_max = sol.von_mises.iter().fold(0.0f64, |a, &b| a.max(b));
+    json!({
+        "scene": ls.path.display().to_string(),
+        "title": ls.scene.title,
+        "ranks": comm.size(),
+        "mpi": comm.library(),
+        "problem": "linear elasticity (no contact)",
+        "mesh": {
+            "nodes": mesh.nodes.len(),
+            "elements": mesh.hexes.len(),
+            "dofs": model.ndof(),
+            "free_dofs": sol.bodies.iter().map(|b| b.free_dofs).sum::<usize>(),
+        },
+        "bodies": sol.bodies.iter().map(|b| json!({
+            "name": b.name, "nodes": b.nodes, "elements": b.elements, "free_dofs": b.free_dofs,
+            "nnz_K_lower": b.nnz_k, "nnz_L": b.nnz_l, "relative_residual": b.residual, "rank": b.rank,
+        })).collect::<Vec<_>>(),
+        "results": {
+            "max_displacement": umax,
+            "max_displacement_node": at,
+            "max_displacement_body": mesh.bodies.get(body_of_node).map(|b| b.name.clone()),
+            "max_von_mises": vm_max,
+        },
+        "timings": t.to_json(),
+        "versions": crate::versions(),
+    })
+}
+
+fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, t: &Timings, report: &serde_json::Value) -> OutputData {
+    let mesh = &model.mesh;
+    let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
+    let mut fields = Vec::new();
+    if want("displacement") {
+        fields.push(Field {
+            name: "displacement".into(),
+            center: Center::Node,
+            ncomp: 3,
+            values: Values::F64(sol.displacement.iter().flatten().copied().collect()),
+        });
+    }
+    if want("von_mises") {
+        fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(sol.von_mises.clone()) });
+    }
+    if want("body") {
+        fields.push(Field {
+            name: "body".into(),
+            center: Center::Cell,
+            ncomp: 1,
+            values: Values::I32(mesh.elem_body().into_iter().map(|b| b as i32).collect()),
+        });
+    }
+    OutputData {
+        coordinates: mesh.nodes.clone(),
+        hexahedra: mesh.hexes.clone(),
+        fields,
+        attributes: vec![
+            ("scene".into(), ls.scene.to_toml()),
+            ("versions".into(), crate::versions().to_string()),
+            ("timings".into(), t.to_json().to_string()),
+            ("report".into(), report.to_string()),
+        ],
+    }
+}
+
+/// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print
+/// (the resolved scene, mesh sizes, DOF counts).
+pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<String> {
+    use std::fmt::Write;
+    let ls = crate::scene::load(scene_path, overrides)?;
+    let model = model::build(&ls)?;
+    let mesh = &model.mesh;
+    let mut s = String::new();
+    let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
+    let _ = writeln!(s, "mesh: {} bodies, {} nodes, {} hexahedra", mesh.bodies.len(), mesh.nodes.len(), mesh.hexes.len());
+    let mut free_total = 0;
+    for body in &mesh.bodies {
+        let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+        free_total += dofs.nfree;
+        let _ = writeln!(
+            s,
+            "  body {}: {} nodes, {} elements, {} DOFs ({} free, {} Dirichlet)",
+            body.name,
+            body.nodes.len(),
+            body.elems.len(),
+            3 * body.nodes.len(),
+            dofs.nfree,
+            3 * body.nodes.len() - dofs.nfree
+        );
+    }
+    let _ = writeln!(s, "faces:");
+    for f in &mesh.faces {
+        let _ = writeln!(s, "  {}: {} quadrilaterals, {} nodes", f.name, f.quads.len(), f.nodes().len());
+    }
+    let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
+    let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e})", load[0], load[1], load[2]);
+    let _ = writeln!(s, "DOFs: n = {} ({} free after Dirichlet elimination)", model.ndof(), free_total);
+    for (i, &(sl, ma)) in model.contact.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "contact pair {i}: slave {} ({} nodes) against master {} ({} nodes){}",
+            mesh.faces[sl].name,
+            mesh.faces[sl].nodes().len(),
+            mesh.faces[ma].name,
+            mesh.faces[ma].nodes().len(),
+            if ls.scene.contact.enabled { "" } else { " — disabled" }
+        );
+    }
+    let _ = write!(s, "solve support: {}", match supported(&ls, &model) {
+        Ok(()) => "yes".to_string(),
+        Err(e) => format!("no — {e}"),
+    });
+    Ok(s)
+}

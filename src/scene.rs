@@ -1,0 +1,587 @@
+//! Scene files: TOML → [`Scene`] (serde, unknown keys rejected with their dotted path),
+//! command-line overrides (`--set key=value`), defaults, and validation of every value with the
+//! offending key in the message. Checks that need the mesh (face names, element counts) live in
+//! [`crate::model`].
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// A whole scene: bodies, materials, boundary conditions, contact, solver, decomposition, output.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub title: String,
+    #[serde(default)]
+    pub mesh: MeshSettings,
+    #[serde(rename = "material")]
+    pub materials: Vec<Material>,
+    #[serde(rename = "body")]
+    pub bodies: Vec<Body>,
+    /// Extra named faces, cut out of existing ones.
+    #[serde(default, rename = "face", skip_serializing_if = "Vec::is_empty")]
+    pub faces: Vec<FaceDef>,
+    #[serde(default)]
+    pub dirichlet: Vec<Dirichlet>,
+    #[serde(default)]
+    pub traction: Vec<Traction>,
+    #[serde(default)]
+    pub contact: ContactSettings,
+    #[serde(default)]
+    pub solver: SolverSettings,
+    #[serde(default)]
+    pub decomposition: Decomposition,
+    #[serde(default)]
+    pub output: OutputSettings,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSettings {
+    /// Nodes per edge of every box body that gives no `nodes` of its own (the paper's N).
+    #[serde(default = "default_n")]
+    pub n: usize,
+}
+
+fn default_n() -> usize {
+    8
+}
+
+impl Default for MeshSettings {
+    fn default() -> Self {
+        MeshSettings { n: default_n() }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    /// Young's modulus (MPa).
+    #[serde(rename = "E")]
+    pub e: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    pub name: String,
+    pub material: String,
+    /// A structured box; exactly one of `box` and `gmsh`.
+    #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
+    pub boxed: Option<BoxDef>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gmsh: Option<GmshDef>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxDef {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    /// Nodes per direction; defaults to `[mesh.n; 3]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nodes: Option<[usize; 3]>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GmshDef {
+    /// Path of a Gmsh 4.1 `.msh`, relative to the scene file.
+    pub file: PathBuf,
+    /// Physical volume to take (default: every hexahedron of the file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<String>,
+    /// Shift applied to all node coordinates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f64; 3]>,
+}
+
+/// `name` becomes the face `<body>.<name>`: the quads of `<body>.<from>` whose nodes all lie in
+/// the box `[min, max]`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaceDef {
+    pub name: String,
+    pub body: String,
+    pub from: String,
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    X,
+    Y,
+    Z,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dirichlet {
+    pub face: String,
+    /// Prescribed displacement (default 0).
+    #[serde(default)]
+    pub value: [f64; 3],
+    /// Constrained components (default all three).
+    #[serde(default = "all_components")]
+    pub components: Vec<Component>,
+}
+
+fn all_components() -> Vec<Component> {
+    vec![Component::X, Component::Y, Component::Z]
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Traction {
+    pub face: String,
+    /// Surface traction (MPa), constant over the face.
+    pub p: [f64; 3],
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSettings {
+    /// `false` drops every contact pair: the bodies are solved as independent elastic problems.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    #[serde(default)]
+    pub pair: Vec<ContactPair>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings { enabled: true, pair: vec![] }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactPair {
+    pub slave: String,
+    pub master: String,
+    #[serde(default)]
+    pub friction: Friction,
+    /// Matching tolerance of slave and master node coordinates (m); default 1e-8 × model size.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+}
+
+/// Friction law of a contact pair.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Friction {
+    #[default]
+    None,
+    /// Isotropic Tresca with slip bound g (MPa).
+    Tresca { g: f64 },
+    /// Orthotropic Tresca: slip bounds g1 along `direction` (projected onto the contact plane),
+    /// g2 across it.
+    Orthotropic { g1: f64, g2: f64, direction: [f64; 3] },
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    Gimssn,
+    Imssn,
+    Mssn,
+    SsnBicgstab,
+    Mpgp,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSettings {
+    #[serde(default = "default_method")]
+    pub method: Method,
+    /// Relative stopping tolerance ε: ‖r̃_ρ(λ)‖ ≤ ε‖b‖.
+    #[serde(default = "default_eps")]
+    pub eps: f64,
+    /// ρ = rho_factor / σ_max(A).
+    #[serde(default = "default_rho_factor")]
+    pub rho_factor: f64,
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    #[serde(default = "default_cfact")]
+    pub cfact: f64,
+    #[serde(default = "default_max_outer")]
+    pub max_outer: usize,
+    #[serde(default = "default_max_inner")]
+    pub max_inner: usize,
+    /// Power iterations for the estimate of σ_max(A).
+    #[serde(default = "default_power_iterations")]
+    pub power_iterations: usize,
+}
+
+fn default_method() -> Method {
+    Method::Gimssn
+}
+fn default_eps() -> f64 {
+    1e-6
+}
+fn default_rho_factor() -> f64 {
+    1.9
+}
+fn default_rtol() -> f64 {
+    0.5
+}
+fn default_cfact() -> f64 {
+    0.9
+}
+fn default_max_outer() -> usize {
+    1000
+}
+fn default_max_inner() -> usize {
+    10_000
+}
+fn default_power_iterations() -> usize {
+    30
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            method: default_method(),
+            eps: default_eps(),
+            rho_factor: default_rho_factor(),
+            rtol: default_rtol(),
+            cfact: default_cfact(),
+            max_outer: default_max_outer(),
+            max_inner: default_max_inner(),
+            power_iterations: default_power_iterations(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Decomposition {
+    /// METIS subdomains per body.
+    #[serde(default = "one")]
+    pub subdomains: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Default for Decomposition {
+    fn default() -> Self {
+        Decomposition { subdomains: 1 }
+    }
+}
+
+/// Output fields a scene can ask for.
+pub const FIELDS: [&str; 3] = ["displacement", "von_mises", "body"];
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSettings {
+    /// HDF5 file; the XDMF (`.xdmf`) and JSON report (`.json`) go beside it. Default
+    /// `out/<scene file stem>.h5`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    #[serde(default = "default_fields")]
+    pub fields: Vec<String>,
+    #[serde(default = "yes")]
+    pub xdmf: bool,
+    #[serde(default = "yes")]
+    pub report: bool,
+}
+
+fn default_fields() -> Vec<String> {
+    FIELDS.iter().map(|s| s.to_string()).collect()
+}
+
+impl Default for OutputSettings {
+    fn default() -> Self {
+        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true }
+    }
+}
+
+/// A scene as loaded: the values plus where it came from.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    pub scene: Scene,
+    /// The scene file.
+    pub path: PathBuf,
+}
+
+impl LoadedScene {
+    /// Directory that relative paths in the scene are resolved against.
+    pub fn dir(&self) -> PathBuf {
+        self.path.parent().map(Path::to_path_buf).unwrap_or_default()
+    }
+
+    /// The resolved HDF5 output path.
+    pub fn output_path(&self) -> PathBuf {
+        self.scene.output.path.clone().unwrap_or_else(|| {
+            let stem = self.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or("result".into());
+            PathBuf::from("out").join(format!("{stem}.h5"))
+        })
+    }
+}
+
+/// Reads, overrides (`key=value` pairs), resolves and validates a scene file.
+pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedScene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display().to_string(), e))?;
+    let scene = parse(&text, &path.display().to_string(), overrides)?;
+    Ok(LoadedScene { scene, path: path.to_path_buf() })
+}
+
+/// Parses scene text (`file` is only used in messages).
+pub fn parse(text: &str, file: &str, overrides: &[String]) -> Result<Scene> {
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::Parse {
+        file: file.into(),
+        msg: one_line_toml_error(text, &e),
+    })?;
+    for o in overrides {
+        apply_override(&mut table, o)?;
+    }
+    let mut scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+        let path = e.path().to_string();
+        let msg = e.inner().message().replace('\n', " ");
+        Error::Scene { key: if path == "." { file.into() } else { path }, msg }
+    })?;
+    scene.resolve();
+    scene.validate()?;
+    Ok(scene)
+}
+
+fn one_line_toml_error(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1;
+            format!("line {line}, column {col}: {msg}")
+        }
+        None => msg,
+    }
+}
+
+/// `a.b.0.c=value`: sets a (possibly new) key; numeric parts index arrays. The value is parsed as
+/// TOML (`16`, `1e-8`, `"gimssn"`, `[0, 0, -1]`, `false`), and taken as a plain string otherwise.
+pub fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
+    let bad = |msg: &str| Error::scene(format!("--set {assignment}"), msg);
+    let (key, raw) = assignment.split_once('=').ok_or_else(|| bad("expected key=value"))?;
+    let key = key.trim();
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err(bad("empty key component"));
+    }
+    let value = match format!("v = {}", raw.trim()).parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(raw.into())),
+        Err(_) => toml::Value::String(raw.trim().into()),
+    };
+    let mut root = toml::Value::Table(std::mem::take(table));
+    let result = set_path(&mut root, &parts, value).map_err(|m| bad(&m));
+    if let toml::Value::Table(t) = root {
+        *table = t;
+    }
+    result
+}
+
+fn set_path(root: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::result::Result<(), String> {
+    let mut cur = root;
+    for (i, part) in parts.iter().enumerate() {
+        let last = i + 1 == parts.len();
+        let here = parts[..i].join(".");
+        cur = match cur {
+            toml::Value::Table(t) => {
+                if last {
+                    t.insert(part.to_string(), value);
+                    return Ok(());
+                }
+                t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            toml::Value::Array(a) => {
+                let idx: usize = part.parse().map_err(|_| format!("`{part}` is not an index of the array `{here}`"))?;
+                let len = a.len();
+                let slot = a.get_mut(idx).ok_or_else(|| format!("index {idx} out of range: `{here}` has {len} entries"))?;
+                if last {
+                    *slot = value;
+                    return Ok(());
+                }
+                slot
+            }
+            _ => return Err(format!("`{here}` is not a table")),
+        };
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Fills in what defaults to other values (box node counts from `mesh.n`).
+    pub fn resolve(&mut self) {
+        let n = self.mesh.n;
+        for b in &mut self.bodies {
+            if let Some(bx) = &mut b.boxed {
+                bx.nodes.get_or_insert([n; 3]);
+            }
+        }
+    }
+
+    /// Checks every value that can be checked without the mesh.
+    pub fn validate(&self) -> Result<()> {
+        let finite = |key: String, v: &[f64]| -> Result<()> {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(Error::scene(key, format!("must be finite, got {v:?}")))
+            }
+        };
+        if self.mesh.n < 2 {
+            return Err(Error::scene("mesh.n", format!("must be at least 2 nodes per edge, got {}", self.mesh.n)));
+        }
+        if self.materials.is_empty() {
+            return Err(Error::scene("material", "at least one [[material]] is required"));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let k = |f: &str| format!("material[{i}].{f}");
+            finite(k("E"), &[m.e])?;
+            finite(k("nu"), &[m.nu])?;
+            if m.e <= 0.0 {
+                return Err(Error::scene(k("E"), format!("Young's modulus must be > 0, got {}", m.e)));
+            }
+            if !(m.nu > -1.0 && m.nu < 0.5) {
+                return Err(Error::scene(k("nu"), format!("Poisson's ratio must lie in (-1, 0.5), got {}", m.nu)));
+            }
+            if self.materials[..i].iter().any(|o| o.name == m.name) {
+                return Err(Error::scene(k("name"), format!("duplicate material name \"{}\"", m.name)));
+            }
+        }
+        if self.bodies.is_empty() {
+            return Err(Error::scene("body", "at least one [[body]] is required"));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            let k = |f: &str| format!("body[{i}].{f}");
+            if b.name.is_empty() || b.name.contains('.') {
+                return Err(Error::scene(k("name"), format!("body names must be non-empty and contain no '.', got \"{}\"", b.name)));
+            }
+            if self.bodies[..i].iter().any(|o| o.name == b.name) {
+                return Err(Error::scene(k("name"), format!("duplicate body name \"{}\"", b.name)));
+            }
+            if !self.materials.iter().any(|m| m.name == b.material) {
+                return Err(Error::scene(k("material"), format!("unknown material \"{}\"", b.material)));
+            }
+            match (&b.boxed, &b.gmsh) {
+                (Some(bx), None) => {
+                    finite(k("box.min"), &bx.min)?;
+                    finite(k("box.max"), &bx.max)?;
+                    if (0..3).any(|d| bx.max[d] <= bx.min[d]) {
+                        return Err(Error::scene(k("box"), "max must exceed min in every direction"));
+                    }
+                    if let Some(n) = bx.nodes {
+                        if n.iter().any(|&v| v < 2) {
+                            return Err(Error::scene(k("box.nodes"), format!("need at least 2 nodes per direction, got {n:?}")));
+                        }
+                    }
+                }
+                (None, Some(g)) => {
+                    if let Some(t) = g.translate {
+                        finite(k("gmsh.translate"), &t)?;
+                    }
+                }
+                _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
+            }
+        }
+        for (i, f) in self.faces.iter().enumerate() {
+            finite(format!("face[{i}].min"), &f.min)?;
+            finite(format!("face[{i}].max"), &f.max)?;
+            if f.name.is_empty() || f.name.contains('.') {
+                return Err(Error::scene(format!("face[{i}].name"), "face names must be non-empty and contain no '.'"));
+            }
+        }
+        for (i, d) in self.dirichlet.iter().enumerate() {
+            finite(format!("dirichlet[{i}].value"), &d.value)?;
+            if d.components.is_empty() {
+                return Err(Error::scene(format!("dirichlet[{i}].components"), "must name at least one of x, y, z"));
+            }
+        }
+        for (i, t) in self.traction.iter().enumerate() {
+            finite(format!("traction[{i}].p"), &t.p)?;
+        }
+        for (i, p) in self.contact.pair.iter().enumerate() {
+            let k = |f: &str| format!("contact.pair[{i}].{f}");
+            if p.slave == p.master {
+                return Err(Error::scene(k("master"), "slave and master must be different faces"));
+            }
+            if let Some(t) = p.tolerance {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(Error::scene(k("tolerance"), format!("must be > 0, got {t}")));
+                }
+            }
+            match &p.friction {
+                Friction::None => {}
+                Friction::Tresca { g } => {
+                    if !(g.is_finite() && *g >= 0.0) {
+                        return Err(Error::scene(k("friction.g"), format!("slip bound must be finite and ≥ 0, got {g}")));
+                    }
+                }
+                Friction::Orthotropic { g1, g2, direction } => {
+                    for (name, g) in [("g1", g1), ("g2", g2)] {
+                        if !(g.is_finite() && *g >= 0.0) {
+                            return Err(Error::scene(k(&format!("friction.{name}")), format!("slip bound must be finite and ≥ 0, got {g}")));
+                        }
+                    }
+                    finite(k("friction.direction"), direction)?;
+                    if direction.iter().map(|v| v * v).sum::<f64>() == 0.0 {
+                        return Err(Error::scene(k("friction.direction"), "must be a non-zero vector"));
+                    }
+                }
+            }
+        }
+        let s = &self.solver;
+        let pos = |key: &str, v: f64| -> Result<()> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::scene(format!("solver.{key}"), format!("must be finite and > 0, got {v}")))
+            }
+        };
+        pos("eps", s.eps)?;
+        pos("rho_factor", s.rho_factor)?;
+        for (key, v) in [("rtol", s.rtol), ("cfact", s.cfact)] {
+            if !(v > 0.0 && v < 1.0) {
+                return Err(Error::scene(format!("solver.{key}"), format!("must lie in (0, 1), got {v}")));
+            }
+        }
+        for (key, v) in [("max_outer", s.max_outer), ("max_inner", s.max_inner), ("power_iterations", s.power_iterations)] {
+            if v == 0 {
+                return Err(Error::scene(format!("solver.{key}"), "must be at least 1"));
+            }
+        }
+        if self.decomposition.subdomains == 0 {
+            return Err(Error::scene("decomposition.subdomains", "must be at least 1"));
+        }
+        for (i, f) in self.output.fields.iter().enumerate() {
+            if !FIELDS.contains(&f.as_str()) {
+                return Err(Error::scene(format!("output.fields[{i}]"), format!("unknown field \"{f}\"; known: {}", FIELDS.join(", "))));
+            }
+        }
+        Ok(())
+    }
+
+    /// The resolved scene as TOML (what `check` prints and the result file stores).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_else(|e| format!("# scene could not be serialized: {e}"))
+    }
+
+    pub fn material(&self, name: &str) -> Option<&Material> {
+        self.materials.iter().find(|m| m.name == name)
+    }
+}
