@@ -1,0 +1,165 @@
+//! The command line as a user meets it: `check`, `solve`, bad input (one line on stderr naming
+//! the key or file, exit code ≠ 0, no panic, no result file), and runs under `mpirun` with 1, 2
+//! and 3 ranks giving identical fields.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use tresca_feti::output::{self, OutputData};
+
+const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tresca-feti-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn mpirun(n: usize, args: &[&str]) -> Output {
+    Command::new("mpirun")
+        .args(["-n", &n.to_string(), "--oversubscribe", BIN])
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_btl_base_warn_component_unused", "0")
+        .output()
+        .expect("mpirun must be installed (openmpi-bin, see run/packages.txt)")
+}
+
+const SEED: &str = include_str!("../run/seed.toml");
+
+/// Writes `scene` into a fresh directory, solves it there and checks the failure is clean.
+fn assert_clean_failure(name: &str, scene: &str, extra: &[&str], expect: &[&str]) {
+    let dir = tmpdir(name);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    let out = dir.join("out").join("result.h5");
+    let mut args = vec!["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{name}: succeeded; stdout {}", String::from_utf8_lossy(&o.stdout));
+    assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{name}: not one line: {stderr}");
+    assert!(lines[0].starts_with("error: "), "{name}: {stderr}");
+    for e in expect {
+        assert!(lines[0].contains(e), "{name}: expected `{e}` in: {}", lines[0]);
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.join("out")).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+    assert!(left.is_empty(), "{name}: files left behind: {left:?}");
+}
+
+fn seed_with(from: &str, to: &str) -> String {
+    assert!(SEED.contains(from), "seed.toml has no `{from}`");
+    SEED.replacen(from, to, 1)
+}
+
+fn abs_mesh(rel: &str) -> String {
+    root().join("mesh").join(rel).display().to_string()
+}
+
+#[test]
+fn bad_input_gives_one_line_and_no_file() {
+    let off = ["--set", "contact.enabled=false"];
+    assert_clean_failure("malformed", &seed_with("[mesh]", "[mesh"), &[], &["scene.toml", "line 6"]);
+    assert_clean_failure("unknown-key", &seed_with("eps = 1e-6", "epsilon = 1e-6"), &[], &["solver", "epsilon"]);
+    assert_clean_failure("unknown-key-set", SEED, &["--set", "mesh.nn=3"], &["mesh", "nn"]);
+    assert_clean_failure("nu", &seed_with("nu = 0.35", "nu = 0.5"), &off, &["material[1].nu", "0.5"]);
+    assert_clean_failure("E", &seed_with("E = 50000.0", "E = 0.0"), &off, &["material[0].E"]);
+    assert_clean_failure("E-negative", &seed_with("E = 50000.0", "E = -1.0"), &off, &["material[0].E"]);
+    assert_clean_failure("N", SEED, &["--set", "mesh.n=1"], &["mesh.n", "at least 2"]);
+    assert_clean_failure("N-negative", SEED, &["--set", "mesh.n=-4"], &["mesh.n"]);
+    assert_clean_failure("face", &seed_with("face = \"upper.zmax\"", "face = \"upper.top\""), &off, &["traction[0].face", "upper.top"]);
+    assert_clean_failure("slave", &seed_with("slave = \"upper.zmin\"", "slave = \"upper.bottom\""), &off, &["contact.pair[0].slave", "upper.bottom"]);
+    assert_clean_failure("nan-load", &seed_with("p = [0.0, 0.0, -1.0]", "p = [0.0, nan, -1.0]"), &off, &["traction[0].p", "finite"]);
+    assert_clean_failure("inf-coord", &seed_with("max = [2.0, 1.0, 2.0]", "max = [2.0, inf, 2.0]"), &off, &["body[0].box.max", "finite"]);
+    assert_clean_failure("zero-subdomains", SEED, &["--set", "decomposition.subdomains=0"], &["decomposition.subdomains"]);
+    assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
+    assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
+    assert_clean_failure("floating", &seed_with("face = \"lower.xmin\"", "face = \"upper.xmin\""), &off, &["lower", "floats"]);
+    assert_clean_failure("bad-friction", &seed_with("type = \"tresca\"", "type = \"coulomb\""), &off, &["friction", "coulomb"]);
+    assert_clean_failure("bad-field", SEED, &["--set", "output.fields=[\"stress\"]"], &["output.fields[0]", "stress"]);
+    // meshes
+    let gmsh_body = |file: &str| {
+        seed_with("box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }", &format!("gmsh = {{ file = \"{file}\" }}"))
+    };
+    assert_clean_failure("missing-mesh", &gmsh_body("/nonexistent/blocks.msh"), &off, &["/nonexistent/blocks.msh"]);
+    assert_clean_failure("tet-mesh", &gmsh_body(&abs_mesh("tet.msh")), &off, &["tet.msh", "hexahedra"]);
+    let dir = tmpdir("truncated-mesh");
+    let full = std::fs::read_to_string(root().join("mesh/two_blocks.msh")).unwrap();
+    let cut = dir.join("cut.msh");
+    std::fs::write(&cut, &full[..full.len() / 2]).unwrap();
+    assert_clean_failure("truncated-mesh", &gmsh_body(cut.to_str().unwrap()), &off, &["cut.msh"]);
+    // contact is parsed and validated, and refused with a reason until it is implemented
+    assert_clean_failure("contact", SEED, &["--set", "mesh.n=3"], &["contact"]);
+}
+
+#[test]
+fn missing_scene_file() {
+    let o = run(&["solve", "/nonexistent/scene.toml"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim().lines().count(), 1);
+    assert!(e.contains("/nonexistent/scene.toml"), "{e}");
+}
+
+#[test]
+fn check_prints_resolved_scene_and_sizes() {
+    let o = run(&["check", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=6"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("nodes = [6, 6, 6]"), "{s}");
+    assert!(s.contains("mesh: 2 bodies, 432 nodes, 250 hexahedra"), "{s}");
+    assert!(s.contains("DOFs: n = 1296"), "{s}");
+    assert!(s.contains("total applied load: (0.000000e0, 0.000000e0, -3.000000e0)"), "{s}");
+    assert!(s.contains("contact pair 0: slave upper.zmin (36 nodes) against master lower.zmax (36 nodes)"), "{s}");
+}
+
+fn fields(path: &Path) -> OutputData {
+    output::hdf5::read(path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn one_two_three_ranks_give_identical_fields() {
+    let dir = tmpdir("ranks");
+    let scene = root().join("run/seed.toml");
+    let mut results = Vec::new();
+    for n in [1, 2, 3] {
+        let out = dir.join(format!("r{n}.h5"));
+        let o = mpirun(n, &["solve", scene.to_str().unwrap(), "--set", "mesh.n=6", "--set", "contact.enabled=false", "--out", out.to_str().unwrap()]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{n} ranks: {}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(stdout.matches("wrote ").count(), 1, "only rank 0 prints: {stdout}");
+        assert!(stdout.contains(&format!("{n} rank(s)")), "{stdout}");
+        results.push(fields(&out));
+    }
+    for r in &results[1..] {
+        assert_eq!(r.coordinates, results[0].coordinates);
+        for (a, b) in r.fields.iter().zip(&results[0].fields) {
+            assert_eq!(a.name, b.name);
+            assert_eq!(a.values, b.values, "field {} differs between rank counts", a.name);
+        }
+    }
+}
+
+#[test]
+fn bad_scene_under_mpirun_fails_once_on_all_ranks() {
+    let dir = tmpdir("mpi-bad");
+    let out = dir.join("r.h5");
+    let o = mpirun(2, &["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=1", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.matches("error: mesh.n").count(), 1, "{e}");
+    assert!(!out.exists());
+}

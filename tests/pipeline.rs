@@ -1,0 +1,170 @@
+//! The whole pipeline on scene files: an analytic bar through scene, traction and roller
+//! conditions; the Gmsh-imported seed geometry against the generated one; HDF5 read-back of the
+//! written file against the computed fields.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use tresca_feti::comm::SerialComm;
+use tresca_feti::output::{self, Values};
+use tresca_feti::pipeline::{run_solve, Summary};
+use tresca_feti::{model, scene};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tresca-feti-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf())).unwrap()
+}
+
+#[test]
+fn bar_under_uniform_traction_is_exact() {
+    // [0,3]×[0,1]×[0,1], rollers on the three faces through the origin, p on x = 3:
+    // u = (p x / E, −ν p y / E, −ν p z / E) exactly.
+    let dir = tmpdir("bar");
+    let scene = dir.join("bar.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[[material]]
+name = "steel"
+E = 210000.0
+nu = 0.3
+[[body]]
+name = "bar"
+material = "steel"
+box = { min = [0.0, 0.0, 0.0], max = [3.0, 1.0, 1.0], nodes = [7, 3, 4] }
+[[dirichlet]]
+face = "bar.xmin"
+components = ["x"]
+[[dirichlet]]
+face = "bar.ymin"
+components = ["y"]
+[[dirichlet]]
+face = "bar.zmin"
+components = ["z"]
+[[traction]]
+face = "bar.xmax"
+p = [12.0, 0.0, 0.0]
+"#,
+    )
+    .unwrap();
+    let s = solve(&scene, &[], &dir.join("bar.h5"));
+    let ls = scene::load(&scene, &[]).unwrap();
+    let m = model::build(&ls).unwrap();
+    let (e, nu, p) = (210000.0, 0.3, 12.0);
+    let mut err: f64 = 0.0;
+    for (x, u) in m.mesh.nodes.iter().zip(&s.solution.displacement) {
+        let exact = [p * x[0] / e, -nu * p * x[1] / e, -nu * p * x[2] / e];
+        for c in 0..3 {
+            err = err.max((u[c] - exact[c]).abs());
+        }
+    }
+    assert!(err <= 1e-12 * (3.0 * p / e), "bar error {err:e}");
+    for vm in &s.solution.von_mises {
+        assert!((vm - p).abs() <= 1e-10 * p, "von Mises {vm} ≠ {p}");
+    }
+}
+
+/// Displacements keyed by (body, rounded coordinates).
+fn by_position(body_of: &[usize], nodes: &[[f64; 3]], u: &[[f64; 3]]) -> HashMap<(usize, [i64; 3]), [f64; 3]> {
+    nodes
+        .iter()
+        .zip(u)
+        .zip(body_of)
+        .map(|((x, u), &b)| ((b, x.map(|c| (c * 1e9).round() as i64)), *u))
+        .collect()
+}
+
+fn node_bodies(m: &model::Model) -> Vec<usize> {
+    let mut out = vec![0; m.mesh.nodes.len()];
+    for (b, body) in m.mesh.bodies.iter().enumerate() {
+        out[body.nodes.clone()].fill(b);
+    }
+    out
+}
+
+#[test]
+fn gmsh_seed_geometry_counts_and_matches_the_generated_box() {
+    let dir = tmpdir("gmsh");
+    let gscene = root().join("run/gmsh_blocks.toml");
+    let ls = scene::load(&gscene, &["contact.enabled=false".into()]).unwrap();
+    let gm = model::build(&ls).unwrap();
+    assert_eq!(gm.mesh.nodes.len(), 2 * 7 * 4 * 4);
+    assert_eq!(gm.mesh.hexes.len(), 2 * 54);
+    let counts: Vec<(String, usize)> = gm.mesh.faces.iter().map(|f| (f.name.clone(), f.quads.len())).collect();
+    for (name, n) in [("upper.upper_top", 18), ("upper.upper_bottom", 18), ("upper.upper_left", 9), ("upper.upper_right", 9), ("lower.lower_top", 18), ("lower.lower_left", 9)] {
+        assert!(counts.contains(&(name.to_string(), n)), "{name}: {counts:?}");
+    }
+    assert_eq!(gm.contact.len(), 1);
+    let total_z: f64 = gm.loads.iter().skip(2).step_by(3).sum();
+    assert!((total_z + 3.0).abs() < 1e-12, "total load {total_z}");
+
+    let gs = solve(&gscene, &["contact.enabled=false"], &dir.join("g.h5"));
+    let bscene = root().join("run/seed.toml");
+    let sets = ["contact.enabled=false", "body.0.box.nodes=[7,4,4]", "body.1.box.nodes=[7,4,4]"];
+    let bs = solve(&bscene, &sets, &dir.join("b.h5"));
+    let bm = model::build(&scene::load(&bscene, &sets.map(String::from)).unwrap()).unwrap();
+    let g = by_position(&node_bodies(&gm), &gm.mesh.nodes, &gs.solution.displacement);
+    let b = by_position(&node_bodies(&bm), &bm.mesh.nodes, &bs.solution.displacement);
+    assert_eq!(g.len(), b.len());
+    let scale = b.values().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(scale > 1e-4);
+    for (k, ub) in &b {
+        let ug = g.get(k).unwrap_or_else(|| panic!("no Gmsh node at {k:?}"));
+        for c in 0..3 {
+            assert!((ug[c] - ub[c]).abs() <= 1e-10 * scale, "at {k:?}: {ug:?} vs {ub:?}");
+        }
+    }
+}
+
+#[test]
+fn written_file_reads_back_as_computed() {
+    let dir = tmpdir("readback");
+    let h5 = dir.join("seed.h5");
+    let scene_path = root().join("run/seed.toml");
+    let sets = ["contact.enabled=false", "mesh.n=5"];
+    let s = solve(&scene_path, &sets, &h5);
+    assert_eq!(s.files, vec![h5.clone(), dir.join("seed.xdmf"), dir.join("seed.json")]);
+    for f in &s.files {
+        assert!(f.exists());
+        assert!(!PathBuf::from(format!("{}.tmp", f.display())).exists());
+    }
+    let m = model::build(&scene::load(&scene_path, &sets.map(String::from)).unwrap()).unwrap();
+    let back = output::hdf5::read(&h5).unwrap();
+    assert_eq!(back.coordinates, m.mesh.nodes);
+    assert_eq!(back.hexahedra, m.mesh.hexes);
+    let field = |name: &str| back.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
+    assert_eq!(field("displacement").values, Values::F64(s.solution.displacement.iter().flatten().copied().collect()));
+    assert_eq!(field("von_mises").values, Values::F64(s.solution.von_mises.clone()));
+    assert_eq!(field("body").values, Values::I32(m.mesh.elem_body().iter().map(|&b| b as i32).collect()));
+    let attr = |name: &str| back.attributes.iter().find(|a| a.0 == name).map(|a| a.1.clone()).unwrap_or_else(|| panic!("no attribute {name}"));
+    // the stored scene is the resolved one and parses back to the same scene
+    let stored = scene::parse(&attr("scene"), "stored", &[]).unwrap();
+    let mut expect = scene::load(&scene_path, &sets.map(String::from)).unwrap().scene;
+    expect.output.path = Some(h5.clone()); // --out is part of the resolved scene
+    assert_eq!(stored.to_toml(), expect.to_toml());
+    let versions: serde_json::Value = serde_json::from_str(&attr("versions")).unwrap();
+    assert_eq!(versions["tresca-feti"], env!("CARGO_PKG_VERSION"));
+    let timings: serde_json::Value = serde_json::from_str(&attr("timings")).unwrap();
+    assert!(timings["factorize"].as_f64().unwrap() >= 0.0);
+    // the JSON report agrees with the fields
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("seed.json")).unwrap()).unwrap();
+    let umax = s.solution.displacement.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).fold(0.0, f64::max);
+    assert_eq!(report["results"]["max_displacement"].as_f64().unwrap(), umax);
+    assert_eq!(report["mesh"]["dofs"], 6 * 125);
+    // only the requested fields are written
+    let h5b = dir.join("only_u.h5");
+    solve(&scene_path, &["contact.enabled=false", "mesh.n=3", "output.fields=[\"displacement\"]", "output.xdmf=false", "output.report=false"], &h5b);
+    let back = output::hdf5::read(&h5b).unwrap();
+    assert_eq!(back.fields.iter().map(|f| f.name.as_str()).collect::<Vec<_>>(), ["displacement"]);
+    assert!(!dir.join("only_u.xdmf").exists() && !dir.join("only_u.json").exists());
+}
