@@ -21,7 +21,7 @@ use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, OutputData, Values};
-use crate::scene::LoadedScene;
+use crate::scene::{LoadedScene, OrderingKind};
 
 /// Wall time of each phase, the maximum over the ranks.
 #[derive(Clone, Debug, Default)]
@@ -100,7 +100,7 @@ struct BodyResult {
 
 /// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
 /// everything on rank 0.
-pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, t: &mut Timings) -> Result<Solution> {
+pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Solution> {
     let mesh = &model.mesh;
     let mine: Vec<usize> = (0..mesh.bodies.len()).filter(|&b| owner(b, comm.size()) == comm.rank()).collect();
     let systems = t.phase(comm, "assemble", || {
@@ -118,10 +118,15 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, t: &mut Timings) -> Resul
             .zip(&systems)
             .map(|(&b, (dofs, sys))| {
                 let body = &mesh.bodies[b];
-                let (xadj, adj) = &sys.graph;
-                let node_perm = nested_dissection(xadj, adj)?;
-                let perm = expand_to_dofs(&node_perm, dofs.nfree, |v| dofs.node_dofs(body.nodes.start + v));
-                Cholesky::factorize(&sys.k, Ordering::Custom(perm))
+                let ord = match ordering {
+                    OrderingKind::Metis => {
+                        let (xadj, adj) = &sys.graph;
+                        let node_perm = nested_dissection(xadj, adj)?;
+                        Ordering::Custom(expand_to_dofs(&node_perm, dofs.nfree, |v| dofs.node_dofs(body.nodes.start + v)))
+                    }
+                    OrderingKind::Amd => Ordering::Amd,
+                };
+                Cholesky::factorize(&sys.k, ord)
                     .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))
             })
             .collect::<Result<Vec<_>>>()
@@ -257,8 +262,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         Ok(ls)
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
-    t.phase(comm, "check", || supported(&ls, &model))?;
-    let sol = solve_elastic(comm, &model, &mut t)?;
+    t.phase(comm, "validate", || supported(&ls, &model))?;
+    let sol = solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?;
     let h5 = ls.output_path();
     let mut report = report(comm, &ls, &model, &sol, &t);
     let before_output = t.clone();
@@ -289,6 +294,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, t:
         "ranks": comm.size(),
         "mpi": comm.library(),
         "problem": "linear elasticity (no contact)",
+        "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
         "mesh": {
             "nodes": mesh.nodes.len(),
             "elements": mesh.hexes.len(),

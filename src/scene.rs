@@ -35,6 +35,8 @@ pub struct Scene {
     #[serde(default)]
     pub decomposition: Decomposition,
     #[serde(default)]
+    pub factorization: Factorization,
+    #[serde(default)]
     pub output: OutputSettings,
 }
 
@@ -281,6 +283,24 @@ impl Default for Decomposition {
     fn default() -> Self {
         Decomposition { subdomains: 1 }
     }
+}
+
+/// Fill-reducing ordering of the sparse Cholesky factorizations.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum OrderingKind {
+    /// METIS nested dissection of the node graph, expanded to the DOFs.
+    #[default]
+    Metis,
+    /// faer's approximate minimum degree.
+    Amd,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Factorization {
+    #[serde(default)]
+    pub ordering: OrderingKind,
 }
 
 /// Output fields a scene can ask for.

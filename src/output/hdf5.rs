@@ -17,7 +17,7 @@
 //! [`write`] writes the file in place; [`super::write_all`] gives it a temporary name and
 //! renames it only when every output file succeeded.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use ::hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
 use ::hdf5::types::{IntSize, TypeDescriptor, VarLenAscii, VarLenUnicode};
@@ -451,7 +451,7 @@ fn read_str_attr(attr: &Attribute) -> R<String> {
 mod tests {
     use super::*;
 
-    fn tmp(name: &str) -> PathBuf {
+    fn tmp(name: &str) -> std::path::PathBuf {
         std::env::temp_dir().join(format!("tresca_feti_h5_{}_{name}", std::process::id()))
     }
 
