@@ -106,6 +106,15 @@ fn bad_input_gives_one_line_and_no_file() {
 }
 
 #[test]
+fn unwritable_output_is_one_line() {
+    let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=3", "--set", "contact.enabled=false", "--out", "/proc/no/such/dir/r.h5"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    assert!(e.starts_with("error: ") && e.contains("/proc/no/such/dir"), "{e}");
+}
+
+#[test]
 fn missing_scene_file() {
     let o = run(&["solve", "/nonexistent/scene.toml"]);
     assert_eq!(o.status.code(), Some(1));

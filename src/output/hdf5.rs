@@ -44,7 +44,10 @@ pub fn write(path: &Path, data: &OutputData) -> Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(path);
     }
-    result
+    result.map_err(|e| match e {
+        Error::Output { msg, .. } => Error::output(&shown, msg),
+        other => other,
+    })
 }
 
 /// Reads a file written by [`write`] back.
@@ -457,33 +460,19 @@ mod tests {
 
     /// Two hexahedra side by side along x: 12 nodes.
     fn sample() -> OutputData {
-        let mut coordinates = Vec::new();
-        for x in 0..3 {
-            for y in 0..2 {
-                for z in 0..2 {
-                    coordinates.push([x as f64 * 0.1, y as f64 + 1e-300, -(z as f64) / 3.0]);
-                }
-            }
+        // two hexahedra side by side along x: 12 nodes
+        let mut g = crate::mesh::boxgen::generate([0.0; 3], [0.2, 1.0, 1.0], [3, 2, 2]);
+        for p in &mut g.nodes {
+            // values that must round-trip bit for bit
+            p[1] += 1e-300;
+            p[2] /= -3.0;
         }
-        let id = |x: usize, y: usize, z: usize| x * 4 + y * 2 + z;
-        let hex = |x: usize| {
-            [
-                id(x, 0, 0),
-                id(x + 1, 0, 0),
-                id(x + 1, 1, 0),
-                id(x, 1, 0),
-                id(x, 0, 1),
-                id(x + 1, 0, 1),
-                id(x + 1, 1, 1),
-                id(x, 1, 1),
-            ]
-        };
         let big: String = (0..50 * 1024)
             .map(|i| char::from(b'a' + (i % 26) as u8))
             .collect();
         OutputData {
-            coordinates,
-            hexahedra: vec![hex(0), hex(1)],
+            coordinates: g.nodes,
+            hexahedra: g.hexes,
             fields: vec![
                 Field {
                     name: "displacement".into(),

@@ -287,30 +287,11 @@ mod tests {
     }
 
     fn sample() -> OutputData {
-        let mut coordinates = Vec::new();
-        for x in 0..3 {
-            for y in 0..2 {
-                for z in 0..2 {
-                    coordinates.push([x as f64, y as f64, z as f64]);
-                }
-            }
-        }
-        let id = |x: usize, y: usize, z: usize| x * 4 + y * 2 + z;
-        let hex = |x: usize| {
-            [
-                id(x, 0, 0),
-                id(x + 1, 0, 0),
-                id(x + 1, 1, 0),
-                id(x, 1, 0),
-                id(x, 0, 1),
-                id(x + 1, 0, 1),
-                id(x + 1, 1, 1),
-                id(x, 1, 1),
-            ]
-        };
+        // two hexahedra side by side along x: 12 nodes
+        let g = crate::mesh::boxgen::generate([0.0; 3], [0.2, 1.0, 1.0], [3, 2, 2]);
         OutputData {
-            coordinates,
-            hexahedra: vec![hex(0), hex(1)],
+            coordinates: g.nodes,
+            hexahedra: g.hexes,
             fields: vec![
                 Field {
                     name: "displacement".into(),
