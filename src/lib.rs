@@ -6,6 +6,7 @@
 //! [`output`] (HDF5 + XDMF + JSON). All collective communication goes through [`comm`].
 
 pub mod comm;
+pub mod contact;
 pub mod error;
 pub mod fem;
 pub mod linalg;

@@ -2,6 +2,7 @@
 //! the named faces resolved, Dirichlet constraints and nodal loads. Every face name a scene
 //! uses is checked here, with the scene key in the error.
 
+use crate::contact::pairing::{self, Contact};
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
 use crate::fem::material::Lame;
@@ -20,6 +21,8 @@ pub struct Model {
     pub loads: Vec<f64>,
     /// Contact pairs as (slave face, master face) indices into `mesh.faces`.
     pub contact: Vec<(usize, usize)>,
+    /// The node-to-node pairs, only when contact is enabled.
+    pub pairs: Option<Contact>,
 }
 
 impl Model {
@@ -119,6 +122,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         contact.push((s, m));
     }
     let contact_active = scene.contact.enabled && !contact.is_empty();
+    let pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
 
     for (b, body) in mesh.bodies.iter().enumerate() {
         let ne = body.elems.len();
@@ -137,5 +141,5 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             ));
         }
     }
-    Ok(Model { mesh, lame, constraints, loads, contact })
+    Ok(Model { mesh, lame, constraints, loads, contact, pairs })
 }

@@ -395,6 +395,18 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
             if ls.scene.contact.enabled { "" } else { " — disabled" }
         );
     }
+    if let Some(c) = &model.pairs {
+        let (gmin, gmax) = c.gap.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &g| (a.min(g), b.max(g)));
+        let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
+        let _ = writeln!(
+            s,
+            "contact: m = {} node-to-node pairs, Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential",
+            c.len(),
+            c.area.iter().sum::<f64>(),
+            c.len(),
+            tangential
+        );
+    }
     let _ = write!(s, "solve support: {}", match supported(&ls, &model) {
         Ok(()) => "yes".to_string(),
         Err(e) => format!("no — {e}"),

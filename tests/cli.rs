@@ -133,6 +133,8 @@ fn check_prints_resolved_scene_and_sizes() {
     assert!(s.contains("DOFs: n = 1296"), "{s}");
     assert!(s.contains("total applied load: (0.000000e0, 0.000000e0, -3.000000e0)"), "{s}");
     assert!(s.contains("contact pair 0: slave upper.zmin (36 nodes) against master lower.zmax (36 nodes)"), "{s}");
+    assert!(s.contains("contact: m = 36 node-to-node pairs, Σw = 2.000000e0"), "{s}");
+    assert!(s.contains("multipliers: 36 normal + 72 tangential"), "{s}");
 }
 
 fn fields(path: &Path) -> OutputData {

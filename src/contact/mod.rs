@@ -1,0 +1,4 @@
+//! Contact: node-to-node pairing of slave and master faces, with the local frames, nodal areas,
+//! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ.
+
+pub mod pairing;

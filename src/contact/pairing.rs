@@ -1,0 +1,355 @@
+//! Node-to-node contact pairing.
+//!
+//! For each `[[contact.pair]]`, every node of the slave face is matched with the master node that
+//! has the same position in the contact plane (distance measured after projecting out the slave
+//! normal, within `tolerance`); the distance along the normal is the initial gap dᵢ ≥ 0. The
+//! frame of pair i is the slave face's outward unit normal nᵢ (averaged over the quads around the
+//! node, area-weighted; exact for planar faces) and tangents t₁ᵢ (the orthotropic `direction`,
+//! else the global x axis — y if x is nearly normal — projected into the plane), t₂ᵢ = t₁ᵢ × nᵢ.
+//! With u_s, u_m the displacements of the slave and master node, pair i contributes
+//!
+//! ```text
+//! (N u)ᵢ = (u_s − u_m)·nᵢ ≤ dᵢ      (non-penetration)
+//! (T u)ᵢ = ((u_s − u_m)·t₁ᵢ, (u_s − u_m)·t₂ᵢ)   (relative tangential displacement)
+//! ```
+//!
+//! which for the seed scene (slave = upper face z = 1, n = −z) is exactly DESIGN §4's
+//! `Nᵢu = u_z(lower) − u_z(upper)` and `Tᵢu = (u_x, u_y)(upper) − (u_x, u_y)(lower)`.
+//! The nodal area wᵢ = ∫ φᵢ dA over the slave face (2×2 Gauss; a quarter of a quad at corners
+//! of a uniform grid), and the slip bound gᵢ = g·wᵢ (orthotropic: g₁wᵢ along t₁, g₂wᵢ along t₂).
+
+use std::collections::HashMap;
+
+use crate::error::{Error, Result};
+use crate::fem::element::quad4_nodal_areas;
+use crate::mesh::{Face, Mesh};
+use crate::scene::{ContactPair, Friction};
+
+/// Slip bound of one pair, as a nodal force.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SlipBound {
+    /// Frictionless: no tangential multipliers.
+    None,
+    /// Isotropic Tresca: ‖λ̄τ,ᵢ‖ ≤ g.
+    Disc(f64),
+    /// Orthotropic Tresca: (λ₁/g₁)² + (λ₂/g₂)² ≤ 1 in the pair's frame (t₁, t₂).
+    Ellipse(f64, f64),
+}
+
+/// All contact pairs of a scene, in the order of the scene's pair entries and slave nodes.
+#[derive(Clone, Debug, Default)]
+pub struct Contact {
+    pub slave: Vec<usize>,
+    pub master: Vec<usize>,
+    pub normal: Vec<[f64; 3]>,
+    pub t1: Vec<[f64; 3]>,
+    pub t2: Vec<[f64; 3]>,
+    /// Nodal area wᵢ of the slave node.
+    pub area: Vec<f64>,
+    /// Initial gap dᵢ ≥ 0.
+    pub gap: Vec<f64>,
+    pub bound: Vec<SlipBound>,
+    /// Index of the scene's `[[contact.pair]]` entry each pair comes from.
+    pub entry: Vec<usize>,
+}
+
+impl Contact {
+    /// Number of pairs, the paper's m.
+    pub fn len(&self) -> usize {
+        self.slave.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.slave.is_empty()
+    }
+
+    /// Whether any pair carries friction (i.e. tangential multipliers exist).
+    pub fn has_friction(&self) -> bool {
+        self.bound.iter().any(|b| *b != SlipBound::None)
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    a.map(|v| v / n)
+}
+
+/// Area-weighted outward normals at the nodes of a face (sum of the quads' cross products).
+fn node_normals(mesh: &Mesh, face: &Face) -> HashMap<usize, [f64; 3]> {
+    let mut out: HashMap<usize, [f64; 3]> = HashMap::new();
+    for q in &face.quads {
+        let x = mesh.quad_coords(q);
+        // the cross product of the diagonals is twice the area vector of a (warped) quad
+        let n = cross(sub(x[2], x[0]), sub(x[3], x[1]));
+        for &v in &q.nodes {
+            let e = out.entry(v).or_insert([0.0; 3]);
+            for d in 0..3 {
+                e[d] += n[d];
+            }
+        }
+    }
+    out.into_iter().map(|(v, n)| (v, unit(n))).collect()
+}
+
+/// Consistent nodal areas ∫ φᵢ dA of a face.
+fn node_areas(mesh: &Mesh, face: &Face) -> HashMap<usize, f64> {
+    let mut out = HashMap::new();
+    for q in &face.quads {
+        let w = quad4_nodal_areas(&mesh.quad_coords(q));
+        for (a, &v) in q.nodes.iter().enumerate() {
+            *out.entry(v).or_insert(0.0) += w[a];
+        }
+    }
+    out
+}
+
+/// First tangent: `dir` projected into the plane ⟂ n, normalized.
+fn tangent(n: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
+    let d = unit(dir);
+    let p = sub(d, n.map(|v| v * dot(d, n)));
+    (dot(p, p).sqrt() > 1e-6).then(|| unit(p))
+}
+
+/// Pairs the faces of every contact entry of the scene. `faces[k]` = (slave, master) indices into
+/// `mesh.faces` for `pairs[k]`.
+pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Result<Contact> {
+    let (lo, hi) = mesh.nodes.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
+        (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d])))
+    });
+    let size = dot(sub(hi, lo), sub(hi, lo)).sqrt().max(f64::MIN_POSITIVE);
+    let mut c = Contact::default();
+    for (k, (p, &(sf, mf))) in pairs.iter().zip(faces).enumerate() {
+        let key = format!("contact.pair[{k}]");
+        let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
+        let tol = p.tolerance.unwrap_or(1e-8 * size);
+        let normals = node_normals(mesh, slave);
+        let mnormals = node_normals(mesh, master);
+        let areas = node_areas(mesh, slave);
+        let snodes = slave.nodes();
+        let mnodes = master.nodes();
+        if snodes.len() != mnodes.len() {
+            return Err(Error::scene(
+                key,
+                format!(
+                    "slave face {} has {} nodes but master face {} has {}: only matching (node-to-node) meshes are supported",
+                    slave.name,
+                    snodes.len(),
+                    master.name,
+                    mnodes.len()
+                ),
+            ));
+        }
+        // master nodes hashed by their position in the contact plane of the slave face's mean
+        // normal, in cells of size tol: a match lies in one of the 27 neighbouring cells
+        let mean = unit(normals.values().fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]));
+        let inplane = |x: [f64; 3]| sub(x, mean.map(|v| v * dot(x, mean)));
+        let cell = |x: [f64; 3]| inplane(x).map(|v| (v / tol).floor() as i64);
+        let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        for &v in &mnodes {
+            grid.entry(cell(mesh.nodes[v])).or_default().push(v);
+        }
+        let mut used = HashMap::new();
+        for &s in &snodes {
+            let xs = mesh.nodes[s];
+            let n = normals[&s];
+            let cs = cell(xs);
+            let mut best: Option<(f64, usize)> = None;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        for &m in grid.get(&[cs[0] + dx, cs[1] + dy, cs[2] + dz]).into_iter().flatten() {
+                            let dxm = sub(mesh.nodes[m], xs);
+                            let t = sub(dxm, n.map(|v| v * dot(dxm, n)));
+                            let dist = dot(t, t).sqrt();
+                            if dist <= tol && best.is_none_or(|b| dist < b.0) {
+                                best = Some((dist, m));
+                            }
+                        }
+                    }
+                }
+            }
+            let Some((_, m)) = best else {
+                return Err(Error::scene(
+                    key,
+                    format!(
+                        "faces {} and {} do not match node to node: no master node within {tol:.1e} of the slave node at ({:.6}, {:.6}, {:.6})",
+                        slave.name, master.name, xs[0], xs[1], xs[2]
+                    ),
+                ));
+            };
+            if let Some(prev) = used.insert(m, s) {
+                return Err(Error::scene(key, format!("master node {m} of {} is matched by two slave nodes ({prev} and {s})", master.name)));
+            }
+            if dot(n, mnormals[&m]) > -0.5 {
+                return Err(Error::scene(
+                    key,
+                    format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name),
+                ));
+            }
+            let gap = dot(sub(mesh.nodes[m], xs), n);
+            if gap < -tol {
+                return Err(Error::scene(
+                    key,
+                    format!(
+                        "bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}",
+                        xs[0], xs[1], xs[2], slave.name, -gap, master.name
+                    ),
+                ));
+            }
+            let dir = match p.friction {
+                Friction::Orthotropic { direction, .. } => direction,
+                _ => [1.0, 0.0, 0.0],
+            };
+            let t1 = match (tangent(n, dir), &p.friction) {
+                (Some(t), _) => t,
+                (None, Friction::Orthotropic { .. }) => {
+                    return Err(Error::scene(format!("{key}.friction.direction"), format!("is normal to the contact face {}", slave.name)));
+                }
+                (None, _) => tangent(n, [0.0, 1.0, 0.0]).expect("x and y cannot both be normal"),
+            };
+            let w = areas[&s];
+            c.slave.push(s);
+            c.master.push(m);
+            c.normal.push(n);
+            c.t1.push(t1);
+            c.t2.push(cross(t1, n));
+            c.area.push(w);
+            c.gap.push(gap.max(0.0));
+            c.bound.push(match p.friction {
+                Friction::None => SlipBound::None,
+                Friction::Tresca { g } => SlipBound::Disc(g * w),
+                Friction::Orthotropic { g1, g2, .. } => SlipBound::Ellipse(g1 * w, g2 * w),
+            });
+            c.entry.push(k);
+        }
+    }
+    Ok(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::boxgen;
+
+    /// Two stacked boxes (upper on lower) with n nodes per edge; `shift` moves the upper one,
+    /// `rot` rotates everything.
+    fn blocks(n_up: usize, n_low: usize, shift: [f64; 3], rot: [[f64; 3]; 3]) -> Mesh {
+        let mut m = Mesh::default();
+        let mut up = boxgen::generate([0.0, 0.0, 1.0], [2.0, 1.0, 2.0], [n_up; 3]);
+        for p in &mut up.nodes {
+            *p = std::array::from_fn(|d| p[d] + shift[d]);
+        }
+        m.push_body("upper", up);
+        m.push_body("lower", boxgen::generate([0.0; 3], [2.0, 1.0, 1.0], [n_low; 3]));
+        for p in &mut m.nodes {
+            *p = std::array::from_fn(|i| (0..3).map(|j| rot[i][j] * p[j]).sum());
+        }
+        m
+    }
+
+    const I: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    fn rotation() -> [[f64; 3]; 3] {
+        // rotation by 0.7 rad about the axis (1, 2, 2)/3
+        let k = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+        let (s, c) = 0.7f64.sin_cos();
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let kk = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+                let kk2: f64 = (0..3).map(|l| kk[i][l] * kk[l][j]).sum();
+                I[i][j] + s * kk[i][j] + (1.0 - c) * kk2
+            })
+        })
+    }
+
+    fn seed_pair(friction: Friction) -> ContactPair {
+        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None }
+    }
+
+    fn faces(m: &Mesh, s: &str, ma: &str) -> Vec<(usize, usize)> {
+        let f = |n: &str| m.faces.iter().position(|f| f.name == n).unwrap();
+        vec![(f(s), f(ma))]
+    }
+
+    #[test]
+    fn seed_pairs_frames_areas() {
+        let m = blocks(8, 8, [0.0; 3], I);
+        let c = pair(&m, &[seed_pair(Friction::Tresca { g: 0.09 })], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        assert_eq!(c.len(), 64);
+        let total: f64 = c.area.iter().sum();
+        assert!((total - 2.0).abs() < 1e-13);
+        let h = (2.0 / 7.0) * (1.0 / 7.0);
+        for i in 0..c.len() {
+            assert_eq!(c.normal[i], [0.0, 0.0, -1.0]);
+            assert_eq!(c.t1[i], [1.0, 0.0, 0.0]);
+            assert_eq!(c.t2[i], [0.0, 1.0, 0.0]);
+            assert_eq!(c.gap[i], 0.0);
+            let (xs, xm) = (m.nodes[c.slave[i]], m.nodes[c.master[i]]);
+            assert!(sub(xs, xm).iter().all(|v| v.abs() < 1e-14));
+            assert!(m.bodies[0].nodes.contains(&c.slave[i]) && m.bodies[1].nodes.contains(&c.master[i]));
+            // lumped areas: quarter at corners, half on edges, full inside
+            let on = |v: f64, a: f64| (v - a).abs() < 1e-12;
+            let edges = [on(xs[0], 0.0) || on(xs[0], 2.0), on(xs[1], 0.0) || on(xs[1], 1.0)].iter().filter(|&&b| b).count();
+            assert!((c.area[i] - h / f64::from(1 << edges)).abs() < 1e-14);
+            assert_eq!(c.bound[i], SlipBound::Disc(0.09 * c.area[i]));
+        }
+    }
+
+    #[test]
+    fn rotated_faces_with_a_gap() {
+        let r = rotation();
+        let m = blocks(5, 5, [0.0, 0.0, 0.01], r);
+        let c = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        assert_eq!(c.len(), 25);
+        let n: [f64; 3] = std::array::from_fn(|i| -r[i][2]);
+        for i in 0..c.len() {
+            assert!(sub(c.normal[i], n).iter().all(|v| v.abs() < 1e-13), "{:?} vs {n:?}", c.normal[i]);
+            assert!((c.gap[i] - 0.01).abs() < 1e-13);
+            assert!(dot(c.t1[i], c.normal[i]).abs() < 1e-14 && dot(c.t2[i], c.normal[i]).abs() < 1e-14);
+            assert!(dot(c.t1[i], c.t2[i]).abs() < 1e-14 && (dot(c.t2[i], c.t2[i]) - 1.0).abs() < 1e-14);
+            assert_eq!(c.bound[i], SlipBound::None);
+        }
+        assert!(!c.has_friction());
+        assert!((c.area.iter().sum::<f64>() - 2.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn orthotropic_frame_follows_the_direction() {
+        let m = blocks(4, 4, [0.0; 3], I);
+        let p = seed_pair(Friction::Orthotropic { g1: 0.1, g2: 0.05, direction: [1.0, 1.0, 0.5] });
+        let c = pair(&m, &[p], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        let s = 0.5f64.sqrt();
+        for i in 0..c.len() {
+            assert!(sub(c.t1[i], [s, s, 0.0]).iter().all(|v| v.abs() < 1e-14));
+            assert_eq!(c.bound[i], SlipBound::Ellipse(0.1 * c.area[i], 0.05 * c.area[i]));
+        }
+        let p = seed_pair(Friction::Orthotropic { g1: 0.1, g2: 0.05, direction: [0.0, 0.0, 1.0] });
+        let e = pair(&m, &[p], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("direction") && e.contains("normal"), "{e}");
+    }
+
+    #[test]
+    fn bad_pairs_are_named() {
+        let m = blocks(5, 4, [0.0; 3], I);
+        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[0]") && e.contains("upper.zmin") && e.contains("lower.zmax"), "{e}");
+        let m = blocks(4, 4, [0.0; 3], I);
+        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmin")).unwrap_err().to_string();
+        assert!(e.contains("do not face each other"), "{e}");
+        let m = blocks(4, 4, [0.0, 0.0, -0.1], I);
+        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("overlap"), "{e}");
+        let m = blocks(4, 4, [0.05, 0.0, 0.0], I);
+        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("do not match node to node"), "{e}");
+    }
+}
