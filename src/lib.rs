@@ -7,6 +7,7 @@
 
 pub mod comm;
 pub mod contact;
+pub mod dual;
 pub mod error;
 pub mod fem;
 pub mod linalg;

@@ -14,7 +14,7 @@ use serde_json::json;
 
 use crate::comm::Comm;
 use crate::error::{Error, Result};
-use crate::fem::assembly::{assemble_body, DofMap};
+use crate::fem::assembly::{assemble_body, BodySystem, DofMap};
 use crate::fem::element::hex8_center_stress;
 use crate::fem::material::von_mises;
 use crate::linalg::cholesky::{Cholesky, Ordering};
@@ -98,9 +98,16 @@ struct BodyResult {
     stats: BodyStats,
 }
 
-/// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
-/// everything on rank 0.
-pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Solution> {
+/// One body owned by this rank: assembled and factorized.
+pub struct LocalBody {
+    pub body: usize,
+    pub dofs: DofMap,
+    pub sys: BodySystem,
+    pub chol: Cholesky,
+}
+
+/// Assembles and factorizes the bodies this rank owns (phases `assemble`, `factorize`).
+pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Vec<LocalBody>> {
     let mesh = &model.mesh;
     let mine: Vec<usize> = (0..mesh.bodies.len()).filter(|&b| owner(b, comm.size()) == comm.rank()).collect();
     let systems = t.phase(comm, "assemble", || {
@@ -109,14 +116,14 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
                 let body = &mesh.bodies[b];
                 let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
                 let loads = &model.loads[3 * body.nodes.start..3 * body.nodes.end];
-                assemble_body(mesh, b, model.lame[b], &dofs, loads).map(|s| (dofs, s))
+                assemble_body(mesh, b, model.lame[b], &dofs, loads).map(|s| (b, dofs, s))
             })
             .collect::<Result<Vec<_>>>()
     })?;
-    let factors = t.phase(comm, "factorize", || {
-        mine.iter()
-            .zip(&systems)
-            .map(|(&b, (dofs, sys))| {
+    t.phase(comm, "factorize", || {
+        systems
+            .into_iter()
+            .map(|(b, dofs, sys)| {
                 let body = &mesh.bodies[b];
                 let ord = match ordering {
                     OrderingKind::Metis => {
@@ -126,16 +133,24 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
                     }
                     OrderingKind::Amd => Ordering::Amd,
                 };
-                Cholesky::factorize(&sys.k, ord)
-                    .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))
+                let chol = Cholesky::factorize(&sys.k, ord)
+                    .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))?;
+                Ok(LocalBody { body: b, dofs, sys, chol })
             })
             .collect::<Result<Vec<_>>>()
-    })?;
+    })
+}
+
+/// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
+/// everything on rank 0.
+pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Solution> {
+    let mesh = &model.mesh;
+    let bodies = assemble_and_factorize(comm, model, ordering, t)?;
     let solved = t.phase(comm, "solve", || {
-        mine.iter()
-            .zip(&systems)
-            .zip(&factors)
-            .map(|((&b, (dofs, sys)), chol)| {
+        bodies
+            .iter()
+            .map(|LocalBody { body: b, dofs, sys, chol }| {
+                let b = *b;
                 let body = &mesh.bodies[b];
                 let mut x = sys.f.clone();
                 chol.solve_in_place(&mut x);

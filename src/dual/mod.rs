@@ -1,0 +1,55 @@
+//! The dual problem: multipliers λ of the contact rows, the operator A = B K⁻¹ Bᵀ applied
+//! matrix-free behind [`DualOperator`], the right-hand side b = B K⁻¹ f − c, and the recovery
+//! u = K⁻¹(f − Bᵀλ). [`monolithic`] is the paper's setting (one piece per body, Dirichlet
+//! eliminated); the TFETI operator will implement the same trait.
+
+pub mod monolithic;
+
+use std::cell::Cell;
+
+/// "Apply A": a symmetric positive (semi)definite operator on the dual vectors. Every call
+/// counts as one A-product (nA).
+pub trait DualOperator {
+    /// Length of a dual vector.
+    fn dim(&self) -> usize;
+    /// y = A x.
+    fn apply(&self, x: &[f64], y: &mut [f64]);
+    /// A-products so far.
+    fn products(&self) -> usize;
+}
+
+/// A counter of A-products shared by the implementations.
+#[derive(Debug, Default)]
+pub struct ProductCounter(Cell<usize>);
+
+impl ProductCounter {
+    pub fn tick(&self) {
+        self.0.set(self.0.get() + 1);
+    }
+    pub fn get(&self) -> usize {
+        self.0.get()
+    }
+}
+
+/// Layout of the contact multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ), λτ absent when frictionless;
+/// pair i owns λν[i] and λτ[2i], λτ[2i+1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    pub m: usize,
+    pub friction: bool,
+}
+
+impl Layout {
+    pub fn dim(&self) -> usize {
+        if self.friction { 3 * self.m } else { self.m }
+    }
+    /// Index of λν,ᵢ.
+    pub fn normal(&self, i: usize) -> usize {
+        i
+    }
+    /// Index of the k-th tangential component of pair i (k = 0, 1).
+    pub fn tangent(&self, i: usize, k: usize) -> usize {
+        debug_assert!(self.friction);
+        self.m + 2 * i + k
+    }
+}
