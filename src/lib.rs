@@ -15,6 +15,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod pipeline;
+pub mod qp;
 pub mod scene;
 
 pub use error::{Error, Result};

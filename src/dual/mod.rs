@@ -16,6 +16,14 @@ pub trait DualOperator {
     fn apply(&self, x: &[f64], y: &mut [f64]);
     /// A-products so far.
     fn products(&self) -> usize;
+    /// Inner product of two dual vectors (replicated vectors: local; distributed ones reduce
+    /// over the ranks), so that every rank sees the same value.
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
+        x.iter().zip(y).map(|(a, b)| a * b).sum()
+    }
+    fn norm(&self, x: &[f64]) -> f64 {
+        self.dot(x, x).sqrt()
+    }
 }
 
 /// A counter of A-products shared by the implementations.

@@ -1,0 +1,121 @@
+//! Λ = R₊ᵐ × Π_i Λτ,ᵢ: the product of the contact pairs' blocks ([`HalfLine`] for λν,ᵢ, a
+//! [`TangentSet`] for λ̄τ,ᵢ), on the multiplier layout of [`Layout`]. Provides P_Λ, the largest
+//! feasible step, the reduced gradient r̃_ρ(λ) = (λ − P_Λ(λ − ρ r))/ρ and the active sets (12)–(13).
+
+use super::sets::{ConvexSet, Disc, Ellipse, HalfLine, TangentSet};
+use crate::contact::pairing::{Contact, SlipBound};
+use crate::dual::Layout;
+
+/// The constraint set of the dual contact problem.
+#[derive(Clone, Debug)]
+pub struct Lambda {
+    pub layout: Layout,
+    /// One tangential set per pair (empty when frictionless).
+    pub tangent: Vec<TangentSet>,
+}
+
+/// Active/inactive sets at λ (paper (12)–(13)) as a free mask over the components.
+#[derive(Clone, Debug, Default)]
+pub struct ActiveSets {
+    /// Components CG may move: active normals and both components of sticking pairs.
+    pub free: Vec<bool>,
+    /// |A_ν|: pairs in contact.
+    pub normal_active: usize,
+    /// |A_τ|: sticking pairs.
+    pub stick: usize,
+    /// |I_τ|: sliding pairs.
+    pub slip: usize,
+}
+
+impl Lambda {
+    pub fn new(contact: &Contact) -> Self {
+        let layout = Layout { m: contact.len(), friction: contact.has_friction() };
+        let tangent = if layout.friction {
+            contact
+                .bound
+                .iter()
+                .map(|b| match *b {
+                    SlipBound::None => TangentSet::Disc(Disc::new(0.0)),
+                    SlipBound::Disc(g) => TangentSet::Disc(Disc::new(g)),
+                    SlipBound::Ellipse(a, b) => TangentSet::Ellipse(Ellipse::new(a, b)),
+                })
+                .collect()
+        } else {
+            vec![]
+        };
+        Lambda { layout, tangent }
+    }
+
+    fn pair(&self, v: &[f64], i: usize) -> [f64; 2] {
+        let k = self.layout.tangent(i, 0);
+        [v[k], v[k + 1]]
+    }
+
+    /// out = P_Λ(y).
+    pub fn project(&self, y: &[f64], out: &mut [f64]) {
+        let m = self.layout.m;
+        for i in 0..m {
+            HalfLine.project(&y[i..i + 1], &mut out[i..i + 1]);
+        }
+        for (i, s) in self.tangent.iter().enumerate() {
+            let k = self.layout.tangent(i, 0);
+            s.project(&y[k..k + 2], &mut out[k..k + 2]);
+        }
+    }
+
+    /// Whether x ∈ Λ up to `tol` per block.
+    pub fn contains(&self, x: &[f64], tol: f64) -> bool {
+        (0..self.layout.m).all(|i| HalfLine.contains(&x[i..i + 1], tol))
+            && self.tangent.iter().enumerate().all(|(i, s)| s.contains(&self.pair(x, i), tol))
+    }
+
+    /// Largest α ≥ 0 with x − α d ∈ Λ (x ∈ Λ).
+    pub fn max_step(&self, x: &[f64], d: &[f64]) -> f64 {
+        let mut a = f64::INFINITY;
+        for i in 0..self.layout.m {
+            if d[i] != 0.0 {
+                a = a.min(HalfLine.max_step(&x[i..i + 1], &d[i..i + 1]));
+            }
+        }
+        for (i, s) in self.tangent.iter().enumerate() {
+            let dd = self.pair(d, i);
+            if dd != [0.0, 0.0] {
+                a = a.min(s.max_step(&self.pair(x, i), &dd));
+            }
+        }
+        a
+    }
+
+    /// out = r̃_ρ(λ) = (λ − P_Λ(λ − ρ r))/ρ.
+    pub fn reduced_gradient(&self, lambda: &[f64], r: &[f64], rho: f64, out: &mut [f64]) {
+        let y: Vec<f64> = lambda.iter().zip(r).map(|(l, g)| l - rho * g).collect();
+        self.project(&y, out);
+        for (o, l) in out.iter_mut().zip(lambda) {
+            *o = (l - *o) / rho;
+        }
+    }
+
+    /// The sets (12)–(13) at λ with gradient r.
+    pub fn active_sets(&self, lambda: &[f64], r: &[f64], rho: f64) -> ActiveSets {
+        let n = self.layout.dim();
+        let mut s = ActiveSets { free: vec![false; n], ..Default::default() };
+        for i in 0..self.layout.m {
+            if lambda[i] - rho * r[i] >= 0.0 {
+                s.free[i] = true;
+                s.normal_active += 1;
+            }
+        }
+        for (i, set) in self.tangent.iter().enumerate() {
+            let k = self.layout.tangent(i, 0);
+            let y = [lambda[k] - rho * r[k], lambda[k + 1] - rho * r[k + 1]];
+            if set.is_outside(&y) {
+                s.slip += 1;
+            } else {
+                s.free[k] = true;
+                s.free[k + 1] = true;
+                s.stick += 1;
+            }
+        }
+        s
+    }
+}
