@@ -16,6 +16,7 @@ pub mod model;
 pub mod output;
 pub mod pipeline;
 pub mod qp;
+pub mod recovery;
 pub mod scene;
 
 pub use error::{Error, Result};

@@ -91,6 +91,26 @@ fn print_summary(s: &pipeline::Summary) {
             b["rank"]
         );
     }
+    if let Some(sv) = r["solver"].as_object() {
+        println!(
+            "solver {}: {} outer iterations, nA = {} (+{} power iterations), {} CG iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e})",
+            sv["method"].as_str().unwrap_or(""),
+            sv["outer_iterations"],
+            sv["nA"],
+            sv["nA_power"],
+            sv["inner_iterations"],
+            sv["final_relative_reduced_gradient"].as_f64().unwrap_or(f64::NAN),
+            sv["eps"].as_f64().unwrap_or(f64::NAN)
+        );
+        let c = &r["contact"];
+        println!(
+            "contact: {} pairs — {} open, {} stick, {} slip; {} on the slip bound; contact force on the slave body ({:.4e}, {:.4e}, {:.4e})",
+            c["pairs"], c["open"], c["stick"], c["slip"], c["on_slip_bound"],
+            c["total_force_on_slave"][0].as_f64().unwrap_or(0.0),
+            c["total_force_on_slave"][1].as_f64().unwrap_or(0.0),
+            c["total_force_on_slave"][2].as_f64().unwrap_or(0.0)
+        );
+    }
     let res = &r["results"];
     println!(
         "max |u| = {:.4e} m (body {}), max von Mises = {:.4e} MPa",

@@ -21,7 +21,12 @@ use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, OutputData, Values};
-use crate::scene::{LoadedScene, OrderingKind};
+use crate::dual::monolithic::MonolithicDual;
+use crate::dual::DualOperator;
+use crate::qp::gimssn;
+use crate::qp::lambda::Lambda;
+use crate::recovery::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
+use crate::scene::{LoadedScene, Method, OrderingKind};
 
 /// Wall time of each phase, the maximum over the ranks.
 #[derive(Clone, Debug, Default)]
@@ -144,19 +149,37 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
 /// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
 /// everything on rank 0.
 pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Solution> {
-    let mesh = &model.mesh;
     let bodies = assemble_and_factorize(comm, model, ordering, t)?;
-    let solved = t.phase(comm, "solve", || {
+    let u = t.phase(comm, "solve", || {
+        Ok(bodies
+            .iter()
+            .map(|lb| {
+                let mut x = lb.sys.f.clone();
+                lb.chol.solve_in_place(&mut x);
+                x
+            })
+            .collect::<Vec<_>>())
+    })?;
+    let refs: Vec<&LocalBody> = bodies.iter().collect();
+    let rhs: Vec<&[f64]> = bodies.iter().map(|lb| lb.sys.f.as_slice()).collect();
+    finish_bodies(comm, model, &refs, &u, &rhs, t)
+}
+
+/// Checks K u = rhs on each local body, expands u, computes the element stresses (phase
+/// `stress`) and gathers all bodies on rank 0 (phase `gather`).
+fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[Vec<f64>], rhs: &[&[f64]], t: &mut Timings) -> Result<Solution> {
+    let mesh = &model.mesh;
+    let results = t.phase(comm, "stress", || {
         bodies
             .iter()
-            .map(|LocalBody { body: b, dofs, sys, chol }| {
-                let b = *b;
+            .zip(u)
+            .zip(rhs)
+            .map(|((lb, x), f)| {
+                let b = lb.body;
                 let body = &mesh.bodies[b];
-                let mut x = sys.f.clone();
-                chol.solve_in_place(&mut x);
-                let kx = sys.k.mul(&x);
-                let fnorm = norm(&sys.f);
-                let rnorm = norm(&kx.iter().zip(&sys.f).map(|(a, b)| a - b).collect::<Vec<_>>());
+                let kx = lb.sys.k.mul(x);
+                let fnorm = norm(f);
+                let rnorm = norm(&kx.iter().zip(*f).map(|(a, b)| a - b).collect::<Vec<_>>());
                 let residual = if fnorm > 0.0 { rnorm / fnorm } else { rnorm };
                 if !residual.is_finite() || residual > 1e-6 {
                     return Err(Error::numerical(
@@ -168,21 +191,13 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
                     name: body.name.clone(),
                     nodes: body.nodes.len(),
                     elements: body.elems.len(),
-                    free_dofs: dofs.nfree,
-                    nnz_k: sys.k.nnz(),
-                    nnz_l: chol.nnz_l(),
+                    free_dofs: lb.dofs.nfree,
+                    nnz_k: lb.sys.k.nnz(),
+                    nnz_l: lb.chol.nnz_l(),
                     residual,
                     rank: comm.rank(),
                 };
-                Ok((b, dofs.expand(&x), stats))
-            })
-            .collect::<Result<Vec<_>>>()
-    })?;
-    let results = t.phase(comm, "stress", || {
-        Ok(solved
-            .into_iter()
-            .map(|(b, u, stats)| {
-                let body = &mesh.bodies[b];
+                let u = lb.dofs.expand(x);
                 let vm = body
                     .elems
                     .clone()
@@ -191,11 +206,48 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
                         von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[b]))
                     })
                     .collect();
-                BodyResult { u, vm, stats }
+                Ok(BodyResult { u, vm, stats })
             })
-            .collect::<Vec<_>>())
+            .collect::<Result<Vec<_>>>()
     })?;
     t.phase(comm, "gather", || Ok(gather(comm, model, &results)))
+}
+
+/// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), solve the
+/// QP (phase `iterate`), recover u (phase `recover`), then stresses and gather as for elasticity.
+pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
+    let contact = model.pairs.as_ref().expect("contact is active");
+    let s = &ls.scene.solver;
+    let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
+    let (dual, b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
+    let set = Lambda::new(contact);
+    let params = gimssn::Params {
+        eps: s.eps,
+        rho_factor: s.rho_factor,
+        rtol: s.rtol,
+        cfact: s.cfact,
+        max_outer: s.max_outer,
+        max_inner: s.max_inner,
+        power_iterations: s.power_iterations,
+        cg_stop: gimssn::CgStop::Rhs,
+    };
+    let qp = t.phase(comm, "iterate", || {
+        gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical("GIMSSN", e.to_string()))
+    })?;
+    let (u, rhs) = t.phase(comm, "recover", || Ok(dual.recover(&qp.lambda)))?;
+    let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
+    let rhs_refs: Vec<&[f64]> = rhs.iter().map(Vec::as_slice).collect();
+    let sol = finish_bodies(comm, model, &refs, &u, &rhs_refs, t)?;
+    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, 1e-9);
+    Ok((sol, ContactOutcome { state, info: qp.info, bnorm: dual.norm(&b) }))
+}
+
+/// What the contact solve adds to the elastic fields.
+#[derive(Clone, Debug)]
+pub struct ContactOutcome {
+    pub state: ContactState,
+    pub info: gimssn::Info,
+    pub bnorm: f64,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -251,10 +303,10 @@ fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
 
 /// Checks that the scene can be solved by this build.
 fn supported(ls: &LoadedScene, model: &Model) -> Result<()> {
-    if ls.scene.contact.enabled && !model.contact.is_empty() {
+    if model.pairs.is_some() && ls.scene.solver.method != Method::Gimssn {
         return Err(Error::scene(
-            "contact",
-            "solving contact is not implemented yet; run with --set contact.enabled=false to solve the bodies without contact",
+            "solver.method",
+            format!("{:?} is not implemented yet; use \"gimssn\"", ls.scene.solver.method).to_lowercase(),
         ));
     }
     if ls.scene.decomposition.subdomains != 1 {
@@ -278,22 +330,25 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
     t.phase(comm, "validate", || supported(&ls, &model))?;
-    let sol = solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?;
+    let (sol, outcome) = match &model.pairs {
+        Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
+        None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
+    };
     let h5 = ls.output_path();
-    let mut report = report(comm, &ls, &model, &sol, &t);
+    let mut report = report(comm, &ls, &model, &sol, outcome.as_ref(), &t);
     let before_output = t.clone();
     let files = t.phase(comm, "output", || {
         if !comm.is_root() {
             return Ok(vec![]);
         }
-        let data = output_data(&ls, &model, &sol, &before_output, &report);
+        let data = output_data(&ls, &model, &sol, outcome.as_ref(), &before_output, &report);
         output::write_all(&h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&report))
     })?;
     report["timings"] = t.to_json();
     Ok(Summary { report, files, solution: sol })
 }
 
-fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, t: &Timings) -> serde_json::Value {
+fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings) -> serde_json::Value {
     let mesh = &model.mesh;
     let (umax, at) = sol
         .displacement
@@ -308,7 +363,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, t:
         "title": ls.scene.title,
         "ranks": comm.size(),
         "mpi": comm.library(),
-        "problem": "linear elasticity (no contact)",
+        "problem": if outcome.is_some() { "contact with Tresca friction (monolithic dual)" } else { "linear elasticity (no contact)" },
         "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
         "mesh": {
             "nodes": mesh.nodes.len(),
@@ -326,12 +381,47 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, t:
             "max_displacement_body": mesh.bodies.get(body_of_node).map(|b| b.name.clone()),
             "max_von_mises": vm_max,
         },
+        "contact": outcome.map(|o| {
+            let c = model.pairs.as_ref().expect("contact outcome implies pairs");
+            json!({
+                "pairs": c.len(),
+                "open": o.state.count(OPEN),
+                "stick": o.state.count(STICK),
+                "slip": o.state.count(SLIP),
+                "on_slip_bound": o.state.on_slip_bound,
+                "total_force_on_slave": o.state.total_force(c),
+            })
+        }),
+        "solver": outcome.map(|o| {
+            let i = &o.info;
+            json!({
+                "method": "gimssn",
+                "eps": ls.scene.solver.eps,
+                "outer_iterations": i.iterations,
+                "nA": i.n_a,
+                "nA_power": i.n_a_power,
+                "inner_iterations": i.inner_iterations,
+                "final_relative_reduced_gradient": i.err,
+                "q": i.q,
+                "sigma_est": i.sigma_est,
+                "rho": i.rho,
+                "norm_b": o.bnorm,
+            })
+        }),
         "timings": t.to_json(),
         "versions": crate::versions(),
     })
 }
 
-fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, t: &Timings, report: &serde_json::Value) -> OutputData {
+fn history_json(info: &gimssn::Info) -> serde_json::Value {
+    json!(info
+        .history
+        .iter()
+        .map(|h| json!({"err": h.err, "tol": h.tol, "q": h.q, "nA": h.n_a, "inner": h.inner, "normal_active": h.normal_active, "stick": h.stick, "slip": h.slip}))
+        .collect::<Vec<_>>())
+}
+
+fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &serde_json::Value) -> OutputData {
     let mesh = &model.mesh;
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
     let mut fields = Vec::new();
@@ -354,17 +444,17 @@ fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, t: &Timings, rep
             values: Values::I32(mesh.elem_body().into_iter().map(|b| b as i32).collect()),
         });
     }
-    OutputData {
-        coordinates: mesh.nodes.clone(),
-        hexahedra: mesh.hexes.clone(),
-        fields,
-        attributes: vec![
-            ("scene".into(), ls.scene.to_toml()),
-            ("versions".into(), crate::versions().to_string()),
-            ("timings".into(), t.to_json().to_string()),
-            ("report".into(), report.to_string()),
-        ],
+    let mut attributes = vec![
+        ("scene".into(), ls.scene.to_toml()),
+        ("versions".into(), crate::versions().to_string()),
+        ("timings".into(), t.to_json().to_string()),
+        ("report".into(), report.to_string()),
+    ];
+    if let (Some(o), Some(c)) = (outcome, &model.pairs) {
+        fields.extend(contact_fields(mesh.nodes.len(), c, &o.state, want));
+        attributes.push(("solver_history".into(), history_json(&o.info).to_string()));
     }
+    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes }
 }
 
 /// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print

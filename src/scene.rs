@@ -303,8 +303,8 @@ pub struct Factorization {
     pub ordering: OrderingKind,
 }
 
-/// Output fields a scene can ask for.
-pub const FIELDS: [&str; 3] = ["displacement", "von_mises", "body"];
+/// Output fields a scene can ask for (the contact ones are written only when contact is solved).
+pub const FIELDS: [&str; 8] = ["displacement", "von_mises", "body", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

@@ -101,8 +101,10 @@ fn bad_input_gives_one_line_and_no_file() {
     let cut = dir.join("cut.msh");
     std::fs::write(&cut, &full[..full.len() / 2]).unwrap();
     assert_clean_failure("truncated-mesh", &gmsh_body(cut.to_str().unwrap()), &off, &["cut.msh"]);
-    // contact is parsed and validated, and refused with a reason until it is implemented
-    assert_clean_failure("contact", SEED, &["--set", "mesh.n=3"], &["contact"]);
+    // solvers not implemented yet are refused with a reason
+    assert_clean_failure("method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"mpgp\""], &["solver.method", "mpgp"]);
+    // a solver that cannot reach ε within its iterations says so
+    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["GIMSSN", "no convergence"]);
 }
 
 #[test]
@@ -146,13 +148,20 @@ fn one_two_three_ranks_give_identical_fields() {
     let dir = tmpdir("ranks");
     let scene = root().join("run/seed.toml");
     let mut results = Vec::new();
+    let mut counters_1: Option<String> = None;
     for n in [1, 2, 3] {
         let out = dir.join(format!("r{n}.h5"));
-        let o = mpirun(n, &["solve", scene.to_str().unwrap(), "--set", "mesh.n=6", "--set", "contact.enabled=false", "--out", out.to_str().unwrap()]);
+        let o = mpirun(n, &["solve", scene.to_str().unwrap(), "--set", "mesh.n=6", "--out", out.to_str().unwrap()]);
         let stdout = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{n} ranks: {}", String::from_utf8_lossy(&o.stderr));
         assert_eq!(stdout.matches("wrote ").count(), 1, "only rank 0 prints: {stdout}");
         assert!(stdout.contains(&format!("{n} rank(s)")), "{stdout}");
+        // the same iteration counts on every rank count
+        let counters = stdout.lines().find(|l| l.starts_with("solver gimssn")).unwrap_or_else(|| panic!("{stdout}")).to_string();
+        match &counters_1 {
+            Some(c) => assert_eq!(&counters, c, "{n} ranks"),
+            None => counters_1 = Some(counters),
+        }
         results.push(fields(&out));
     }
     for r in &results[1..] {

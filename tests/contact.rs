@@ -27,7 +27,8 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = Lambda::new(contact);
     let params = Params { eps: 1e-10, ..Params::default() };
-    let (lam, info) = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
+    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
+    let (lam, info) = (sol.lambda, sol.info);
     eprintln!("GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}", info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err);
     assert!(info.err <= 1e-10);
     // every iterate in Λ (the last one checked here; CGMfeas keeps them all there) and q monotone
@@ -40,6 +41,7 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let mut r = vec![0.0; dual.dim()];
     dual.apply(&lam, &mut r);
     r.iter_mut().zip(&b).for_each(|(ri, bi)| *ri -= bi);
+    assert_eq!(r, sol.gradient, "the returned gradient is a fresh Aλ − b");
     let bn = dual.norm(&b);
     let lmax = lam.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let (mut carrying, mut sliding) = (0, 0);
@@ -71,7 +73,7 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     }
     // DESIGN §4 sanity figures for N = 8
     assert_eq!((carrying, sliding), (32, 48));
-    let u = dual.recover(&lam);
+    let (u, _) = dual.recover(&lam);
     let umax = dual
         .blocks
         .iter()

@@ -125,16 +125,26 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
         b
     }
 
-    /// u_b = K_b⁻¹(f_b − B_bᵀλ) for each local body, as free DOF vectors.
-    pub fn recover(&self, lambda: &[f64]) -> Vec<Vec<f64>> {
-        let mut z = self.scatter(lambda);
-        for (blk, zb) in self.blocks.iter().zip(&mut z) {
+    /// u_b = K_b⁻¹(f_b − B_bᵀλ) for each local body, as free DOF vectors, with the right-hand
+    /// sides f_b − B_bᵀλ.
+    pub fn recover(&self, lambda: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let mut rhs = self.scatter(lambda);
+        for (blk, zb) in self.blocks.iter().zip(&mut rhs) {
             for (v, f) in zb.iter_mut().zip(&blk.local.sys.f) {
                 *v = f - *v;
             }
-            blk.local.chol.solve_in_place(zb);
         }
-        z
+        let u = self
+            .blocks
+            .iter()
+            .zip(&rhs)
+            .map(|(blk, f)| {
+                let mut x = f.clone();
+                blk.local.chol.solve_in_place(&mut x);
+                x
+            })
+            .collect();
+        (u, rhs)
     }
 }
 
@@ -203,7 +213,7 @@ mod tests {
             assert!(dot(&x, &ax) > 0.0);
             assert_eq!(dual.products(), 2);
             // r(λ) = Aλ − b = −(Bu − c) with u = K⁻¹(f − Bᵀλ): evaluate Bu − c on the primal side
-            let u = dual.recover(&x);
+            let (u, _) = dual.recover(&x);
             let mut full = vec![[0.0; 3]; model.mesh.nodes.len()];
             for (blk, ub) in dual.blocks.iter().zip(&u) {
                 let r = blk.local.dofs.nodes.clone();

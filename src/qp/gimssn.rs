@@ -123,14 +123,18 @@ fn q_of<A: DualOperator>(a: &A, lambda: &[f64], r: &[f64], b: &[f64]) -> f64 {
     0.5 * a.dot(lambda, &rb)
 }
 
-/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first). Returns λ ∈ Λ and the counters.
-pub fn solve<A: DualOperator>(
-    a: &A,
-    b: &[f64],
-    set: &Lambda,
-    lambda0: &[f64],
-    p: &Params,
-) -> Result<(Vec<f64>, Info), QpError> {
+/// The result of a QP solve.
+#[derive(Clone, Debug)]
+pub struct QpSolution {
+    /// λ ∈ Λ.
+    pub lambda: Vec<f64>,
+    /// r(λ) = Aλ − b from a fresh product (= −(Bu − c)).
+    pub gradient: Vec<f64>,
+    pub info: Info,
+}
+
+/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first).
+pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
     let n = a.dim();
     let n0 = a.products();
     let sigma = power_sigma(a, p.power_iterations);
@@ -174,7 +178,7 @@ pub fn solve<A: DualOperator>(
                 info.err = err;
                 info.q = q_of(a, &lambda, &r, b);
                 info.n_a = products();
-                return Ok((lambda, info));
+                return Ok(QpSolution { lambda, gradient: r, info });
             }
         }
         if k == p.max_outer {

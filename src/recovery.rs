@@ -1,0 +1,124 @@
+//! Recovery of the contact state from the dual solution: per pair the status (open / stick /
+//! slip), the normal and tangential tractions, the current gap and the slip, and the node fields
+//! that carry them into the result file.
+//!
+//! With r = Aλ − b = −(Bu − c): the current gap is rν,ᵢ = dᵢ − (Nu)ᵢ ≥ 0 and the relative
+//! tangential displacement (slip) is ūτ,ᵢ = −r̄τ,ᵢ. The slave node receives the force
+//! −(λν,ᵢ nᵢ + λτ,₁ t₁ᵢ + λτ,₂ t₂ᵢ); tractions are forces divided by the nodal area wᵢ.
+
+use crate::contact::pairing::Contact;
+use crate::output::{Center, Field, Values};
+use crate::qp::lambda::Lambda;
+use crate::qp::sets::ConvexSet;
+
+/// Status codes written to the `contact_status` field (0 on nodes without a contact pair).
+pub const OPEN: i32 = 1;
+pub const STICK: i32 = 2;
+pub const SLIP: i32 = 3;
+
+/// The contact state of every pair.
+#[derive(Clone, Debug, Default)]
+pub struct ContactState {
+    pub status: Vec<i32>,
+    /// Normal multiplier λν,ᵢ (force, ≥ 0).
+    pub normal_force: Vec<f64>,
+    /// Tangential multiplier as a global vector λτ,₁t₁ + λτ,₂t₂.
+    pub tangential_force: Vec<[f64; 3]>,
+    /// Current gap (≥ 0 up to the solver tolerance).
+    pub gap: Vec<f64>,
+    /// Relative tangential displacement of the slave w.r.t. the master node, global vector.
+    pub slip: Vec<[f64; 3]>,
+    /// Pairs with ‖λ̄τ,ᵢ‖ on the slip bound (open ones included: with Tresca the bound acts there too).
+    pub on_slip_bound: usize,
+}
+
+impl ContactState {
+    pub fn count(&self, status: i32) -> usize {
+        self.status.iter().filter(|&&s| s == status).count()
+    }
+
+    /// Total force the contact exerts on the slave bodies.
+    pub fn total_force(&self, contact: &Contact) -> [f64; 3] {
+        let mut f = [0.0; 3];
+        for i in 0..contact.len() {
+            for c in 0..3 {
+                f[c] -= self.normal_force[i] * contact.normal[i][c] + self.tangential_force[i][c];
+            }
+        }
+        f
+    }
+}
+
+/// Classifies each pair from λ and r = Aλ − b; `tol` is relative (to the largest λν, and to gᵢ).
+pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64], tol: f64) -> ContactState {
+    let m = contact.len();
+    let lmax = lambda[..m].iter().fold(0.0f64, |a, v| a.max(*v));
+    let mut s = ContactState::default();
+    for i in 0..m {
+        let (lt, rt) = if set.layout.friction {
+            let k = set.layout.tangent(i, 0);
+            ([lambda[k], lambda[k + 1]], [r[k], r[k + 1]])
+        } else {
+            ([0.0; 2], [0.0; 2])
+        };
+        let global = |v: [f64; 2]| -> [f64; 3] { std::array::from_fn(|c| v[0] * contact.t1[i][c] + v[1] * contact.t2[i][c]) };
+        let on_bound = set.layout.friction && {
+            // ‖λ̄τ‖ on the boundary: scaling it up by (1 + tol) leaves the set
+            let out = [lt[0] * (1.0 + tol), lt[1] * (1.0 + tol)];
+            set.tangent[i].is_outside(&out) && lt != [0.0, 0.0]
+        };
+        s.on_slip_bound += usize::from(on_bound);
+        let closed = lambda[i] > tol * lmax;
+        s.status.push(if !closed {
+            OPEN
+        } else if on_bound || !set.layout.friction {
+            SLIP
+        } else {
+            STICK
+        });
+        s.normal_force.push(lambda[i]);
+        s.tangential_force.push(global(lt));
+        s.gap.push(r[i]);
+        s.slip.push(global([-rt[0], -rt[1]]));
+    }
+    s
+}
+
+/// Node fields of the contact state on the slave nodes (zero elsewhere), for the result file.
+pub fn contact_fields(nnodes: usize, contact: &Contact, state: &ContactState, want: impl Fn(&str) -> bool) -> Vec<Field> {
+    let mut fields = Vec::new();
+    let scalar = |name: &str, f: &dyn Fn(usize) -> f64| {
+        let mut v = vec![0.0; nnodes];
+        for i in 0..contact.len() {
+            v[contact.slave[i]] = f(i);
+        }
+        Field { name: name.into(), center: Center::Node, ncomp: 1, values: Values::F64(v) }
+    };
+    let vector = |name: &str, f: &dyn Fn(usize) -> [f64; 3]| {
+        let mut v = vec![0.0; 3 * nnodes];
+        for i in 0..contact.len() {
+            v[3 * contact.slave[i]..3 * contact.slave[i] + 3].copy_from_slice(&f(i));
+        }
+        Field { name: name.into(), center: Center::Node, ncomp: 3, values: Values::F64(v) }
+    };
+    if want("contact_status") {
+        let mut v = vec![0; nnodes];
+        for i in 0..contact.len() {
+            v[contact.slave[i]] = state.status[i];
+        }
+        fields.push(Field { name: "contact_status".into(), center: Center::Node, ncomp: 1, values: Values::I32(v) });
+    }
+    if want("contact_pressure") {
+        fields.push(scalar("contact_pressure", &|i| state.normal_force[i] / contact.area[i]));
+    }
+    if want("contact_traction") {
+        fields.push(vector("contact_traction", &|i| state.tangential_force[i].map(|f| f / contact.area[i])));
+    }
+    if want("gap") {
+        fields.push(scalar("gap", &|i| state.gap[i]));
+    }
+    if want("slip") {
+        fields.push(vector("slip", &|i| state.slip[i]));
+    }
+    fields
+}
