@@ -1,8 +1,8 @@
 # tresca-feti on Debian 12 with Rust. The system packages come from run/packages.txt, the same
 # list run/demo and run/test install from.
 #   docker build -t tresca-feti .
-#   docker run --rm -v "$PWD/out:/work/out" tresca-feti solve run/seed.toml --set contact.enabled=false
-#   docker run --rm --entrypoint mpirun tresca-feti -n 2 tresca-feti solve run/seed.toml --set contact.enabled=false
+#   docker run --rm -v "$PWD/out:/work/out" tresca-feti solve run/seed.toml
+#   docker run --rm --entrypoint mpirun tresca-feti -n 2 tresca-feti solve run/seed.toml
 FROM rust:1-bookworm
 WORKDIR /work
 COPY run/packages.txt run/install-deps run/
