@@ -84,3 +84,39 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     // the largest displacement component (DESIGN's "max |u|" is the max-norm of u ∈ Rⁿ)
     assert!((umax - 8.7e-5).abs() < 0.05e-5, "max |u| = {umax:e}");
 }
+
+/// u of the seed scene with the given `--set` overrides, solved by GIMSSN at ε.
+fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+    let mut all = vec![format!("mesh.n={n}")];
+    all.extend(sets.iter().map(|s| s.to_string()));
+    let model = model::build(&scene::load(&path, &all).unwrap()).unwrap();
+    let contact = model.pairs.as_ref().unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
+    let set = Lambda::new(contact);
+    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, ..Params::default() }).unwrap();
+    let (u, _) = dual.recover(&sol.lambda);
+    dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).collect()
+}
+
+fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> (f64, f64) {
+    let d = a.iter().zip(b).flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs())).fold(0.0, f64::max);
+    let s = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    (d, s)
+}
+
+#[test]
+fn orthotropic_with_equal_bounds_is_isotropic() {
+    let iso = solve_u(6, &[], 1e-11);
+    for dir in ["[1.0, 0.0, 0.0]", "[0.3, -0.8, 0.2]"] {
+        let f = format!("contact.pair.0.friction={{type=\"orthotropic\", g1=0.09, g2=0.09, direction={dir}}}");
+        let ortho = solve_u(6, &[&f], 1e-11);
+        let (d, s) = max_diff(&iso, &ortho);
+        assert!(d <= 1e-8 * s, "direction {dir}: max difference {d:e} of {s:e}");
+    }
+    // a genuinely orthotropic law changes the answer
+    let f = "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.01, direction=[0.0, 1.0, 0.0]}";
+    let (d, s) = max_diff(&iso, &solve_u(6, &[f], 1e-11));
+    assert!(d > 1e-4 * s, "g2 ≠ g1 should matter: {d:e}");
+}
