@@ -1316,36 +1316,6 @@ mod tests {
 
     /// Cost per call (`cargo test --release --lib qp::sets::tests::timing -- --ignored
     /// --nocapture`): about 8 ns for a disc, 70–90 ns for an ellipse (2/3 of the points outside).
-    #[test]
-    #[ignore]
-    fn timing() {
-        let mut rng = Lcg(1);
-        let ys: Vec<[f64; 2]> = (0..10000).map(|_| [3.0 * rng.sym(), 3.0 * rng.sym()]).collect();
-        for set in [
-            TangentSet::Disc(Disc::new(1.0)),
-            TangentSet::Ellipse(Ellipse::new(3.0, 1.0)),
-            TangentSet::Ellipse(Ellipse::new(100.0, 1.0)),
-        ] {
-            let t = std::time::Instant::now();
-            let mut acc = 0.0;
-            for _ in 0..100 {
-                for y in &ys {
-                    let x = proj(&set, *y);
-                    acc += x[0];
-                }
-            }
-            let t1 = t.elapsed().as_secs_f64() / 1e6 * 1e9;
-            let t = std::time::Instant::now();
-            for _ in 0..100 {
-                for y in &ys {
-                    let j = slant(&set, *y);
-                    acc += j[0];
-                }
-            }
-            let t2 = t.elapsed().as_secs_f64() / 1e6 * 1e9;
-            println!("{set:?}: project {t1:.1} ns, slant {t2:.1} ns ({acc})");
-        }
-    }
 
     /// Random ellipses (axis ratio up to 1e8, size 1e-100…1e100) and points at all distances:
     /// the projection satisfies the optimality conditions that characterize it (on the boundary,
