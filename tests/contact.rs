@@ -120,3 +120,72 @@ fn orthotropic_with_equal_bounds_is_isotropic() {
     let (d, s) = max_diff(&iso, &solve_u(6, &[f], 1e-11));
     assert!(d > 1e-4 * s, "g2 ≠ g1 should matter: {d:e}");
 }
+
+/// A block pressed onto a fixed block and dragged along x by a prescribed displacement of its
+/// top face, in plane strain (two nodes across y, u_y = 0 on both y faces) so that every slip is
+/// exactly along x. Returns (pairs, report["contact"]).
+fn dragged_block(drag: f64) -> (usize, serde_json::Value) {
+    let dir = std::env::temp_dir().join(format!("tresca-feti-drag-{}-{drag:e}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("drag.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"
+[[material]]
+name = "steel"
+E = 50000.0
+nu = 0.3
+[[body]]
+name = "top"
+material = "steel"
+box = {{ min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 1.5], nodes = [9, 2, 4] }}
+[[body]]
+name = "base"
+material = "steel"
+box = {{ min = [0.0, 0.0, 0.5], max = [2.0, 1.0, 1.0], nodes = [9, 2, 4] }}
+[[dirichlet]]
+face = "top.zmax"
+value = [{drag}, 0.0, -1e-4]
+[[dirichlet]]
+face = "base.zmin"
+[[dirichlet]]
+face = "top.ymin"
+components = ["y"]
+[[dirichlet]]
+face = "top.ymax"
+components = ["y"]
+[[dirichlet]]
+face = "base.ymin"
+components = ["y"]
+[[dirichlet]]
+face = "base.ymax"
+components = ["y"]
+[[contact.pair]]
+slave = "top.zmin"
+master = "base.zmax"
+friction = {{ type = "tresca", g = 0.09 }}
+[solver]
+eps = 1e-10
+"#
+        ),
+    )
+    .unwrap();
+    let s = tresca_feti::pipeline::run_solve(&SerialComm, &scene, &[], Some(dir.join("drag.h5"))).unwrap();
+    (s.report["contact"]["pairs"].as_u64().unwrap() as usize, s.report["contact"].clone())
+}
+
+#[test]
+fn dragged_block_slides_above_the_slip_bound_and_sticks_below() {
+    // area 2 m², g = 0.09 MPa: the friction force cannot exceed g·A = 0.18 MN
+    let (m, c) = dragged_block(1e-3);
+    assert_eq!(m, 18);
+    assert_eq!(c["slip"].as_u64().unwrap() as usize, m, "{c}");
+    let fx = c["total_force_on_slave"][0].as_f64().unwrap();
+    assert!((fx.abs() - 0.09 * 2.0).abs() <= 1e-8, "friction force {fx} ≠ g·A");
+    assert!(fx < 0.0, "friction must oppose the drag: {fx}");
+    let (_, c) = dragged_block(1e-7);
+    assert_eq!(c["stick"].as_u64().unwrap() as usize, m, "{c}");
+    let fx = c["total_force_on_slave"][0].as_f64().unwrap();
+    assert!(fx.abs() < 0.5 * 0.18, "sticking friction force {fx} should be well below g·A");
+}
