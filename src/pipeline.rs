@@ -230,9 +230,15 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         max_inner: s.max_inner,
         power_iterations: s.power_iterations,
         cg_stop: gimssn::CgStop::Rhs,
+        variant: match s.method {
+            Method::Imssn => gimssn::Variant::Imssn,
+            Method::Mssn => gimssn::Variant::Mssn,
+            _ => gimssn::Variant::Gimssn,
+        },
     };
+    let name = method_name(s.method);
     let qp = t.phase(comm, "iterate", || {
-        gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical("GIMSSN", e.to_string()))
+        gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
     })?;
     let (u, rhs) = t.phase(comm, "recover", || Ok(dual.recover(&qp.lambda)))?;
     let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
@@ -301,12 +307,23 @@ fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
     sol
 }
 
+/// The scene's name of a method.
+pub fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Gimssn => "gimssn",
+        Method::Imssn => "imssn",
+        Method::Mssn => "mssn",
+        Method::SsnBicgstab => "ssn-bicgstab",
+        Method::Mpgp => "mpgp",
+    }
+}
+
 /// Checks that the scene can be solved by this build.
 fn supported(ls: &LoadedScene, model: &Model) -> Result<()> {
-    if model.pairs.is_some() && ls.scene.solver.method != Method::Gimssn {
+    if model.pairs.is_some() && matches!(ls.scene.solver.method, Method::SsnBicgstab | Method::Mpgp) {
         return Err(Error::scene(
             "solver.method",
-            format!("{:?} is not implemented yet; use \"gimssn\"", ls.scene.solver.method).to_lowercase(),
+            format!("\"{}\" is not implemented yet; use gimssn, imssn or mssn", method_name(ls.scene.solver.method)),
         ));
     }
     if ls.scene.decomposition.subdomains != 1 {
@@ -395,7 +412,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         "solver": outcome.map(|o| {
             let i = &o.info;
             json!({
-                "method": "gimssn",
+                "method": method_name(ls.scene.solver.method),
                 "eps": ls.scene.solver.eps,
                 "outer_iterations": i.iterations,
                 "nA": i.n_a,

@@ -8,7 +8,7 @@ use tresca_feti::dual::monolithic::MonolithicDual;
 use tresca_feti::dual::DualOperator;
 use tresca_feti::model::{self, Model};
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
-use tresca_feti::qp::gimssn::{self, Params};
+use tresca_feti::qp::gimssn::{self, Params, Variant};
 use tresca_feti::qp::lambda::Lambda;
 use tresca_feti::qp::sets::ConvexSet;
 use tresca_feti::scene::{self, OrderingKind};
@@ -87,6 +87,10 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
 
 /// u of the seed scene with the given `--set` overrides, solved by GIMSSN at ε.
 fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
+    solve_u_with(n, sets, eps, Variant::Gimssn)
+}
+
+fn solve_u_with(n: usize, sets: &[&str], eps: f64, variant: Variant) -> Vec<[f64; 3]> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
     let mut all = vec![format!("mesh.n={n}")];
     all.extend(sets.iter().map(|s| s.to_string()));
@@ -95,7 +99,8 @@ fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = Lambda::new(contact);
-    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, ..Params::default() }).unwrap();
+    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, variant, ..Params::default() }).unwrap();
+    assert!(set.contains(&sol.lambda, 1e-14), "{variant:?} returned λ ∉ Λ");
     let (u, _) = dual.recover(&sol.lambda);
     dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).collect()
 }
@@ -188,4 +193,13 @@ fn dragged_block_slides_above_the_slip_bound_and_sticks_below() {
     assert_eq!(c["stick"].as_u64().unwrap() as usize, m, "{c}");
     let fx = c["total_force_on_slave"][0].as_f64().unwrap();
     assert!(fx.abs() < 0.5 * 0.18, "sticking friction force {fx} should be well below g·A");
+}
+
+#[test]
+fn gimssn_imssn_mssn_agree() {
+    let reference = solve_u_with(6, &[], 1e-11, Variant::Gimssn);
+    for v in [Variant::Imssn, Variant::Mssn] {
+        let (d, s) = max_diff(&reference, &solve_u_with(6, &[], 1e-11, v));
+        assert!(d <= 1e-8 * s, "{v:?}: max difference {d:e} of {s:e}");
+    }
 }

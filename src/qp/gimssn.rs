@@ -9,6 +9,11 @@
 //! would leave Λ. Every iterate is in Λ and q(λᵏ) decreases monotonically for ρ ∈ (0, 2/σ_max).
 //! ρ = rho_factor/(1.1·σ_est) with σ_est from power iterations (the 1.1 covers their
 //! underestimate, DESIGN §3a). Stop: ‖r̃_ρ(λ)‖ ≤ ε‖b‖, confirmed with a fresh A-product.
+//!
+//! The same loop gives the paper's two other symmetrized variants ([`Variant`]): **IMSSN** fixes
+//! the components of (11) but starts CG from λᵏ's free components, runs CG without the
+//! feasibility test, and measures the error at P_Λ(λ^{k+1}) (one more product per step); the
+//! result is P_Λ(λ). **MSSN** is IMSSN with the free-set system solved to round-off.
 
 use super::lambda::Lambda;
 use crate::dual::DualOperator;
@@ -35,6 +40,18 @@ pub struct Params {
     pub max_inner: usize,
     pub power_iterations: usize,
     pub cg_stop: CgStop,
+    pub variant: Variant,
+}
+
+/// Which member of the symmetrized semi-smooth Newton family runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// Monotone, feasible (CGMfeas), globally convergent.
+    Gimssn,
+    /// Inexact: CG to the adaptive tolerance, iterates may leave Λ.
+    Imssn,
+    /// Exact inner solves.
+    Mssn,
 }
 
 impl Default for Params {
@@ -48,6 +65,7 @@ impl Default for Params {
             max_inner: 10_000,
             power_iterations: 30,
             cg_stop: CgStop::Rhs,
+            variant: Variant::Gimssn,
         }
     }
 }
@@ -165,20 +183,26 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
     let (mut x, mut g, mut gf, mut d, mut ad) =
         (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut y = vec![0.0; n];
+    let feasible = p.variant == Variant::Gimssn;
+    // (z, rz): the point in Λ the error is measured at and its gradient; for GIMSSN z = λ
+    let (mut z, mut rz) = (lambda.clone(), r.clone());
+    let mut pz = vec![0.0; n];
     for k in 0.. {
         if !err.is_finite() {
             return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
         }
         if err <= p.eps {
-            // confirm with a fresh product: the CG recurrences drift
-            residual(&lambda, &mut r);
-            err = err_of(&lambda, &r, &mut rt);
+            if feasible {
+                // confirm with a fresh product: the CG recurrences drift
+                residual(&z, &mut rz);
+                err = err_of(&z, &rz, &mut rt);
+            }
             if err <= p.eps {
                 info.iterations = k;
                 info.err = err;
-                info.q = q_of(a, &lambda, &r, b);
+                info.q = q_of(a, &z, &rz, b);
                 info.n_a = products();
-                return Ok(QpSolution { lambda, gradient: r, info });
+                return Ok(QpSolution { lambda: z, gradient: rz, info });
             }
         }
         if k == p.max_outer {
@@ -189,13 +213,21 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         let sets = set.active_sets(&lambda, &r, rho);
         tol = (p.rtol * err / err0).min(p.cfact * tol);
-        // λ^{k+1,0} = P_Λ(λᵏ − ρ r(λᵏ))
+        // the fixed components as (11) wants them: P_Λ(λᵏ − ρ r(λᵏ)) there
         for i in 0..n {
             y[i] = lambda[i] - rho * r[i];
         }
         set.project(&y, &mut x);
+        if !feasible {
+            // IMSSN/MSSN: the free components start from λᵏ
+            for i in 0..n {
+                if sets.free[i] {
+                    x[i] = lambda[i];
+                }
+            }
+        }
         residual(&x, &mut g);
-        // CGMfeas on the free set
+        // CG on the free set (CGMfeas for GIMSSN)
         let masked = |g: &[f64], out: &mut [f64]| {
             for i in 0..n {
                 out[i] = if sets.free[i] { g[i] } else { 0.0 };
@@ -207,8 +239,11 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             CgStop::Rhs => bnorm,
             CgStop::InitialGradient => gf0,
         };
-        // never ask CG for more than a tenth of the outer tolerance (round-off floor)
-        let threshold = (tol * scale).max(0.1 * p.eps * bnorm);
+        let threshold = match p.variant {
+            Variant::Mssn => 1e-13 * bnorm,
+            // never ask CG for more than a tenth of the outer tolerance (round-off floor)
+            _ => (tol * scale).max(0.1 * p.eps * bnorm),
+        };
         d.copy_from_slice(&gf);
         let mut inner = 0;
         let mut gg = gf0 * gf0;
@@ -223,14 +258,16 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                 return Err(QpError::Breakdown { outer: k, p_ap: dad });
             }
             let alpha = a.dot(&gf, &d) / dad;
-            let alpha_f = set.max_step(&x, &d);
-            if alpha > alpha_f {
-                // the CG step would leave Λ: go to the boundary and stop
-                for i in 0..n {
-                    x[i] -= alpha_f * d[i];
-                    g[i] -= alpha_f * ad[i];
+            if feasible {
+                let alpha_f = set.max_step(&x, &d);
+                if alpha > alpha_f {
+                    // the CG step would leave Λ: go to the boundary and stop
+                    for i in 0..n {
+                        x[i] -= alpha_f * d[i];
+                        g[i] -= alpha_f * ad[i];
+                    }
+                    break;
                 }
-                break;
             }
             for i in 0..n {
                 x[i] -= alpha * d[i];
@@ -245,12 +282,20 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         std::mem::swap(&mut lambda, &mut x);
         std::mem::swap(&mut r, &mut g);
-        err = err_of(&lambda, &r, &mut rt);
+        if feasible {
+            z.copy_from_slice(&lambda);
+            rz.copy_from_slice(&r);
+        } else {
+            set.project(&lambda, &mut pz);
+            std::mem::swap(&mut z, &mut pz);
+            residual(&z, &mut rz);
+        }
+        err = err_of(&z, &rz, &mut rt);
         info.inner_iterations += inner;
         info.history.push(Step {
             err,
             tol,
-            q: q_of(a, &lambda, &r, b),
+            q: q_of(a, &z, &rz, b),
             normal_active: sets.normal_active,
             stick: sets.stick,
             slip: sets.slip,
