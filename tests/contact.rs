@@ -13,15 +13,17 @@ use tresca_feti::qp::lambda::Lambda;
 use tresca_feti::qp::sets::ConvexSet;
 use tresca_feti::scene::{self, OrderingKind};
 
-fn seed(n: usize) -> Model {
+/// The seed scene at N = n with extra `--set` overrides.
+fn seed(n: usize, sets: &[&str]) -> Model {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-    let ls = scene::load(&path, &[format!("mesh.n={n}")]).unwrap();
-    model::build(&ls).unwrap()
+    let mut all = vec![format!("mesh.n={n}")];
+    all.extend(sets.iter().map(|s| s.to_string()));
+    model::build(&scene::load(&path, &all).unwrap()).unwrap()
 }
 
 #[test]
 fn gimssn_seed_kkt_monotone_and_sanity_figures() {
-    let model = seed(8);
+    let model = seed(8, &[]);
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
@@ -91,10 +93,7 @@ fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
 }
 
 fn solve_u_with(n: usize, sets: &[&str], eps: f64, variant: Variant) -> Vec<[f64; 3]> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-    let mut all = vec![format!("mesh.n={n}")];
-    all.extend(sets.iter().map(|s| s.to_string()));
-    let model = model::build(&scene::load(&path, &all).unwrap()).unwrap();
+    let model = seed(n, sets);
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
