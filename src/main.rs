@@ -93,14 +93,15 @@ fn print_summary(s: &pipeline::Summary) {
     }
     if let Some(sv) = r["solver"].as_object() {
         println!(
-            "solver {}: {} outer iterations, nA = {} (+{} power iterations), {} CG iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e})",
+            "solver {}: {} outer iterations, nA = {} (+{} power iterations), {} inner iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e}), KKT residual {:.1e}",
             sv["method"].as_str().unwrap_or(""),
             sv["outer_iterations"],
             sv["nA"],
             sv["nA_power"],
             sv["inner_iterations"],
             sv["final_relative_reduced_gradient"].as_f64().unwrap_or(f64::NAN),
-            sv["eps"].as_f64().unwrap_or(f64::NAN)
+            sv["eps"].as_f64().unwrap_or(f64::NAN),
+            sv["kkt_worst"].as_f64().unwrap_or(f64::NAN)
         );
         let c = &r["contact"];
         println!(

@@ -23,10 +23,10 @@ use crate::model::{self, Model};
 use crate::output::{self, Center, Field, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualOperator;
-use crate::qp::gimssn;
+use crate::qp;
 use crate::qp::lambda::Lambda;
 use crate::recovery::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
-use crate::scene::{LoadedScene, Method, OrderingKind};
+use crate::scene::{LoadedScene, OrderingKind, SolverSettings};
 
 /// Wall time of each phase, the maximum over the ranks.
 #[derive(Clone, Debug, Default)]
@@ -221,39 +221,29 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
     let (dual, b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
     let set = Lambda::new(contact);
-    let params = gimssn::Params {
-        eps: s.eps,
-        rho_factor: s.rho_factor,
-        rtol: s.rtol,
-        cfact: s.cfact,
-        max_outer: s.max_outer,
-        max_inner: s.max_inner,
-        power_iterations: s.power_iterations,
-        cg_stop: gimssn::CgStop::Rhs,
-        variant: match s.method {
-            Method::Imssn => gimssn::Variant::Imssn,
-            Method::Mssn => gimssn::Variant::Mssn,
-            _ => gimssn::Variant::Gimssn,
-        },
-    };
-    let name = method_name(s.method);
+    let params = solver_params(s);
+    let name = s.method.name();
     let qp = t.phase(comm, "iterate", || {
-        gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
+        qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
     })?;
     let (u, rhs) = t.phase(comm, "recover", || Ok(dual.recover(&qp.lambda)))?;
     let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
     let rhs_refs: Vec<&[f64]> = rhs.iter().map(Vec::as_slice).collect();
     let sol = finish_bodies(comm, model, &refs, &u, &rhs_refs, t)?;
-    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, 1e-9);
-    Ok((sol, ContactOutcome { state, info: qp.info, bnorm: dual.norm(&b) }))
+    // the status cannot be sharper than the solution: classify at the solver's tolerance
+    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, s.eps.max(1e-9));
+    let bnorm = dual.norm(&b);
+    let kkt = qp::kkt::residuals(&set, &qp.lambda, &qp.gradient, bnorm);
+    Ok((sol, ContactOutcome { state, info: qp.info, bnorm, kkt }))
 }
 
 /// What the contact solve adds to the elastic fields.
 #[derive(Clone, Debug)]
 pub struct ContactOutcome {
     pub state: ContactState,
-    pub info: gimssn::Info,
+    pub info: qp::Info,
     pub bnorm: f64,
+    pub kkt: qp::kkt::Kkt,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -307,25 +297,25 @@ fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
     sol
 }
 
-/// The scene's name of a method.
-pub fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Gimssn => "gimssn",
-        Method::Imssn => "imssn",
-        Method::Mssn => "mssn",
-        Method::SsnBicgstab => "ssn-bicgstab",
-        Method::Mpgp => "mpgp",
+/// The solver parameters of the scene's `[solver]` table.
+pub fn solver_params(s: &SolverSettings) -> qp::Params {
+    qp::Params {
+        method: s.method,
+        eps: s.eps,
+        rho_factor: s.rho_factor,
+        rtol: s.rtol,
+        cfact: s.cfact,
+        inner_tol: s.inner_tol,
+        cg_stop: s.cg_stop,
+        max_outer: s.max_outer,
+        max_inner: s.max_inner,
+        power_iterations: s.power_iterations,
+        gamma: s.gamma,
     }
 }
 
 /// Checks that the scene can be solved by this build.
-fn supported(ls: &LoadedScene, model: &Model) -> Result<()> {
-    if model.pairs.is_some() && matches!(ls.scene.solver.method, Method::SsnBicgstab | Method::Mpgp) {
-        return Err(Error::scene(
-            "solver.method",
-            format!("\"{}\" is not implemented yet; use gimssn, imssn or mssn", method_name(ls.scene.solver.method)),
-        ));
-    }
+fn supported(ls: &LoadedScene) -> Result<()> {
     if ls.scene.decomposition.subdomains != 1 {
         return Err(Error::scene(
             "decomposition.subdomains",
@@ -346,7 +336,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         Ok(ls)
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
-    t.phase(comm, "validate", || supported(&ls, &model))?;
+    t.phase(comm, "validate", || supported(&ls))?;
     let (sol, outcome) = match &model.pairs {
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
         None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
@@ -412,7 +402,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         "solver": outcome.map(|o| {
             let i = &o.info;
             json!({
-                "method": method_name(ls.scene.solver.method),
+                "method": ls.scene.solver.method.name(),
                 "eps": ls.scene.solver.eps,
                 "outer_iterations": i.iterations,
                 "nA": i.n_a,
@@ -423,6 +413,8 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 "sigma_est": i.sigma_est,
                 "rho": i.rho,
                 "norm_b": o.bnorm,
+                "kkt": o.kkt,
+                "kkt_worst": o.kkt.worst(),
             })
         }),
         "timings": t.to_json(),
@@ -430,11 +422,11 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
     })
 }
 
-fn history_json(info: &gimssn::Info) -> serde_json::Value {
+fn history_json(info: &qp::Info) -> serde_json::Value {
     json!(info
         .history
         .iter()
-        .map(|h| json!({"err": h.err, "tol": h.tol, "q": h.q, "nA": h.n_a, "inner": h.inner, "normal_active": h.normal_active, "stick": h.stick, "slip": h.slip}))
+        .map(|h| json!({"kind": h.kind.to_string(), "err": h.err, "tol": h.tol, "q": h.q, "nA": h.n_a, "inner": h.inner, "normal_active": h.normal_active, "stick": h.stick, "slip": h.slip}))
         .collect::<Vec<_>>())
 }
 
@@ -529,7 +521,7 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
             tangential
         );
     }
-    let _ = write!(s, "solve support: {}", match supported(&ls, &model) {
+    let _ = write!(s, "solve support: {}", match supported(&ls) {
         Ok(()) => "yes".to_string(),
         Err(e) => format!("no — {e}"),
     });

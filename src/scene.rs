@@ -193,15 +193,7 @@ pub enum Friction {
     Orthotropic { g1: f64, g2: f64, direction: [f64; 3] },
 }
 
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    Gimssn,
-    Imssn,
-    Mssn,
-    SsnBicgstab,
-    Mpgp,
-}
+pub use crate::qp::{CgStop, Method};
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -225,6 +217,22 @@ pub struct SolverSettings {
     /// Power iterations for the estimate of σ_max(A).
     #[serde(default = "default_power_iterations")]
     pub power_iterations: usize,
+    /// What inner tolerances are relative to: "rhs" (‖b‖) or "initial-gradient" (the paper's).
+    #[serde(default = "default_cg_stop")]
+    pub cg_stop: CgStop,
+    /// A fixed relative inner tolerance for SSN-BiCGSTAB instead of the adaptive one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inner_tol: Option<f64>,
+    /// MPGP's proportioning constant Γ.
+    #[serde(default = "default_gamma")]
+    pub gamma: f64,
+}
+
+fn default_cg_stop() -> CgStop {
+    CgStop::Rhs
+}
+fn default_gamma() -> f64 {
+    1.0
 }
 
 fn default_method() -> Method {
@@ -263,6 +271,9 @@ impl Default for SolverSettings {
             max_outer: default_max_outer(),
             max_inner: default_max_inner(),
             power_iterations: default_power_iterations(),
+            cg_stop: default_cg_stop(),
+            inner_tol: None,
+            gamma: default_gamma(),
         }
     }
 }
@@ -575,6 +586,12 @@ impl Scene {
         };
         pos("eps", s.eps)?;
         pos("rho_factor", s.rho_factor)?;
+        pos("gamma", s.gamma)?;
+        if let Some(t) = s.inner_tol {
+            if !(t > 0.0 && t < 1.0) {
+                return Err(Error::scene("solver.inner_tol", format!("must lie in (0, 1), got {t}")));
+            }
+        }
         for (key, v) in [("rtol", s.rtol), ("cfact", s.cfact)] {
             if !(v > 0.0 && v < 1.0) {
                 return Err(Error::scene(format!("solver.{key}"), format!("must lie in (0, 1), got {v}")));

@@ -8,7 +8,7 @@ use tresca_feti::dual::monolithic::MonolithicDual;
 use tresca_feti::dual::DualOperator;
 use tresca_feti::model::{self, Model};
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
-use tresca_feti::qp::gimssn::{self, Params, Variant};
+use tresca_feti::qp::{self, kkt, Method, Params};
 use tresca_feti::qp::lambda::Lambda;
 use tresca_feti::qp::sets::ConvexSet;
 use tresca_feti::scene::{self, OrderingKind};
@@ -29,7 +29,7 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = Lambda::new(contact);
     let params = Params { eps: 1e-10, ..Params::default() };
-    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
+    let sol = qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
     let (lam, info) = (sol.lambda, sol.info);
     eprintln!("GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}", info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err);
     assert!(info.err <= 1e-10);
@@ -44,6 +44,8 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     dual.apply(&lam, &mut r);
     r.iter_mut().zip(&b).for_each(|(ri, bi)| *ri -= bi);
     assert_eq!(r, sol.gradient, "the returned gradient is a fresh Aλ − b");
+    let k = kkt::residuals(&set, &lam, &r, dual.norm(&b));
+    assert!(k.worst() <= 1e-9, "KKT residuals {k:?}");
     let bn = dual.norm(&b);
     let lmax = lam.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let (mut carrying, mut sliding) = (0, 0);
@@ -89,19 +91,27 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
 
 /// u of the seed scene with the given `--set` overrides, solved by GIMSSN at ε.
 fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
-    solve_u_with(n, sets, eps, Variant::Gimssn)
+    solve_u_with(n, sets, eps, Method::Gimssn).0
 }
 
-fn solve_u_with(n: usize, sets: &[&str], eps: f64, variant: Variant) -> Vec<[f64; 3]> {
+/// u of the seed scene solved by `method` at ε, with the KKT residuals of the result.
+fn solve_u_with(n: usize, sets: &[&str], eps: f64, method: Method) -> (Vec<[f64; 3]>, kkt::Kkt) {
     let model = seed(n, sets);
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = Lambda::new(contact);
-    let sol = gimssn::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, variant, ..Params::default() }).unwrap();
-    assert!(set.contains(&sol.lambda, 1e-14), "{variant:?} returned λ ∉ Λ");
+    let sol = qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, method, ..Params::default() }).unwrap();
+    assert!(set.contains(&sol.lambda, 1e-14), "{method:?} returned λ ∉ Λ");
+    if matches!(method, Method::Gimssn | Method::Mpgp) {
+        // the monotone methods: q never increases
+        for w in sol.info.history.windows(2) {
+            assert!(w[1].q <= w[0].q + 1e-13 * w[0].q.abs(), "{method:?} {sets:?}: q increased {} → {}", w[0].q, w[1].q);
+        }
+    }
+    let k = kkt::residuals(&set, &sol.lambda, &sol.gradient, dual.norm(&b));
     let (u, _) = dual.recover(&sol.lambda);
-    dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).collect()
+    (dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).collect(), k)
 }
 
 fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> (f64, f64) {
@@ -195,10 +205,21 @@ fn dragged_block_slides_above_the_slip_bound_and_sticks_below() {
 }
 
 #[test]
-fn gimssn_imssn_mssn_agree() {
-    let reference = solve_u_with(6, &[], 1e-11, Variant::Gimssn);
-    for v in [Variant::Imssn, Variant::Mssn] {
-        let (d, s) = max_diff(&reference, &solve_u_with(6, &[], 1e-11, v));
-        assert!(d <= 1e-8 * s, "{v:?}: max difference {d:e} of {s:e}");
+fn all_five_solvers_agree_and_satisfy_kkt() {
+    // isotropic Tresca (the seed), frictionless (no tangential multipliers), and orthotropic
+    let cases: [&[&str]; 3] = [
+        &[],
+        &["contact.pair.0.friction={type=\"none\"}"],
+        &["contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}"],
+    ];
+    for sets in cases {
+        let (reference, _) = solve_u_with(6, sets, 1e-11, Method::Gimssn);
+        for m in Method::ALL {
+            let (u, k) = solve_u_with(6, sets, 1e-11, m);
+            let (d, s) = max_diff(&reference, &u);
+            eprintln!("{sets:?} {m:?}: max |u − u_GIMSSN| = {d:.2e} of {s:.2e}, KKT {:.1e}", k.worst());
+            assert!(d <= 1e-8 * s, "{sets:?} {m:?}: max difference {d:e} of {s:e}");
+            assert!(k.worst() <= 1e-8, "{sets:?} {m:?}: KKT residuals {k:?}");
+        }
     }
 }

@@ -119,3 +119,51 @@ impl Lambda {
         s
     }
 }
+
+/// A slant derivative D of P_Λ at a point y: block-diagonal, a 0/1 per normal component and a
+/// 2×2 block (row-major) per tangential pair (identity inside the set, the ψ° of the set
+/// outside).
+#[derive(Clone, Debug)]
+pub struct SlantDerivative {
+    layout: Layout,
+    pub normal: Vec<f64>,
+    pub tangent: Vec<[f64; 4]>,
+}
+
+impl SlantDerivative {
+    /// out = D x.
+    pub fn apply(&self, x: &[f64], out: &mut [f64]) {
+        for (i, d) in self.normal.iter().enumerate() {
+            out[i] = d * x[i];
+        }
+        for (i, d) in self.tangent.iter().enumerate() {
+            let k = self.layout.tangent(i, 0);
+            let (a, b) = (x[k], x[k + 1]);
+            out[k] = d[0] * a + d[1] * b;
+            out[k + 1] = d[2] * a + d[3] * b;
+        }
+    }
+}
+
+impl Lambda {
+    /// The slant derivative of P_Λ at y.
+    pub fn slant(&self, y: &[f64]) -> SlantDerivative {
+        let m = self.layout.m;
+        let mut normal = vec![0.0; m];
+        for i in 0..m {
+            HalfLine.slant(&y[i..i + 1], &mut normal[i..i + 1]);
+        }
+        let tangent = self
+            .tangent
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let k = self.layout.tangent(i, 0);
+                let mut d = [0.0; 4];
+                s.slant(&y[k..k + 2], &mut d);
+                d
+            })
+            .collect();
+        SlantDerivative { layout: self.layout, normal, tangent }
+    }
+}

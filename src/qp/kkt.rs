@@ -1,0 +1,86 @@
+//! KKT residuals of a dual solution λ with its gradient r = Aλ − b = −(Bu − c): what a result
+//! must satisfy, measured independently of any solver's stopping test. Equilibrium
+//! `Ku = f − Bᵀλ` holds by the recovery (it is checked on the primal side, per body).
+//!
+//! Per pair i: no penetration `rν,ᵢ ≥ 0` (the current gap); `λν,ᵢ ≥ 0`; complementarity
+//! `λν,ᵢ rν,ᵢ = 0`; the friction bound `λ̄τ,ᵢ ∈ Λτ,ᵢ`; the friction law: either stick,
+//! `r̄τ,ᵢ = 0` (no slip), or slip: λ̄τ on the boundary and the slip `ūτ = −r̄τ` along the
+//! outward normal n of the set there (`r̄τ·t = 0`, `r̄τ·n ≤ 0`). The friction-law residual of a
+//! pair is the smaller of its stick residual `‖r̄τ‖` and its slip residual (distance to the
+//! boundary, tangential and outward parts of r̄τ), so that an inexact λ̄τ a hair inside the
+//! bound of a sliding pair is not read as a moving sticking one. Forces are relative to
+//! `max(max λν, max gᵢ)`, the gradient to ‖b‖.
+
+use super::lambda::Lambda;
+use super::sets::ConvexSet;
+
+/// Relative KKT residuals (all ≥ 0; 0 at an exact solution).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Kkt {
+    pub penetration: f64,
+    pub normal_sign: f64,
+    pub complementarity: f64,
+    pub friction_bound: f64,
+    pub friction_law: f64,
+}
+
+impl Kkt {
+    /// The largest of the residuals.
+    pub fn worst(&self) -> f64 {
+        [self.penetration, self.normal_sign, self.complementarity, self.friction_bound, self.friction_law]
+            .into_iter()
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The KKT residuals of λ with gradient r; `bnorm` = ‖b‖.
+pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
+    let m = set.layout.m;
+    let mut lscale = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let mut k = Kkt::default();
+    let bnorm = bnorm.max(f64::MIN_POSITIVE);
+    for s in &set.tangent {
+        // the set's size: the projection of a far point lies on its boundary
+        let mut far = [0.0; 2];
+        s.project(&[1e300, 1e300], &mut far);
+        lscale = lscale.max(far[0].hypot(far[1]));
+    }
+    let lscale = lscale.max(f64::MIN_POSITIVE);
+    for i in 0..m {
+        k.penetration = k.penetration.max((-r[i]).max(0.0) / bnorm);
+        k.normal_sign = k.normal_sign.max((-lambda[i]).max(0.0) / lscale);
+        k.complementarity = k.complementarity.max((lambda[i] * r[i]).abs() / (lscale * bnorm));
+    }
+    for (i, s) in set.tangent.iter().enumerate() {
+        let j = set.layout.tangent(i, 0);
+        let x = [lambda[j], lambda[j + 1]];
+        let g = [r[j], r[j + 1]];
+        let mut px = [0.0; 2];
+        s.project(&x, &mut px);
+        k.friction_bound = k.friction_bound.max((x[0] - px[0]).hypot(x[1] - px[1]) / lscale);
+        if s.is_outside(&[f64::MIN_POSITIVE, f64::MIN_POSITIVE]) {
+            continue; // the point set {0}: every r̄τ is admissible
+        }
+        let stick = g[0].hypot(g[1]) / bnorm;
+        // the nearest boundary point: px itself if λ̄τ is outside, else the boundary point
+        // along the ray from 0 through λ̄τ (exact for a disc, a bound for an ellipse)
+        if px == [0.0, 0.0] {
+            k.friction_law = k.friction_law.max(stick);
+            continue;
+        }
+        let on = if s.is_outside(&x) {
+            px
+        } else {
+            let t = s.max_step(&px, &[-px[0], -px[1]]);
+            [px[0] * (1.0 + t), px[1] * (1.0 + t)]
+        };
+        let dist = (on[0] - px[0]).hypot(on[1] - px[1]) / lscale;
+        let t = s.boundary_tangent(&on);
+        let n = [t[1], -t[0]];
+        let along = (g[0] * t[0] + g[1] * t[1]).abs();
+        let outward = (g[0] * n[0] + g[1] * n[1]).max(0.0);
+        let slip = dist.max(along.max(outward) / bnorm);
+        k.friction_law = k.friction_law.max(stick.min(slip));
+    }
+    k
+}

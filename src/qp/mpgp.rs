@@ -1,0 +1,229 @@
+//! MPGP — modified proportioning with gradient projections (Dostál & Kozubek, Math. Program.
+//! 135 (2012); the disc step bound from Bouchala, Dostál & Vodstrčil, JOTA 157 (2013)): the
+//! peer method for separable convex constraints (DESIGN §3).
+//!
+//! At λ ∈ Λ a block is *active* when λ lies on its boundary (λν,ᵢ = 0; ‖λ̄τ,ᵢ‖ = gᵢ or on the
+//! ellipse), *free* otherwise. The gradient g = Aλ − b splits into the free gradient φ (g on free
+//! blocks, 0 on active ones) and the chopped gradient β (0 on free blocks; on an active block
+//! the projected gradient `g − min(0, gᵀn) n`, n the outward normal: for a disc that is the
+//! inward normal part or the tangential part of g). φ̃ = (λ − P_Λ(λ − ᾱφ))/ᾱ is the reduced free
+//! gradient. Each step is one of:
+//! - **CG** (λ proportional, ‖β‖² ≤ Γ² φ̃ᵀφ, and the CG step stays in Λ): a conjugate gradient
+//!   step on the free blocks;
+//! - **expansion** (proportional, but the CG step would leave Λ): to the boundary, then the
+//!   projected step `λ ← P_Λ(λ − ᾱ φ)` with the fixed length ᾱ ∈ (0, 2/‖A‖], CG restarted;
+//! - **proportioning** (not proportional): an exact line search along −β while that stays in
+//!   Λ; on a curved boundary the tangential part of β admits no feasible step, so there (and
+//!   where the line search would leave Λ) the step ends with the gradient projection of the
+//!   active blocks `λ_A ← P_Λ(λ_A − ᾱ g_A)` (a projected gradient step of the restricted
+//!   problem, monotone for ᾱ < 2/‖A‖; the same step along β is not).
+//!
+//! ᾱ = ρ = rho_factor/(1.1 σ_est); the stop is the same as the Newton methods'
+//! (`‖r̃_ρ(λ)‖ ≤ ε‖b‖`, confirmed with a fresh product). q decreases in every step. One
+//! outer iteration is one step; `inner_iterations` counts the CG steps.
+
+use super::lambda::Lambda;
+use super::sets::ConvexSet;
+use super::{err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
+use crate::dual::DualOperator;
+
+/// Relative distance to the boundary under which a block counts as active.
+const ON_BOUNDARY: f64 = 1e-10;
+
+/// The gradient split at λ.
+struct Split {
+    phi: Vec<f64>,
+    beta: Vec<f64>,
+    /// φ̃, the reduced free gradient.
+    phit: Vec<f64>,
+    /// Free normals, free (interior) tangential pairs, active tangential pairs.
+    free_normal: usize,
+    free_tangent: usize,
+    active_tangent: usize,
+}
+
+fn split(set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
+    let m = set.layout.m;
+    let lmax = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let (phi, beta, phit) = (&mut out.phi, &mut out.beta, &mut out.phit);
+    out.free_normal = 0;
+    out.free_tangent = 0;
+    out.active_tangent = 0;
+    for i in 0..m {
+        if lambda[i] > ON_BOUNDARY * lmax {
+            phi[i] = g[i];
+            beta[i] = 0.0;
+            out.free_normal += 1;
+            // φ̃ᵢ = (λᵢ − max(0, λᵢ − ᾱgᵢ))/ᾱ
+            phit[i] = if g[i] > 0.0 { g[i].min(lambda[i] / alpha) } else { g[i] };
+        } else {
+            phi[i] = 0.0;
+            phit[i] = 0.0;
+            beta[i] = g[i].min(0.0);
+        }
+    }
+    for (i, s) in set.tangent.iter().enumerate() {
+        let k = set.layout.tangent(i, 0);
+        let x = [lambda[k], lambda[k + 1]];
+        let gi = [g[k], g[k + 1]];
+        let degenerate = s.is_outside(&[f64::MIN_POSITIVE, f64::MIN_POSITIVE]);
+        let scaled = [x[0] * (1.0 + ON_BOUNDARY), x[1] * (1.0 + ON_BOUNDARY)];
+        if degenerate {
+            // the point set {0}: nothing can move
+            phi[k..k + 2].fill(0.0);
+            phit[k..k + 2].fill(0.0);
+            beta[k..k + 2].fill(0.0);
+            out.active_tangent += 1;
+        } else if s.is_outside(&scaled) {
+            let t = s.boundary_tangent(&x);
+            let nrm = [t[1], -t[0]];
+            let gn = (gi[0] * nrm[0] + gi[1] * nrm[1]).min(0.0);
+            phi[k..k + 2].fill(0.0);
+            phit[k..k + 2].fill(0.0);
+            beta[k] = gi[0] - gn * nrm[0];
+            beta[k + 1] = gi[1] - gn * nrm[1];
+            out.active_tangent += 1;
+        } else {
+            phi[k] = gi[0];
+            phi[k + 1] = gi[1];
+            beta[k..k + 2].fill(0.0);
+            let mut px = [0.0; 2];
+            s.project(&[x[0] - alpha * gi[0], x[1] - alpha * gi[1]], &mut px);
+            phit[k] = (x[0] - px[0]) / alpha;
+            phit[k + 1] = (x[1] - px[1]) / alpha;
+            out.free_tangent += 1;
+        }
+    }
+}
+
+/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by MPGP.
+pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
+    let n = a.dim();
+    let st = Setup::new(a, b, p)?;
+    let alpha_bar = st.rho;
+    let mut lambda = vec![0.0; n];
+    set.project(lambda0, &mut lambda);
+    let mut g = vec![0.0; n];
+    residual(a, b, &lambda, &mut g);
+    let mut sp = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
+    split(set, &lambda, &g, alpha_bar, &mut sp);
+    let mut dir = sp.phi.clone();
+    let (mut ad, mut y, mut rt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut info: Info = st.info();
+    let mut err = err_of(a, set, &lambda, &g, &st, &mut rt);
+    // λ ← P_Λ(λ − ᾱ v), g fresh, split, CG restarted
+    let projected_step = |lambda: &mut Vec<f64>, v: &[f64], g: &mut Vec<f64>, y: &mut Vec<f64>| {
+        for i in 0..n {
+            y[i] = lambda[i] - alpha_bar * v[i];
+        }
+        set.project(y, lambda);
+        residual(a, b, lambda, g);
+    };
+    for k in 0.. {
+        if !err.is_finite() {
+            return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
+        }
+        if err <= p.eps {
+            // confirm with a fresh product: the recurrences drift
+            residual(a, b, &lambda, &mut g);
+            err = err_of(a, set, &lambda, &g, &st, &mut rt);
+            if err <= p.eps {
+                info.iterations = k;
+                info.err = err;
+                info.q = q_of(a, &lambda, &g, b);
+                info.n_a = st.products(a);
+                return Ok(QpSolution { lambda, gradient: g, info });
+            }
+            split(set, &lambda, &g, alpha_bar, &mut sp);
+            dir.copy_from_slice(&sp.phi);
+        }
+        if k == p.max_outer {
+            info.iterations = k;
+            info.err = err;
+            info.n_a = st.products(a);
+            return Err(QpError::NoConvergence { info: Box::new(info), eps: p.eps });
+        }
+        let (free_normal, stick, slip) = (sp.free_normal, sp.free_tangent, sp.active_tangent);
+        let bb = a.dot(&sp.beta, &sp.beta);
+        let kind;
+        if bb <= p.gamma * p.gamma * a.dot(&sp.phit, &sp.phi) {
+            a.apply(&dir, &mut ad);
+            let pap = a.dot(&dir, &ad);
+            if !(pap > 0.0) {
+                if !pap.is_finite() {
+                    return Err(QpError::NotFinite { what: "the CG curvature pᵀAp", outer: k });
+                }
+                return Err(QpError::Breakdown { outer: k, p_ap: pap });
+            }
+            let acg = a.dot(&g, &dir) / pap;
+            let af = set.max_step(&lambda, &dir);
+            if acg <= af {
+                kind = 'c';
+                info.inner_iterations += 1;
+                for i in 0..n {
+                    lambda[i] -= acg * dir[i];
+                    g[i] -= acg * ad[i];
+                }
+                split(set, &lambda, &g, alpha_bar, &mut sp);
+                let gamma = a.dot(&sp.phi, &ad) / pap;
+                for i in 0..n {
+                    dir[i] = sp.phi[i] - gamma * dir[i];
+                }
+            } else {
+                kind = 'e';
+                for i in 0..n {
+                    lambda[i] -= af * dir[i];
+                    g[i] -= af * ad[i];
+                }
+                split(set, &lambda, &g, alpha_bar, &mut sp);
+                let phi = sp.phi.clone();
+                projected_step(&mut lambda, &phi, &mut g, &mut y);
+                split(set, &lambda, &g, alpha_bar, &mut sp);
+                dir.copy_from_slice(&sp.phi);
+            }
+        } else {
+            kind = 'p';
+            let d = sp.beta.clone();
+            let af = set.max_step(&lambda, &d);
+            let mut done = false;
+            if af > 0.0 {
+                a.apply(&d, &mut ad);
+                let dad = a.dot(&d, &ad);
+                if !(dad > 0.0) {
+                    if !dad.is_finite() {
+                        return Err(QpError::NotFinite { what: "the curvature βᵀAβ", outer: k });
+                    }
+                    return Err(QpError::Breakdown { outer: k, p_ap: dad });
+                }
+                let acg = a.dot(&g, &d) / dad;
+                let step = acg.min(af);
+                for i in 0..n {
+                    lambda[i] -= step * d[i];
+                    g[i] -= step * ad[i];
+                }
+                split(set, &lambda, &g, alpha_bar, &mut sp);
+                done = acg <= af;
+            }
+            if !done {
+                // the gradient-projection step on the active blocks (monotone for ᾱ < 2/‖A‖)
+                let ga: Vec<f64> = g.iter().zip(&sp.phi).map(|(gi, fi)| gi - fi).collect();
+                projected_step(&mut lambda, &ga, &mut g, &mut y);
+                split(set, &lambda, &g, alpha_bar, &mut sp);
+            }
+            dir.copy_from_slice(&sp.phi);
+        }
+        err = err_of(a, set, &lambda, &g, &st, &mut rt);
+        info.history.push(Step {
+            err,
+            tol: 0.0,
+            q: q_of(a, &lambda, &g, b),
+            normal_active: free_normal,
+            stick,
+            slip,
+            inner: usize::from(kind == 'c'),
+            n_a: st.products(a),
+            kind,
+        });
+    }
+    unreachable!("the outer loop returns")
+}
