@@ -101,8 +101,10 @@ fn bad_input_gives_one_line_and_no_file() {
     let cut = dir.join("cut.msh");
     std::fs::write(&cut, &full[..full.len() / 2]).unwrap();
     assert_clean_failure("truncated-mesh", &gmsh_body(cut.to_str().unwrap()), &off, &["cut.msh"]);
-    // solvers not implemented yet are refused with a reason
-    assert_clean_failure("method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"mpgp\""], &["solver.method", "mpgp"]);
+    // an unknown solver, and solver settings out of range
+    assert_clean_failure("method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"cg\""], &["solver.method", "cg"]);
+    assert_clean_failure("inner-tol", SEED, &["--set", "mesh.n=3", "--set", "solver.inner_tol=2.0"], &["solver.inner_tol"]);
+    assert_clean_failure("cg-stop", SEED, &["--set", "mesh.n=3", "--set", "solver.cg_stop=\"never\""], &["solver.cg_stop"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["GIMSSN", "no convergence"]);
 }
