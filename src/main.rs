@@ -29,12 +29,61 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// The paper's Table 1: iter/nA of the dual solvers on the seed scene for growing N, with
+    /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
+    Table1 {
+        /// The scene (its `mesh.n` is set per row).
+        #[arg(long, default_value = "run/seed.toml")]
+        scene: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Mesh sizes N (nodes per edge of each block).
+        #[arg(long, value_delimiter = ',', default_value = "16,21,26,31,36,41")]
+        sizes: Vec<usize>,
+        /// Stopping tolerance ε (relative: ‖r̃_ρ‖ ≤ ε‖b‖); the paper's counts hold at about 2e-4.
+        #[arg(long, default_value_t = 2e-4)]
+        eps: f64,
+        /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp; `:paper`
+        /// takes the paper's settings.
+        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::table1::Column::parse,
+              default_value = "imssn:paper,gimssn,ssn-bicgstab:paper")]
+        solvers: Vec<tresca_feti::table1::Column>,
+        /// CSV output (one line per N and solver).
+        #[arg(long, default_value = "out/table1.csv")]
+        csv: PathBuf,
+        /// Skip the reference solve and the error in u.
+        #[arg(long)]
+        no_error: bool,
+    },
     /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
     Check {
         scene: PathBuf,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+}
+
+fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::table1;
+    if !(args.eps > 0.0 && args.eps.is_finite()) {
+        return Err(tresca_feti::Error::scene("--eps", format!("must be finite and > 0, got {}", args.eps)));
+    }
+    if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
+        return Err(tresca_feti::Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
+    }
+    if comm.is_root() {
+        println!("{}", table1::header(args, comm.size()));
+    }
+    let rows = table1::run(comm, args, |row| {
+        if comm.is_root() {
+            println!("{}", table1::format_row(row));
+        }
+    })?;
+    if let (true, Some(path)) = (comm.is_root(), &args.csv) {
+        table1::write_csv(path, args, &rows)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -54,6 +103,10 @@ fn main() -> ExitCode {
                 print_summary(&s);
             }
         }),
+        Cmd::Table1 { scene, set, sizes, eps, solvers, csv, no_error } => {
+            let args = tresca_feti::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
+            table1(&comm, &args)
+        }
         Cmd::Check { scene, set } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
             let r = comm.agree(pipeline::run_check(&scene, &set));

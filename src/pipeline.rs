@@ -307,6 +307,7 @@ pub fn solver_params(s: &SolverSettings) -> qp::Params {
         cfact: s.cfact,
         inner_tol: s.inner_tol,
         cg_stop: s.cg_stop,
+        inner_floor: s.inner_floor,
         max_outer: s.max_outer,
         max_inner: s.max_inner,
         power_iterations: s.power_iterations,

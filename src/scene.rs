@@ -220,6 +220,9 @@ pub struct SolverSettings {
     /// What inner tolerances are relative to: "rhs" (‖b‖) or "initial-gradient" (the paper's).
     #[serde(default = "default_cg_stop")]
     pub cg_stop: CgStop,
+    /// No inner solve is asked for less than inner_floor·ε·‖b‖ (0: none, as in the paper).
+    #[serde(default = "default_inner_floor")]
+    pub inner_floor: f64,
     /// A fixed relative inner tolerance for SSN-BiCGSTAB instead of the adaptive one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inner_tol: Option<f64>,
@@ -230,6 +233,9 @@ pub struct SolverSettings {
 
 fn default_cg_stop() -> CgStop {
     CgStop::Rhs
+}
+fn default_inner_floor() -> f64 {
+    0.1
 }
 fn default_gamma() -> f64 {
     1.0
@@ -272,6 +278,7 @@ impl Default for SolverSettings {
             max_inner: default_max_inner(),
             power_iterations: default_power_iterations(),
             cg_stop: default_cg_stop(),
+            inner_floor: default_inner_floor(),
             inner_tol: None,
             gamma: default_gamma(),
         }
@@ -587,6 +594,9 @@ impl Scene {
         pos("eps", s.eps)?;
         pos("rho_factor", s.rho_factor)?;
         pos("gamma", s.gamma)?;
+        if !(s.inner_floor >= 0.0 && s.inner_floor.is_finite()) {
+            return Err(Error::scene("solver.inner_floor", format!("must be finite and ≥ 0, got {}", s.inner_floor)));
+        }
         if let Some(t) = s.inner_tol {
             if !(t > 0.0 && t < 1.0) {
                 return Err(Error::scene("solver.inner_tol", format!("must lie in (0, 1), got {t}")));

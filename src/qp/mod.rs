@@ -82,6 +82,9 @@ pub struct Params {
     /// baseline needs about 1e-6).
     pub inner_tol: Option<f64>,
     pub cg_stop: CgStop,
+    /// No inner solve is asked for less than `inner_floor·ε·‖b‖` (0: no floor, as in the
+    /// paper; the inner solves then go far below what the outer test can see).
+    pub inner_floor: f64,
     /// Outer iterations at most (MPGP: steps).
     pub max_outer: usize,
     /// Inner iterations per outer step at most.
@@ -101,6 +104,7 @@ impl Default for Params {
             cfact: 0.9,
             inner_tol: None,
             cg_stop: CgStop::Rhs,
+            inner_floor: 0.1,
             max_outer: 1000,
             max_inner: 10_000,
             power_iterations: 30,

@@ -76,7 +76,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             CgStop::Rhs => rho * bnorm,
             CgStop::InitialGradient => a.norm(&rhs),
         };
-        let threshold = (tol * scale).max(0.1 * p.eps * rho * bnorm);
+        let threshold = (tol * scale).max(p.inner_floor * p.eps * rho * bnorm);
         // J v = v − D(v − ρ A v), also returning A v
         let jacobian = |v: &[f64], jv: &mut [f64], av: &mut [f64]| {
             a.apply(v, av);

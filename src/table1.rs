@@ -1,0 +1,269 @@
+//! `tresca-feti table1`: the paper's Table 1 (DESIGN §4) — iter/nA of the dual solvers on the
+//! seed scene for growing N — with our figures beside the paper's, the wall time of each solve,
+//! the KKT residual and the error in u against a tight reference, printed as a table (rank 0)
+//! and written as CSV.
+//!
+//! A column is a solver with a parameter preset: `default` (the scene's `[solver]` table) or
+//! `paper` (the settings that reproduce the paper's counts, DESIGN §3a: ρ = 1.9/σ_est, rtol 0.1,
+//! cfact 0.6, inner tolerance relative to the gradient at the start of the inner solve and no
+//! floor under it; for SSN-BiCGSTAB ρ = 1/σ_est and near-exact inner solves, 1e-6). The reference u is SSN-BiCGSTAB
+//! at ε = 1e-11 (validated against Clarabel in tests/clarabel.rs).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::comm::Comm;
+use crate::dual::monolithic::MonolithicDual;
+use crate::dual::DualOperator;
+use crate::error::{Error, Result};
+use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
+use crate::qp::lambda::Lambda;
+use crate::qp::{self, kkt, CgStop, Method, Params};
+
+/// The paper's Table 1 (IMSSN, SSN-BiCGSTAB iter/nA) by N.
+pub const PAPER: [(usize, [usize; 2], [usize; 2]); 6] = [
+    (16, [10, 161], [9, 1180]),
+    (21, [9, 143], [9, 1428]),
+    (26, [10, 185], [11, 2506]),
+    (31, [10, 190], [10, 2162]),
+    (36, [9, 167], [10, 2298]),
+    (41, [10, 216], [10, 2586]),
+];
+
+/// Parameter presets of a column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    Default,
+    Paper,
+}
+
+/// One column of the table: a solver and its preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Column {
+    pub method: Method,
+    pub preset: Preset,
+}
+
+impl Column {
+    /// `name` or `name:paper`.
+    pub fn parse(s: &str) -> std::result::Result<Column, String> {
+        let (name, preset) = match s.split_once(':') {
+            Some((n, "paper")) => (n, Preset::Paper),
+            Some((n, "default")) => (n, Preset::Default),
+            Some((_, p)) => return Err(format!("unknown preset \"{p}\" (use paper or default)")),
+            None => (s, Preset::Default),
+        };
+        let known = Method::ALL.map(Method::name).join(", ");
+        let method = Method::from_name(name).ok_or_else(|| format!("unknown solver \"{name}\" (known: {known})"))?;
+        Ok(Column { method, preset })
+    }
+
+    pub fn label(&self) -> String {
+        match self.preset {
+            Preset::Default => self.method.name().to_string(),
+            Preset::Paper => format!("{}:paper", self.method.name()),
+        }
+    }
+
+    /// The solver parameters of this column from the scene's.
+    pub fn params(&self, base: &Params, eps: f64) -> Params {
+        let mut p = Params { method: self.method, eps, ..base.clone() };
+        if self.preset == Preset::Paper {
+            if self.method == Method::SsnBicgstab {
+                p.rho_factor = 1.1; // ρ = 1/σ_est
+                p.inner_tol = Some(1e-6);
+            } else {
+                p.rho_factor = 1.9 * 1.1; // ρ = 1.9/σ_est
+                p.rtol = 0.1;
+                p.cfact = 0.6;
+            }
+            p.cg_stop = CgStop::InitialGradient;
+            p.inner_floor = 0.0;
+        }
+        p
+    }
+}
+
+/// What `table1` is asked to do.
+#[derive(Clone, Debug)]
+pub struct Args {
+    pub scene: PathBuf,
+    pub sets: Vec<String>,
+    pub sizes: Vec<usize>,
+    pub eps: f64,
+    pub columns: Vec<Column>,
+    pub csv: Option<PathBuf>,
+    /// Compute the reference u and report the error of each column against it.
+    pub error: bool,
+}
+
+/// One cell: a solve of one column at one N.
+#[derive(Clone, Debug)]
+pub struct Cell {
+    pub n: usize,
+    pub column: Column,
+    pub outcome: std::result::Result<qp::Info, String>,
+    pub seconds: f64,
+    pub kkt: f64,
+    pub u_error: Option<f64>,
+}
+
+/// One row: the problem at one N.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub n: usize,
+    pub dofs: usize,
+    pub pairs: usize,
+    pub factorize_s: f64,
+    pub cells: Vec<Cell>,
+}
+
+/// max|u − u_ref| / max|u_ref| over all bodies and ranks.
+fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
+    let mut v = [0.0f64, 0.0];
+    for (a, b) in u.iter().zip(reference) {
+        for (x, y) in a.iter().zip(b) {
+            v[0] = v[0].max((x - y).abs());
+            v[1] = v[1].max(y.abs());
+        }
+    }
+    comm.max_f64(&mut v);
+    v[0] / v[1].max(f64::MIN_POSITIVE)
+}
+
+/// Runs the table; `progress` is called with each finished row (rank 0 prints it).
+pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for &n in &args.sizes {
+        let mut sets = vec![format!("mesh.n={n}")];
+        sets.extend(args.sets.iter().cloned());
+        let ls = comm.agree(crate::scene::load(&args.scene, &sets))?;
+        let model = comm.agree(crate::model::build(&ls))?;
+        let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "table1 needs a scene with contact"))?;
+        let mut t = Timings::default();
+        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
+        let (dual, b) = MonolithicDual::new(comm, contact, bodies);
+        let set = Lambda::new(contact);
+        let base = solver_params(&ls.scene.solver);
+        let zero = vec![0.0; dual.dim()];
+        let reference = if args.error {
+            let p = Params { method: Method::SsnBicgstab, eps: 1e-11, max_outer: 10_000, ..base.clone() };
+            let sol = qp::solve(&dual, &b, &set, &zero, &p).map_err(|e| Error::numerical("the reference solve (SSN-BiCGSTAB, ε = 1e-11)", e.to_string()))?;
+            Some(dual.recover(&sol.lambda).0)
+        } else {
+            None
+        };
+        let bnorm = dual.norm(&b);
+        let mut cells = Vec::new();
+        for &column in &args.columns {
+            let p = column.params(&base, args.eps);
+            comm.barrier();
+            let t0 = Instant::now();
+            let r = qp::solve(&dual, &b, &set, &zero, &p);
+            let mut secs = [t0.elapsed().as_secs_f64()];
+            comm.max_f64(&mut secs);
+            let (outcome, kkt, u_err) = match r {
+                Ok(sol) => {
+                    let k = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
+                    let e = reference.as_ref().map(|rf| u_error(comm, &dual.recover(&sol.lambda).0, rf));
+                    (Ok(sol.info), k, e)
+                }
+                Err(e) => (Err(e.to_string()), f64::NAN, None),
+            };
+            cells.push(Cell { n, column, outcome, seconds: secs[0], kkt, u_error: u_err });
+        }
+        let mut dofs = [model.mesh.nodes.len() as f64 * 3.0];
+        comm.max_f64(&mut dofs);
+        let row = Row {
+            n,
+            dofs: dofs[0] as usize,
+            pairs: contact.len(),
+            factorize_s: t.phases.iter().map(|p| p.1).sum(),
+            cells,
+        };
+        progress(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// The header lines of the printed table.
+pub fn header(args: &Args, ranks: usize) -> String {
+    let mut s = format!(
+        "Table 1 — {}, ε = {:.1e} (‖r̃_ρ‖ ≤ ε‖b‖), {ranks} rank(s); cells: iter/nA (+ power iterations) time [s] KKT{}\n",
+        args.scene.display(),
+        args.eps,
+        if args.error { " err(u)" } else { "" }
+    );
+    s += &format!("{:>3} {:>14} {:>8}", "N", "n/m", "factor");
+    for c in &args.columns {
+        s += &format!(" | {:<34}", c.label());
+    }
+    s += " | paper IMSSN | paper SSN";
+    s
+}
+
+/// One printed line for a row.
+pub fn format_row(row: &Row) -> String {
+    let mut s = format!("{:>3} {:>14} {:>7.2}s", row.n, format!("{}/{}", row.dofs, row.pairs), row.factorize_s);
+    for c in &row.cells {
+        let cell = match &c.outcome {
+            Ok(i) => {
+                let err = c.u_error.map(|e| format!(" {e:.0e}")).unwrap_or_default();
+                format!("{}/{} (+{}) {:.2}s {:.0e}{err}", i.iterations, i.n_a, i.n_a_power, c.seconds, c.kkt)
+            }
+            Err(_) => "failed (see below)".to_string(),
+        };
+        s += &format!(" | {cell:<34}");
+    }
+    match PAPER.iter().find(|p| p.0 == row.n) {
+        Some((_, im, ssn)) => s += &format!(" | {:>11} | {:>9}", format!("{}/{}", im[0], im[1]), format!("{}/{}", ssn[0], ssn[1])),
+        None => s += " | — | —",
+    }
+    for c in &row.cells {
+        if let Err(e) = &c.outcome {
+            s += &format!("\n    N = {}, {}: {e}", row.n, c.column.label());
+        }
+    }
+    s
+}
+
+/// Writes the CSV (one line per N and column).
+pub fn write_csv(path: &Path, args: &Args, rows: &[Row]) -> Result<()> {
+    let io = |e| Error::io(path.display().to_string(), e);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let tmp = path.with_extension("csv.tmp");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io)?);
+    writeln!(f, "N,n,m,solver,preset,eps,iter,nA,nA_power,inner,time_s,err,kkt,u_error,factorize_s,paper_iter,paper_nA,status").map_err(io)?;
+    for r in rows {
+        for c in &r.cells {
+            let paper = PAPER.iter().find(|p| p.0 == r.n).and_then(|p| match c.column.method {
+                Method::Imssn => Some(p.1),
+                Method::SsnBicgstab => Some(p.2),
+                _ => None,
+            });
+            let (pi, pn) = paper.map(|p| (p[0].to_string(), p[1].to_string())).unwrap_or_default();
+            let preset = if c.column.preset == Preset::Paper { "paper" } else { "default" };
+            let ue = c.u_error.map(|e| format!("{e:e}")).unwrap_or_default();
+            match &c.outcome {
+                Ok(i) => writeln!(
+                    f,
+                    "{},{},{},{},{preset},{:e},{},{},{},{},{:.4},{:e},{:e},{ue},{:.3},{pi},{pn},ok",
+                    r.n, r.dofs, r.pairs, c.column.method.name(), args.eps, i.iterations, i.n_a, i.n_a_power, i.inner_iterations, c.seconds, i.err, c.kkt, r.factorize_s
+                ),
+                Err(e) => writeln!(
+                    f,
+                    "{},{},{},{},{preset},{:e},,,,,{:.4},,,,{:.3},{pi},{pn},\"{}\"",
+                    r.n, r.dofs, r.pairs, c.column.method.name(), args.eps, c.seconds, r.factorize_s, e.replace('"', "'")
+                ),
+            }
+            .map_err(io)?;
+        }
+    }
+    f.flush().map_err(io)?;
+    drop(f);
+    std::fs::rename(&tmp, path).map_err(io)
+}
