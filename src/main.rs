@@ -46,7 +46,7 @@ enum Cmd {
         /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp; `:paper`
         /// takes the paper's settings.
         #[arg(long, value_delimiter = ',', value_parser = tresca_feti::table1::Column::parse,
-              default_value = "imssn:paper,gimssn,ssn-bicgstab:paper")]
+              default_value = "imssn:paper,gimssn,ssn-bicgstab")]
         solvers: Vec<tresca_feti::table1::Column>,
         /// CSV output (one line per N and solver).
         #[arg(long, default_value = "out/table1.csv")]

@@ -106,7 +106,7 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("inner-tol", SEED, &["--set", "mesh.n=3", "--set", "solver.inner_tol=2.0"], &["solver.inner_tol"]);
     assert_clean_failure("cg-stop", SEED, &["--set", "mesh.n=3", "--set", "solver.cg_stop=\"never\""], &["solver.cg_stop"]);
     // a solver that cannot reach ε within its iterations says so
-    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["GIMSSN", "no convergence"]);
+    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["SSN-BICGSTAB", "no convergence"]);
 }
 
 #[test]
@@ -159,7 +159,7 @@ fn one_two_three_ranks_give_identical_fields() {
         assert_eq!(stdout.matches("wrote ").count(), 1, "only rank 0 prints: {stdout}");
         assert!(stdout.contains(&format!("{n} rank(s)")), "{stdout}");
         // the same iteration counts on every rank count
-        let counters = stdout.lines().find(|l| l.starts_with("solver gimssn")).unwrap_or_else(|| panic!("{stdout}")).to_string();
+        let counters = stdout.lines().find(|l| l.starts_with("solver ")).unwrap_or_else(|| panic!("{stdout}")).to_string();
         match &counters_1 {
             Some(c) => assert_eq!(&counters, c, "{n} ranks"),
             None => counters_1 = Some(counters),
@@ -184,4 +184,32 @@ fn bad_scene_under_mpirun_fails_once_on_all_ranks() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.matches("error: mesh.n").count(), 1, "{e}");
     assert!(!out.exists());
+}
+
+#[test]
+fn table1_prints_the_table_and_writes_the_csv() {
+    let dir = tmpdir("table1");
+    let csv = dir.join("t.csv");
+    let scene = root().join("run/seed.toml");
+    let o = run(&["table1", "--scene", scene.to_str().unwrap(), "--sizes", "4,5", "--eps", "1e-6", "--solvers", "gimssn,imssn:paper,ssn-bicgstab", "--csv", csv.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("imssn:paper") && stdout.contains("paper IMSSN"), "{stdout}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 2 * 3, "{text}");
+    assert!(lines[0].starts_with("N,n,m,solver,preset,eps,iter,nA"));
+    for l in &lines[1..] {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.last(), Some(&"ok"), "{l}");
+        // converged: final ‖r̃‖/‖b‖ ≤ ε, KKT small, u close to the reference
+        assert!(f[11].parse::<f64>().unwrap() <= 1e-6, "{l}");
+        assert!(f[12].parse::<f64>().unwrap() <= 1e-5, "{l}");
+        assert!(f[13].parse::<f64>().unwrap() <= 1e-3, "{l}");
+    }
+    assert_eq!(lines[1].split(',').nth(4), Some("default"));
+    assert_eq!(lines[2].split(',').nth(4), Some("paper"));
+    let o = run(&["table1", "--sizes", "4", "--solvers", "newton"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown solver \"newton\""));
 }

@@ -28,7 +28,7 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = Lambda::new(contact);
-    let params = Params { eps: 1e-10, ..Params::default() };
+    let params = Params { eps: 1e-10, method: Method::Gimssn, ..Params::default() };
     let sol = qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
     let (lam, info) = (sol.lambda, sol.info);
     eprintln!("GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}", info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err);

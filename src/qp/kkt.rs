@@ -84,3 +84,37 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
     }
     k
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dual::Layout;
+    use crate::qp::sets::{Disc, TangentSet};
+
+    /// One pair with a disc of radius 1: λ = (λν, λτ₁, λτ₂), r likewise.
+    fn set() -> Lambda {
+        Lambda { layout: Layout { m: 1, friction: true }, tangent: vec![TangentSet::Disc(Disc::new(1.0))] }
+    }
+
+    #[test]
+    fn exact_points_have_zero_residuals_and_each_violation_is_seen() {
+        let s = set();
+        // contact with sliding along +x: λ̄τ on the bound, slip ūτ = −r̄τ along λ̄τ
+        let ok = residuals(&s, &[2.0, 1.0, 0.0], &[0.0, -0.3, 0.0], 1.0);
+        assert_eq!(ok.worst(), 0.0, "{ok:?}");
+        // open with zero force, sticking
+        assert_eq!(residuals(&s, &[0.0, 0.5, 0.0], &[0.7, 0.0, 0.0], 1.0).worst(), 0.0);
+        let k = residuals(&s, &[2.0, 1.0, 0.0], &[-0.1, -0.3, 0.0], 1.0);
+        assert!(k.penetration > 0.09 && k.complementarity > 0.09, "{k:?}");
+        let k = residuals(&s, &[-0.5, 0.0, 0.0], &[0.0, 0.0, 0.0], 1.0);
+        assert!(k.normal_sign > 0.2, "{k:?}");
+        let k = residuals(&s, &[1.0, 1.5, 0.0], &[0.0, -0.3, 0.0], 1.0);
+        assert!(k.friction_bound > 0.2, "{k:?}");
+        // inside the bound but moving: a sticking pair may not slip
+        let k = residuals(&s, &[1.0, 0.5, 0.0], &[0.0, -0.3, 0.0], 1.0);
+        assert!(k.friction_law > 0.2, "{k:?}");
+        // on the bound but slipping against the friction force, or sideways
+        assert!(residuals(&s, &[1.0, 1.0, 0.0], &[0.0, 0.3, 0.0], 1.0).friction_law > 0.2);
+        assert!(residuals(&s, &[1.0, 1.0, 0.0], &[0.0, 0.0, 0.3], 1.0).friction_law > 0.2);
+    }
+}

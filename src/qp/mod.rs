@@ -97,7 +97,7 @@ pub struct Params {
 impl Default for Params {
     fn default() -> Self {
         Params {
-            method: Method::Gimssn,
+            method: Method::SsnBicgstab,
             eps: 1e-6,
             rho_factor: 1.9,
             rtol: 0.5,
