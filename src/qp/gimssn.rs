@@ -20,7 +20,7 @@
 //! The variant is `Params::method` (GIMSSN, IMSSN or MSSN).
 
 use super::lambda::Lambda;
-use super::{err_of, q_of, residual, CgStop, Info, Method, Params, QpError, QpSolution, Setup, Step};
+use super::{curvature, err_of, q_of, residual, CgStop, Info, Method, Params, QpError, QpSolution, Setup, Step};
 use crate::dual::DualOperator;
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first).
@@ -109,15 +109,8 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         let mut inner = 0;
         let mut gg = gf0 * gf0;
         while gg.sqrt() > threshold && inner < p.max_inner {
-            a.apply(&d, &mut ad);
+            let dad = curvature(a, &d, &mut ad, k)?;
             inner += 1;
-            let dad = a.dot(&d, &ad);
-            if !(dad > 0.0) {
-                if !dad.is_finite() {
-                    return Err(QpError::NotFinite { what: "the CG curvature pᵀAp", outer: k });
-                }
-                return Err(QpError::Breakdown { outer: k, p_ap: dad });
-            }
             let alpha = a.dot(&gf, &d) / dad;
             if feasible {
                 let alpha_f = set.max_step(&x, &d);
@@ -156,17 +149,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         err = err_of(&z, &rz, &mut rt);
         info.inner_iterations += inner;
-        info.history.push(Step {
-            err,
-            tol,
-            q: q_of(a, &z, &rz, b),
-            normal_active: sets.normal_active,
-            stick: sets.stick,
-            slip: sets.slip,
-            inner,
-            n_a: products(),
-            kind: 'n',
-        });
+        info.history.push(Step::newton(err, tol, q_of(a, &z, &rz, b), &sets, inner, products()));
     }
     unreachable!("the outer loop returns")
 }

@@ -155,7 +155,7 @@ pub struct Info {
 pub enum QpError {
     #[error("no convergence in {} outer iterations (‖r̃‖/‖b‖ = {:.3e}, ε = {eps:.1e})", info.iterations, info.err)]
     NoConvergence { info: Box<Info>, eps: f64 },
-    #[error("CG breakdown: pᵀAp = {p_ap:.3e} ≤ 0 at outer iteration {outer} (A not positive definite on the free set)")]
+    #[error("breakdown: dᵀAd = {p_ap:.3e} ≤ 0 at outer iteration {outer} (A not positive definite on the free set)")]
     Breakdown { outer: usize, p_ap: f64 },
     #[error("BiCGSTAB breakdown ({what}) at outer iteration {outer} before any progress")]
     BicgstabBreakdown { outer: usize, what: &'static str },
@@ -239,6 +239,26 @@ impl Setup {
 pub(crate) fn residual<A: DualOperator>(a: &A, b: &[f64], x: &[f64], r: &mut [f64]) {
     a.apply(x, r);
     r.iter_mut().zip(b).for_each(|(ri, bi)| *ri -= bi);
+}
+
+/// ad = A d and the curvature dᵀAd, which must be positive (else a breakdown or NaN error).
+pub(crate) fn curvature<A: DualOperator>(a: &A, d: &[f64], ad: &mut [f64], outer: usize) -> Result<f64, QpError> {
+    a.apply(d, ad);
+    let dad = a.dot(d, ad);
+    if dad > 0.0 && dad.is_finite() {
+        Ok(dad)
+    } else if !dad.is_finite() {
+        Err(QpError::NotFinite { what: "the curvature dᵀAd", outer })
+    } else {
+        Err(QpError::Breakdown { outer, p_ap: dad })
+    }
+}
+
+impl Step {
+    /// A Newton step's record with the sets it started from.
+    pub(crate) fn newton(err: f64, tol: f64, q: f64, sets: &lambda::ActiveSets, inner: usize, n_a: usize) -> Step {
+        Step { err, tol, q, normal_active: sets.normal_active, stick: sets.stick, slip: sets.slip, inner, n_a, kind: 'n' }
+    }
 }
 
 /// q(λ) = ½λᵀAλ − λᵀb = ½λᵀ(r − b) with r = Aλ − b.

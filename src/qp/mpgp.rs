@@ -24,7 +24,7 @@
 
 use super::lambda::Lambda;
 use super::sets::ConvexSet;
-use super::{err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
+use super::{curvature, err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
 use crate::dual::DualOperator;
 
 /// Relative distance to the boundary under which a block counts as active.
@@ -147,14 +147,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         let bb = a.dot(&sp.beta, &sp.beta);
         let kind;
         if bb <= p.gamma * p.gamma * a.dot(&sp.phit, &sp.phi) {
-            a.apply(&dir, &mut ad);
-            let pap = a.dot(&dir, &ad);
-            if !(pap > 0.0) {
-                if !pap.is_finite() {
-                    return Err(QpError::NotFinite { what: "the CG curvature pᵀAp", outer: k });
-                }
-                return Err(QpError::Breakdown { outer: k, p_ap: pap });
-            }
+            let pap = curvature(a, &dir, &mut ad, k)?;
             let acg = a.dot(&g, &dir) / pap;
             let af = set.max_step(&lambda, &dir);
             if acg <= af {
@@ -187,14 +180,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             let af = set.max_step(&lambda, &d);
             let mut done = false;
             if af > 0.0 {
-                a.apply(&d, &mut ad);
-                let dad = a.dot(&d, &ad);
-                if !(dad > 0.0) {
-                    if !dad.is_finite() {
-                        return Err(QpError::NotFinite { what: "the curvature βᵀAβ", outer: k });
-                    }
-                    return Err(QpError::Breakdown { outer: k, p_ap: dad });
-                }
+                let dad = curvature(a, &d, &mut ad, k)?;
                 let acg = a.dot(&g, &d) / dad;
                 let step = acg.min(af);
                 for i in 0..n {

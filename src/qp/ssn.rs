@@ -96,17 +96,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         err = err_of(a, set, &lambda, &r, &st, &mut rt);
         info.inner_iterations += inner;
-        info.history.push(Step {
-            err,
-            tol,
-            q: q_of(a, &lambda, &r, b),
-            normal_active: sets.normal_active,
-            stick: sets.stick,
-            slip: sets.slip,
-            inner,
-            n_a: st.products(a),
-            kind: 'n',
-        });
+        info.history.push(Step::newton(err, tol, q_of(a, &lambda, &r, b), &sets, inner, st.products(a)));
     }
     unreachable!("the outer loop returns")
 }
