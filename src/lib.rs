@@ -7,6 +7,7 @@
 
 pub mod comm;
 pub mod contact;
+pub mod decomposition;
 pub mod dual;
 pub mod error;
 pub mod fem;
