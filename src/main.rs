@@ -71,6 +71,12 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
         return Err(tresca_feti::Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
     }
+    // a CSV that cannot be written fails now, not after the whole run
+    let csv_dir = comm.agree(match args.csv.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
+        Some(d) if comm.is_root() => std::fs::create_dir_all(d).map_err(|e| tresca_feti::Error::io(d.display().to_string(), e)),
+        _ => Ok(()),
+    });
+    csv_dir?;
     if comm.is_root() {
         println!("{}", table1::header(args, comm.size()));
     }
@@ -87,7 +93,21 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) => e.exit(),
+        Err(e) => {
+            // one line, like every other error (clap's own message adds usage lines)
+            let text = e.to_string();
+            let parts: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
+                .collect();
+            eprintln!("{}", parts.join(" "));
+            return ExitCode::from(2);
+        }
+    };
     let Some(universe) = mpi::initialize() else {
         eprintln!("error: MPI could not be initialized");
         return ExitCode::FAILURE;

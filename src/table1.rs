@@ -236,8 +236,16 @@ pub fn write_csv(path: &Path, args: &Args, rows: &[Row]) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
     let tmp = path.with_extension("csv.tmp");
-    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io)?);
-    writeln!(f, "N,n,m,solver,preset,eps,iter,nA,nA_power,inner,time_s,err,kkt,u_error,factorize_s,paper_iter,paper_nA,status").map_err(io)?;
+    let written = write_rows(&tmp, args, rows).and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp); // no half-written file left behind
+    }
+    written.map_err(io)
+}
+
+fn write_rows(tmp: &Path, args: &Args, rows: &[Row]) -> std::io::Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+    writeln!(f, "N,n,m,solver,preset,eps,iter,nA,nA_power,inner,time_s,err,kkt,u_error,factorize_s,paper_iter,paper_nA,status")?;
     for r in rows {
         for c in &r.cells {
             let paper = PAPER.iter().find(|p| p.0 == r.n).and_then(|p| match c.column.method {
@@ -259,11 +267,8 @@ pub fn write_csv(path: &Path, args: &Args, rows: &[Row]) -> Result<()> {
                     "{},{},{},{},{preset},{:e},,,,,{:.4},,,,{:.3},{pi},{pn},\"{}\"",
                     r.n, r.dofs, r.pairs, c.column.method.name(), args.eps, c.seconds, r.factorize_s, e.replace('"', "'")
                 ),
-            }
-            .map_err(io)?;
+            }?;
         }
     }
-    f.flush().map_err(io)?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(io)
+    f.flush()
 }

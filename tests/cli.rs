@@ -211,5 +211,23 @@ fn table1_prints_the_table_and_writes_the_csv() {
     assert_eq!(lines[2].split(',').nth(4), Some("paper"));
     let o = run(&["table1", "--sizes", "4", "--solvers", "newton"]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown solver \"newton\""));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("unknown solver \"newton\""), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    // a CSV that cannot be written fails before the run, with nothing left behind
+    let o = run(&["table1", "--sizes", "4", "--csv", "/proc/no-such-dir/t.csv"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stdout).is_empty());
+    assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: /proc/no-such-dir"));
+}
+
+#[test]
+fn bad_arguments_give_one_line() {
+    for args in [&["solve"][..], &["solve", "x.toml", "--bogus"], &["table1", "--sizes", "a"]] {
+        let o = run(args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    }
 }

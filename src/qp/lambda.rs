@@ -131,16 +131,16 @@ pub struct SlantDerivative {
 }
 
 impl SlantDerivative {
-    /// out = D x.
-    pub fn apply(&self, x: &[f64], out: &mut [f64]) {
+    /// x ← D x.
+    pub fn apply_in_place(&self, x: &mut [f64]) {
         for (i, d) in self.normal.iter().enumerate() {
-            out[i] = d * x[i];
+            x[i] *= d;
         }
         for (i, d) in self.tangent.iter().enumerate() {
             let k = self.layout.tangent(i, 0);
             let (a, b) = (x[k], x[k + 1]);
-            out[k] = d[0] * a + d[1] * b;
-            out[k + 1] = d[2] * a + d[3] * b;
+            x[k] = d[0] * a + d[1] * b;
+            x[k + 1] = d[2] * a + d[3] * b;
         }
     }
 }

@@ -169,19 +169,22 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                     g[i] -= af * ad[i];
                 }
                 split(set, &lambda, &g, alpha_bar, &mut sp);
-                let phi = sp.phi.clone();
+                let phi = std::mem::take(&mut sp.phi);
                 projected_step(&mut lambda, &phi, &mut g, &mut y);
+                sp.phi = phi; // split overwrites every entry
                 split(set, &lambda, &g, alpha_bar, &mut sp);
                 dir.copy_from_slice(&sp.phi);
             }
         } else {
             kind = 'p';
-            let d = sp.beta.clone();
-            let af = set.max_step(&lambda, &d);
+            // the search direction d = β lives in `dir` (reset to φ below)
+            dir.copy_from_slice(&sp.beta);
+            let d: &[f64] = &dir;
+            let af = set.max_step(&lambda, d);
             let mut done = false;
             if af > 0.0 {
-                let dad = curvature(a, &d, &mut ad, k)?;
-                let acg = a.dot(&g, &d) / dad;
+                let dad = curvature(a, d, &mut ad, k)?;
+                let acg = a.dot(&g, d) / dad;
                 let step = acg.min(af);
                 for i in 0..n {
                     lambda[i] -= step * d[i];
@@ -192,8 +195,10 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             }
             if !done {
                 // the gradient-projection step on the active blocks (monotone for ᾱ < 2/‖A‖)
-                let ga: Vec<f64> = g.iter().zip(&sp.phi).map(|(gi, fi)| gi - fi).collect();
-                projected_step(&mut lambda, &ga, &mut g, &mut y);
+                for i in 0..n {
+                    ad[i] = g[i] - sp.phi[i];
+                }
+                projected_step(&mut lambda, &ad, &mut g, &mut y);
                 split(set, &lambda, &g, alpha_bar, &mut sp);
             }
             dir.copy_from_slice(&sp.phi);

@@ -65,8 +65,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             y[i] = lambda[i] - rho * r[i];
         }
         let d = set.slant(&y);
-        // −F = ρ r̃ − λ + λ = −ρ r̃
-        set.reduced_gradient(&lambda, &r, rho, &mut rt);
+        // −F(λ) = −ρ r̃_ρ(λ); rt holds r̃ at the current λ (from the last err_of)
         let rhs: Vec<f64> = rt.iter().map(|v| -rho * v).collect();
         tol = match p.inner_tol {
             Some(t) => t,
@@ -83,8 +82,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             for i in 0..n {
                 jv[i] = v[i] - rho * av[i];
             }
-            let w = jv.to_vec();
-            d.apply(&w, jv);
+            d.apply_in_place(jv);
             for i in 0..n {
                 jv[i] = v[i] - jv[i];
             }
