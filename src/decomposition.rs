@@ -54,8 +54,14 @@ impl Decomposition {
 
 /// Splits every body into `parts` subdomains.
 pub fn decompose(mesh: &Mesh, parts: usize) -> Result<Decomposition> {
+    decompose_each(mesh, &vec![parts; mesh.bodies.len()])
+}
+
+/// Splits body b into `parts[b]` subdomains.
+pub fn decompose_each(mesh: &Mesh, parts: &[usize]) -> Result<Decomposition> {
     let mut subdomains = Vec::new();
     for (b, body) in mesh.bodies.iter().enumerate() {
+        let parts = parts[b];
         let ne = body.elems.len();
         if parts == 0 || parts > ne {
             return Err(Error::scene(

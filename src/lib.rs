@@ -10,6 +10,7 @@ pub mod contact;
 pub mod decomposition;
 pub mod dual;
 pub mod error;
+pub mod feti;
 pub mod fem;
 pub mod linalg;
 pub mod mesh;

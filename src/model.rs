@@ -126,11 +126,10 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
 
     for (b, body) in mesh.bodies.iter().enumerate() {
         let ne = body.elems.len();
-        if scene.decomposition.subdomains > ne {
-            return Err(Error::scene(
-                "decomposition.subdomains",
-                format!("{} subdomains per body exceed the {ne} elements of body \"{}\"", scene.decomposition.subdomains, body.name),
-            ));
+        let parts = scene.decomposition.parts(3 * body.nodes.len());
+        if parts > ne {
+            let key = if scene.decomposition.target_dofs.is_some() { "decomposition.target_dofs" } else { "decomposition.subdomains" };
+            return Err(Error::scene(key, format!("{parts} subdomains per body exceed the {ne} elements of body \"{}\"", body.name)));
         }
         let held = constraints.iter().any(|&(v, _, _)| body.nodes.contains(&v));
         let touches = contact_active && contact.iter().any(|&(s, m)| mesh.faces[s].body == b || mesh.faces[m].body == b);

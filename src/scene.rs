@@ -286,12 +286,23 @@ impl Default for SolverSettings {
     }
 }
 
+/// How each body is split (TFETI, DESIGN §2).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Decomposition {
-    /// METIS subdomains per body.
+    /// METIS subdomains per body. 1 (the default) is the monolithic dual (Dirichlet
+    /// eliminated, no gluing, no coarse problem) unless `tfeti = true`.
     #[serde(default = "one")]
     pub subdomains: usize,
+    /// Instead of `subdomains`: as many subdomains per body as give about this many DOFs each.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_dofs: Option<usize>,
+    /// TFETI even with one subdomain per body (all floating, Dirichlet as multiplier rows).
+    #[serde(default)]
+    pub tfeti: bool,
+    /// Gluing rows of the interface DOFs.
+    #[serde(default)]
+    pub gluing: crate::feti::constraints::Gluing,
 }
 
 fn one() -> usize {
@@ -300,7 +311,22 @@ fn one() -> usize {
 
 impl Default for Decomposition {
     fn default() -> Self {
-        Decomposition { subdomains: 1 }
+        Decomposition { subdomains: 1, target_dofs: None, tfeti: false, gluing: Default::default() }
+    }
+}
+
+impl Decomposition {
+    /// Subdomains for a body with `dofs` DOFs.
+    pub fn parts(&self, dofs: usize) -> usize {
+        match self.target_dofs {
+            Some(t) => dofs.div_ceil(t).max(1),
+            None => self.subdomains,
+        }
+    }
+
+    /// Whether the scene is solved by TFETI (else by the monolithic dual).
+    pub fn is_tfeti(&self) -> bool {
+        self.tfeti || self.subdomains > 1 || self.target_dofs.is_some()
     }
 }
 
@@ -323,7 +349,7 @@ pub struct Factorization {
 }
 
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
-pub const FIELDS: [&str; 8] = ["displacement", "von_mises", "body", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
+pub const FIELDS: [&str; 9] = ["displacement", "von_mises", "body", "subdomain", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -615,6 +641,14 @@ impl Scene {
         }
         if self.decomposition.subdomains == 0 {
             return Err(Error::scene("decomposition.subdomains", "must be at least 1"));
+        }
+        if let Some(t) = self.decomposition.target_dofs {
+            if t < 24 {
+                return Err(Error::scene("decomposition.target_dofs", format!("must be at least 24 (one element), got {t}")));
+            }
+            if self.decomposition.subdomains != 1 {
+                return Err(Error::scene("decomposition.target_dofs", "give either `subdomains` or `target_dofs`, not both"));
+            }
         }
         for (i, f) in self.output.fields.iter().enumerate() {
             if !FIELDS.contains(&f.as_str()) {

@@ -39,17 +39,29 @@ impl ProductCounter {
     }
 }
 
-/// Layout of the contact multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ), λτ absent when frictionless;
-/// pair i owns λν[i] and λτ[2i], λτ[2i+1].
+/// Layout of the multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ, λ_E ∈ R^free), λτ absent when
+/// frictionless; pair i owns λν[i] and λτ[2i], λτ[2i+1]. λ_E are the unconstrained
+/// multipliers (TFETI's gluing and Dirichlet rows; none in the monolithic dual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {
     pub m: usize,
     pub friction: bool,
+    pub free: usize,
 }
 
 impl Layout {
-    pub fn dim(&self) -> usize {
+    /// The contact multipliers only.
+    pub fn contact(m: usize, friction: bool) -> Self {
+        Layout { m, friction, free: 0 }
+    }
+
+    /// Number of contact multipliers (λν and λτ): the free ones start here.
+    pub fn contact_dim(&self) -> usize {
         if self.friction { 3 * self.m } else { self.m }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.contact_dim() + self.free
     }
     /// Index of λν,ᵢ.
     pub fn normal(&self, i: usize) -> usize {

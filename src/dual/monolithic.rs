@@ -60,7 +60,7 @@ pub fn body_rows(contact: &Contact, layout: Layout, dofs: &DofMap) -> (Vec<(usiz
 impl<'c, C: Comm> MonolithicDual<'c, C> {
     /// The operator over this rank's factorized bodies, and b = B K⁻¹ f − c.
     pub fn new(comm: &'c C, contact: &Contact, bodies: Vec<LocalBody>) -> (Self, Vec<f64>) {
-        let layout = Layout { m: contact.len(), friction: contact.has_friction() };
+        let layout = Layout::contact(contact.len(), contact.has_friction());
         let mut shift = vec![0.0; layout.dim()];
         let blocks = bodies
             .into_iter()

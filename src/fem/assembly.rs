@@ -1,6 +1,7 @@
-//! Sparse assembly of one body's stiffness K into the lower triangle of a [`SymCsc`], with
-//! Dirichlet DOFs eliminated (their prescribed values are lifted into the right-hand side at the
-//! element level), and consistent face loads.
+//! Sparse assembly of a stiffness K (one body, or one TFETI subdomain) into the lower triangle
+//! of a [`SymCsc`], with Dirichlet DOFs eliminated where the [`DofMap`] marks them (their
+//! prescribed values are lifted into the right-hand side at the element level), and consistent
+//! face loads.
 
 use std::ops::Range;
 
@@ -85,18 +86,16 @@ impl DofMap {
     }
 }
 
-/// Node adjacency of the elements `elems` in local node numbering (CSR, sorted, without the
-/// node itself).
-pub fn node_graph(hexes: &[[usize; 8]], elems: Range<usize>, nodes: &Range<usize>) -> (Vec<usize>, Vec<usize>) {
-    let nn = nodes.len();
+/// Node adjacency of the elements `elems` in a local node numbering `local` (0..nn; CSR,
+/// sorted, without the node itself).
+pub fn node_graph(hexes: &[[usize; 8]], elems: impl Iterator<Item = usize>, nn: usize, local: impl Fn(usize) -> usize) -> (Vec<usize>, Vec<usize>) {
     let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); nn];
     for e in elems {
-        let h = hexes[e];
+        let h = hexes[e].map(&local);
         for &a in &h {
-            let la = a - nodes.start;
             for &b in &h {
                 if a != b {
-                    nbr[la].push((b - nodes.start) as u32);
+                    nbr[a].push(b as u32);
                 }
             }
         }
@@ -113,7 +112,7 @@ pub fn node_graph(hexes: &[[usize; 8]], elems: Range<usize>, nodes: &Range<usize
     (xadj, adj)
 }
 
-/// One body's assembled system K_ff u_f = f_f.
+/// One body's (or subdomain's) assembled system K_ff u_f = f_f.
 pub struct BodySystem {
     pub k: SymCsc,
     pub f: Vec<f64>,
@@ -126,13 +125,30 @@ pub struct BodySystem {
 /// DOFs are dropped).
 pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Result<BodySystem> {
     let b = &mesh.bodies[body];
-    let (xadj, adj) = node_graph(&mesh.hexes, b.elems.clone(), &b.nodes);
+    let start = b.nodes.start;
+    assemble_elements(mesh, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
+        .map_err(|(e, msg)| Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)))
+}
+
+/// Assembles K_ff and f_f over the elements `elems`, whose nodes are numbered `local(v)` in
+/// 0..nn; DOF `3·local(v) + c` of `dofs` (its `nodes` range is not used). On an inverted
+/// element returns the element and what is wrong with it.
+pub fn assemble_elements(
+    mesh: &Mesh,
+    elems: impl Iterator<Item = usize> + Clone,
+    nn: usize,
+    local: impl Fn(usize) -> usize,
+    lame: Lame,
+    dofs: &DofMap,
+    loads: &[f64],
+) -> std::result::Result<BodySystem, (usize, &'static str)> {
+    let (xadj, adj) = node_graph(&mesh.hexes, elems.clone(), nn, &local);
     // pattern: column of free DOF (v, c) holds free DOFs of v (components ≥ c) and of every
     // neighbour w > v, all three components — node-major numbering makes them sorted.
     let mut col_ptr = Vec::with_capacity(dofs.nfree + 1);
     let mut row_idx = Vec::new();
     col_ptr.push(0);
-    for v in 0..b.nodes.len() {
+    for v in 0..nn {
         for c in 0..3 {
             let j = dofs.free[3 * v + c];
             if j == FIXED {
@@ -157,16 +173,13 @@ pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads:
     }
     let mut k = SymCsc::from_pattern(dofs.nfree, col_ptr, row_idx);
     let mut f = dofs.restrict(loads);
-    for e in b.elems.clone() {
+    for e in elems {
         let x = mesh.hex_coords(e);
         if hex_min_jacobian(&x) <= 0.0 {
-            return Err(Error::mesh(
-                format!("body {}", b.name),
-                format!("element {} is inverted or degenerate (non-positive Jacobian)", e - b.elems.start),
-            ));
+            return Err((e, "inverted or degenerate (non-positive Jacobian)"));
         }
         let ke = hex8_stiffness(&x, lame);
-        let ld: [usize; 24] = std::array::from_fn(|r| dofs.local(mesh.hexes[e][r / 3], r % 3));
+        let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(mesh.hexes[e][r / 3]) + r % 3);
         for q in 0..24 {
             let j = dofs.free[ld[q]];
             if j == FIXED {

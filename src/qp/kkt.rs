@@ -93,7 +93,7 @@ mod tests {
 
     /// One pair with a disc of radius 1: λ = (λν, λτ₁, λτ₂), r likewise.
     fn set() -> Lambda {
-        Lambda { layout: Layout { m: 1, friction: true }, tangent: vec![TangentSet::Disc(Disc::new(1.0))] }
+        Lambda { layout: Layout::contact(1, true), tangent: vec![TangentSet::Disc(Disc::new(1.0))] }
     }
 
     #[test]

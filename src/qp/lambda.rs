@@ -1,5 +1,6 @@
-//! Λ = R₊ᵐ × Π_i Λτ,ᵢ: the product of the contact pairs' blocks ([`HalfLine`] for λν,ᵢ, a
-//! [`TangentSet`] for λ̄τ,ᵢ), on the multiplier layout of [`Layout`]. Provides P_Λ, the largest
+//! Λ = R₊ᵐ × Π_i Λτ,ᵢ × R^free: the product of the contact pairs' blocks ([`HalfLine`] for
+//! λν,ᵢ, a [`TangentSet`] for λ̄τ,ᵢ) and the unconstrained multipliers λ_E of TFETI (always
+//! free), on the multiplier layout of [`Layout`]. Provides P_Λ, the largest
 //! feasible step, the reduced gradient r̃_ρ(λ) = (λ − P_Λ(λ − ρ r))/ρ and the active sets (12)–(13).
 
 use super::sets::{ConvexSet, Disc, Ellipse, HalfLine, TangentSet};
@@ -29,7 +30,7 @@ pub struct ActiveSets {
 
 impl Lambda {
     pub fn new(contact: &Contact) -> Self {
-        let layout = Layout { m: contact.len(), friction: contact.has_friction() };
+        let layout = Layout::contact(contact.len(), contact.has_friction());
         let tangent = if layout.friction {
             contact
                 .bound
@@ -44,6 +45,17 @@ impl Lambda {
             vec![]
         };
         Lambda { layout, tangent }
+    }
+
+    /// The same set with `free` unconstrained components appended (λ_E).
+    pub fn with_free(mut self, free: usize) -> Self {
+        self.layout.free = free;
+        self
+    }
+
+    /// Index range of the unconstrained components.
+    pub fn free_range(&self) -> std::ops::Range<usize> {
+        self.layout.contact_dim()..self.layout.dim()
     }
 
     fn pair(&self, v: &[f64], i: usize) -> [f64; 2] {
@@ -61,6 +73,8 @@ impl Lambda {
             let k = self.layout.tangent(i, 0);
             s.project(&y[k..k + 2], &mut out[k..k + 2]);
         }
+        let e = self.free_range();
+        out[e.clone()].copy_from_slice(&y[e]);
     }
 
     /// Whether x ∈ Λ up to `tol` per block.
@@ -99,6 +113,7 @@ impl Lambda {
     pub fn active_sets(&self, lambda: &[f64], r: &[f64], rho: f64) -> ActiveSets {
         let n = self.layout.dim();
         let mut s = ActiveSets { free: vec![false; n], ..Default::default() };
+        s.free[self.free_range()].fill(true);
         for i in 0..self.layout.m {
             if lambda[i] - rho * r[i] >= 0.0 {
                 s.free[i] = true;
@@ -120,9 +135,9 @@ impl Lambda {
     }
 }
 
-/// A slant derivative D of P_Λ at a point y: block-diagonal, a 0/1 per normal component and a
+/// A slant derivative D of P_Λ at a point y: block-diagonal, a 0/1 per normal component, a
 /// 2×2 block (row-major) per tangential pair (identity inside the set, the ψ° of the set
-/// outside).
+/// outside) and the identity on the unconstrained components.
 #[derive(Clone, Debug)]
 pub struct SlantDerivative {
     layout: Layout,

@@ -10,6 +10,7 @@
 //! with [`QpError`], stop on the same criterion `‖r̃_ρ(λ)‖ ≤ ε‖b‖` and never print. [`kkt`]
 //! measures how well a result satisfies the optimality conditions.
 
+pub mod cg;
 pub mod gimssn;
 pub mod kkt;
 pub mod lambda;

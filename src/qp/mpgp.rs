@@ -94,6 +94,11 @@ fn split(set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
             out.free_tangent += 1;
         }
     }
+    // the unconstrained components (TFETI's λ_E) are always free
+    let e = set.free_range();
+    phi[e.clone()].copy_from_slice(&g[e.clone()]);
+    phit[e.clone()].copy_from_slice(&g[e.clone()]);
+    beta[e].fill(0.0);
 }
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by MPGP.

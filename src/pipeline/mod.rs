@@ -4,8 +4,11 @@
 //! gathers the fields and writes the files. Every phase ends with [`Comm::agree`], so an error on
 //! any rank stops all ranks with the same message.
 //!
-//! At this stage contact is not solved: a scene with active contact pairs is refused with a
-//! message saying so, and each body is an independent linear-elastic problem.
+//! Two paths share the phases: the monolithic dual (one piece per body, Dirichlet eliminated,
+//! the paper's setting) and TFETI ([`tfeti`]: METIS subdomains, gluing and Dirichlet
+//! multipliers, coarse problem), chosen by the scene's `[decomposition]`.
+
+pub mod tfeti;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -81,6 +84,8 @@ pub struct Solution {
     pub displacement: Vec<[f64; 3]>,
     pub von_mises: Vec<f64>,
     pub bodies: Vec<BodyStats>,
+    /// Subdomains, interface and coarse figures when solved by TFETI.
+    pub tfeti: Option<tfeti::TfetiInfo>,
 }
 
 /// What `solve` reports back to the command line.
@@ -269,6 +274,7 @@ fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
         displacement: vec![[0.0; 3]; mesh.nodes.len()],
         von_mises: vec![0.0; mesh.hexes.len()],
         bodies: vec![BodyStats::default(); mesh.bodies.len()],
+        tfeti: None,
     };
     let mut cursor = vec![0usize; comm.size()];
     for (b, body) in mesh.bodies.iter().enumerate() {
@@ -315,17 +321,6 @@ pub fn solver_params(s: &SolverSettings) -> qp::Params {
     }
 }
 
-/// Checks that the scene can be solved by this build.
-fn supported(ls: &LoadedScene) -> Result<()> {
-    if ls.scene.decomposition.subdomains != 1 {
-        return Err(Error::scene(
-            "decomposition.subdomains",
-            "only 1 subdomain per body is implemented yet (the TFETI decomposition is not)",
-        ));
-    }
-    Ok(())
-}
-
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>) -> Result<Summary> {
     let mut t = Timings::default();
@@ -337,8 +332,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         Ok(ls)
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
-    t.phase(comm, "validate", || supported(&ls))?;
     let (sol, outcome) = match &model.pairs {
+        _ if ls.scene.decomposition.is_tfeti() => tfeti::solve(comm, &ls, &model, &mut t)?,
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
         None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
     };
@@ -371,7 +366,22 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         "title": ls.scene.title,
         "ranks": comm.size(),
         "mpi": comm.library(),
-        "problem": if outcome.is_some() { "contact with Tresca friction (monolithic dual)" } else { "linear elasticity (no contact)" },
+        "problem": match (outcome.is_some(), sol.tfeti.is_some()) {
+            (true, false) => "contact with Tresca friction (monolithic dual)",
+            (true, true) => "contact with Tresca friction (TFETI dual)",
+            (false, false) => "linear elasticity (no contact)",
+            (false, true) => "linear elasticity (no contact, TFETI dual)",
+        },
+        "tfeti": sol.tfeti.as_ref().map(|f| json!({
+            "subdomains_per_body": mesh.bodies.iter().enumerate().map(|(b, _)| f.subdomains.iter().filter(|s| s.body == b).count()).collect::<Vec<_>>(),
+            "gluing": ls.scene.decomposition.gluing,
+            "multipliers": {"contact": f.contact_rows, "gluing": f.gluing_rows, "dirichlet": f.dirichlet_rows},
+            "coarse_dim": f.coarse_dim,
+            "nnz_C_lower": f.nnz_c,
+            "gluing_jump_relative": f.gluing_jump,
+            "coarse_feasibility": f.feasibility,
+            "subdomains": f.subdomains,
+        })),
         "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
         "mesh": {
             "nodes": mesh.nodes.len(),
@@ -445,6 +455,14 @@ fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<
     }
     if want("von_mises") {
         fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(sol.von_mises.clone()) });
+    }
+    if let (true, Some(f)) = (want("subdomain"), &sol.tfeti) {
+        fields.push(Field {
+            name: "subdomain".into(),
+            center: Center::Cell,
+            ncomp: 1,
+            values: Values::I32(f.element_subdomain.iter().map(|&s| s as i32).collect()),
+        });
     }
     if want("body") {
         fields.push(Field {
@@ -522,9 +540,16 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
             tangential
         );
     }
-    let _ = write!(s, "solve support: {}", match supported(&ls) {
-        Ok(()) => "yes".to_string(),
-        Err(e) => format!("no — {e}"),
-    });
+    let dec = &ls.scene.decomposition;
+    if dec.is_tfeti() {
+        let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
+        let d = crate::decomposition::decompose_each(mesh, &parts)?;
+        let _ = writeln!(s, "TFETI: {} subdomains ({} per body), {} interface nodes", d.subdomains.len(), parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "), d.interface_nodes());
+        for (i, sd) in d.subdomains.iter().enumerate() {
+            let iface = sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count();
+            let _ = writeln!(s, "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes", mesh.bodies[sd.body].name, sd.elems.len(), sd.nodes.len(), 3 * sd.nodes.len());
+        }
+    }
+    let _ = write!(s, "dual: {}", if dec.is_tfeti() { "TFETI" } else { "monolithic" });
     Ok(s)
 }

@@ -1,0 +1,192 @@
+//! The natural coarse space of TFETI: G = RᵀBᵀ (six rows per subdomain), e = Rᵀf, the coarse
+//! matrix C = G_E G_Eᵀ (sparse, factorized once) and the oblique projector of DESIGN §2,
+//!
+//! ```text
+//! P̃x = x − Gᵀ C⁻¹ G_E x_E,    P̃ᵀy = y − [G_E 0]ᵀ C⁻¹ G y,    λ̂ = (G_Eᵀ C⁻¹ e, 0),
+//! ```
+//!
+//! with P̃Gᵀ = 0, G(λ̂ + P̃ᵀy) = e for every y, and (P̃ᵀy)_I = y_I: the contact multipliers
+//! pass through unchanged, so Λ stays a product of small blocks. G_E has full row rank when
+//! every body is held by Dirichlet conditions; otherwise C is singular and the factorization
+//! says so.
+//!
+//! G is small (6·nnz of the B rows' columns per subdomain) and depends only on coordinates and
+//! the constraint rows, so every rank builds it whole and the coarse problem is replicated:
+//! applying P̃ needs no communication.
+
+use super::constraints::Constraints;
+use super::subdomain::{rigid_modes, NR};
+use crate::decomposition::Decomposition;
+use crate::error::{Error, Result};
+use crate::linalg::cholesky::{Cholesky, Ordering};
+use crate::linalg::sparse::SymCsc;
+use crate::mesh::Mesh;
+
+/// G, e and the factorized C.
+pub struct Coarse {
+    /// Per subdomain: the multipliers whose rows touch it (ascending) and G_s = R_sᵀB_sᵀ on
+    /// them, row-major 6 × len.
+    blocks: Vec<(Vec<usize>, Vec<f64>)>,
+    /// First λ_E index.
+    e_start: usize,
+    /// e = Rᵀf, 6 per subdomain.
+    pub e: Vec<f64>,
+    chol: Cholesky,
+    /// Nonzeros of the lower triangle of C.
+    pub nnz_c: usize,
+}
+
+impl Coarse {
+    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes C.
+    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>]) -> Result<Coarse> {
+        let e_start = cons.e_start();
+        let ns = d.subdomains.len();
+        let mut e = vec![0.0; NR * ns];
+        let mut blocks = Vec::with_capacity(ns);
+        for (s, sd) in d.subdomains.iter().enumerate() {
+            let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
+            let r = rigid_modes(&coords);
+            let nd = 3 * sd.nodes.len();
+            for k in 0..NR {
+                e[NR * s + k] = r[k * nd..(k + 1) * nd].iter().zip(&loads[s]).map(|(a, b)| a * b).sum();
+            }
+            let mut rows: Vec<usize> = cons.rows[s].iter().map(|x| x.0).collect();
+            rows.sort_unstable();
+            rows.dedup();
+            let len = rows.len();
+            let mut g = vec![0.0; NR * len];
+            for &(row, dof, coef) in &cons.rows[s] {
+                let p = rows.binary_search(&row).expect("row listed");
+                for k in 0..NR {
+                    g[k * len + p] += coef * r[k * nd + dof];
+                }
+            }
+            blocks.push((rows, g));
+        }
+        // C = G_E G_Eᵀ, accumulated row of λ_E by row of λ_E
+        let ne = cons.layout.dim() - e_start;
+        let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); ne];
+        for (s, (rows, g)) in blocks.iter().enumerate() {
+            let len = rows.len();
+            for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= e_start) {
+                for k in 0..NR {
+                    by_row[row - e_start].push((NR * s + k, g[k * len + p]));
+                }
+            }
+        }
+        let nc = NR * ns;
+        let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
+        for list in &by_row {
+            for &(i, x) in list {
+                for &(j, y) in list {
+                    if i >= j {
+                        *cols[j].entry(i).or_insert(0.0) += x * y;
+                    }
+                }
+            }
+        }
+        let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
+        for (j, col) in cols.iter().enumerate() {
+            if !col.contains_key(&j) {
+                return Err(singular(d, j / NR, mesh));
+            }
+            for (&i, &v) in col {
+                c.row_idx.push(i);
+                c.values.push(v);
+            }
+            c.col_ptr.push(c.row_idx.len());
+        }
+        let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
+            Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
+        })?;
+        Ok(Coarse { blocks, e_start, e, chol, nnz_c: c.nnz() })
+    }
+
+    /// Size of the coarse problem, 6 per subdomain.
+    pub fn dim(&self) -> usize {
+        self.e.len()
+    }
+
+    /// G x, or G_E x_E when `e_only`.
+    fn g_mul(&self, x: &[f64], e_only: bool) -> Vec<f64> {
+        let mut out = vec![0.0; self.dim()];
+        for (s, (rows, g)) in self.blocks.iter().enumerate() {
+            let len = rows.len();
+            for k in 0..NR {
+                let gk = &g[k * len..(k + 1) * len];
+                out[NR * s + k] = rows
+                    .iter()
+                    .zip(gk)
+                    .filter(|(&r, _)| !e_only || r >= self.e_start)
+                    .map(|(&r, v)| v * x[r])
+                    .sum();
+            }
+        }
+        out
+    }
+
+    /// y −= Gᵀ a (or only its E rows when `e_only`).
+    fn sub_gt_mul(&self, a: &[f64], y: &mut [f64], e_only: bool) {
+        for (s, (rows, g)) in self.blocks.iter().enumerate() {
+            let len = rows.len();
+            for (p, &r) in rows.iter().enumerate() {
+                if e_only && r < self.e_start {
+                    continue;
+                }
+                y[r] -= (0..NR).map(|k| g[k * len + p] * a[NR * s + k]).sum::<f64>();
+            }
+        }
+    }
+
+    /// x ← C⁻¹ x.
+    pub fn c_solve(&self, x: &mut [f64]) {
+        self.chol.solve_in_place(x);
+    }
+
+    /// z ← P̃ z = z − Gᵀ C⁻¹ G_E z_E.
+    pub fn project(&self, z: &mut [f64]) {
+        let mut a = self.g_mul(z, true);
+        self.c_solve(&mut a);
+        self.sub_gt_mul(&a, z, false);
+    }
+
+    /// y ← P̃ᵀ y = y − [G_E 0]ᵀ C⁻¹ G y.
+    pub fn project_t(&self, y: &mut [f64]) {
+        let mut a = self.g_mul(y, false);
+        self.c_solve(&mut a);
+        self.sub_gt_mul(&a, y, true);
+    }
+
+    /// λ̂ = (G_Eᵀ C⁻¹ e, 0) in a vector of length `dim`.
+    pub fn lambda_hat(&self, dim: usize) -> Vec<f64> {
+        let mut a = self.e.clone();
+        self.c_solve(&mut a);
+        let mut l = vec![0.0; dim];
+        self.sub_gt_mul(&a, &mut l, true);
+        l.iter_mut().for_each(|v| *v = -*v);
+        l
+    }
+
+    /// α = C⁻¹ G_E w_E: the rigid-body amplitudes that best close the E rows' residual w.
+    pub fn alpha(&self, w: &[f64]) -> Vec<f64> {
+        let mut a = self.g_mul(w, true);
+        self.c_solve(&mut a);
+        a
+    }
+
+    /// ‖G λ − e‖ / ‖e‖ (or the absolute value when e = 0).
+    pub fn feasibility(&self, lambda: &[f64]) -> f64 {
+        let g = self.g_mul(lambda, false);
+        let num = g.iter().zip(&self.e).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        let den = self.e.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if den > 0.0 { num / den } else { num }
+    }
+}
+
+fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
+    let body = &mesh.bodies[d.subdomains[s].body].name;
+    Error::numerical(
+        "TFETI coarse problem",
+        format!("C = G_E G_Eᵀ is singular (body \"{body}\"): every body needs Dirichlet conditions that stop its rigid motion"),
+    )
+}

@@ -1,0 +1,169 @@
+//! The TFETI constraint rows B = [B_I; B_E] and their right-hand side c, per subdomain.
+//!
+//! Multipliers are ordered as in [`Layout`]: the contact rows B_I first (λν, then λτ when there
+//! is friction), then λ_E: for every mesh node in ascending order and every component, either
+//! its Dirichlet rows or its gluing rows.
+//!
+//! - **B_I** (contact): the rows N and T of each pair, acting on the *first* copy of the slave
+//!   and of the master node (the other copies follow by gluing); c = gap for the normal rows.
+//! - **Dirichlet**: a prescribed DOF gets one row e_dof on *every* copy of its node (c = the
+//!   value) and no gluing rows: each copy is held directly, the rows are orthonormal and
+//!   non-redundant.
+//! - **Gluing** of a free DOF with k > 1 copies: k − 1 rows. [`Gluing::Orthonormal`] (default)
+//!   takes the Helmert basis of the complement of (1, …, 1) — row j = (1, …, 1, −j, 0, …)/√(j(j+1))
+//!   on copies 0..=j — so B_E B_Eᵀ = I (non-redundant, orthonormal: B_E adds nothing to the
+//!   conditioning of F and C = G_E G_Eᵀ is as well scaled as R). [`Gluing::Chain`] takes the
+//!   plain ±1 rows between consecutive copies (non-redundant, not orthogonal at cross points),
+//!   kept for comparison. Redundant gluing (all pairs of copies) is not offered: B_E would be
+//!   rank-deficient and F singular on Ker B_Eᵀ.
+
+use serde::{Deserialize, Serialize};
+
+use crate::contact::pairing::Contact;
+use crate::decomposition::Decomposition;
+use crate::dual::Layout;
+
+/// How the copies of an interface DOF are glued.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Gluing {
+    #[default]
+    Orthonormal,
+    Chain,
+}
+
+/// B and c: one entry list per subdomain.
+#[derive(Clone, Debug)]
+pub struct Constraints {
+    pub layout: Layout,
+    /// c, one value per multiplier.
+    pub c: Vec<f64>,
+    /// Per subdomain: (row, local DOF 3·l + comp, coefficient).
+    pub rows: Vec<Vec<(usize, usize, f64)>>,
+    pub gluing_rows: usize,
+    pub dirichlet_rows: usize,
+}
+
+impl Constraints {
+    /// Index of the first λ_E row.
+    pub fn e_start(&self) -> usize {
+        self.layout.contact_dim()
+    }
+}
+
+/// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a
+/// later entry for the same DOF winning; `contact` the pairs (if contact is on).
+pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, gluing: Gluing) -> Constraints {
+    let (m, friction) = contact.map_or((0, false), |c| (c.len(), c.has_friction()));
+    let mut layout = Layout::contact(m, friction);
+    let mut rows = vec![Vec::new(); d.subdomains.len()];
+    let mut c = vec![0.0; layout.contact_dim()];
+    if let Some(ct) = contact {
+        let first = |v: usize| d.copies[v][0];
+        for i in 0..m {
+            let pair_rows = std::iter::once((layout.normal(i), ct.normal[i]))
+                .chain(friction.then(|| [(layout.tangent(i, 0), ct.t1[i]), (layout.tangent(i, 1), ct.t2[i])]).into_iter().flatten());
+            for (row, dir) in pair_rows {
+                for (node, sign) in [(ct.slave[i], 1.0), (ct.master[i], -1.0)] {
+                    let (s, l) = first(node);
+                    for k in 0..3 {
+                        if dir[k] != 0.0 {
+                            rows[s].push((row, 3 * l + k, sign * dir[k]));
+                        }
+                    }
+                }
+            }
+            c[layout.normal(i)] = ct.gap[i];
+        }
+    }
+    let mut prescribed = std::collections::HashMap::new();
+    for &(v, k, val) in dirichlet {
+        prescribed.insert((v, k), val);
+    }
+    let (mut gluing_rows, mut dirichlet_rows) = (0, 0);
+    for (v, copies) in d.copies.iter().enumerate() {
+        for k in 0..3 {
+            if let Some(&val) = prescribed.get(&(v, k)) {
+                for &(s, l) in copies {
+                    rows[s].push((c.len(), 3 * l + k, 1.0));
+                    c.push(val);
+                    dirichlet_rows += 1;
+                }
+                continue;
+            }
+            for j in 1..copies.len() {
+                let row = c.len();
+                match gluing {
+                    Gluing::Orthonormal => {
+                        let h = 1.0 / ((j * (j + 1)) as f64).sqrt();
+                        for &(s, l) in &copies[..j] {
+                            rows[s].push((row, 3 * l + k, h));
+                        }
+                        let (s, l) = copies[j];
+                        rows[s].push((row, 3 * l + k, -(j as f64) * h));
+                    }
+                    Gluing::Chain => {
+                        let ((s0, l0), (s1, l1)) = (copies[j - 1], copies[j]);
+                        rows[s0].push((row, 3 * l0 + k, 1.0));
+                        rows[s1].push((row, 3 * l1 + k, -1.0));
+                    }
+                }
+                c.push(0.0);
+                gluing_rows += 1;
+            }
+        }
+    }
+    layout.free = gluing_rows + dirichlet_rows;
+    Constraints { layout, c, rows, gluing_rows, dirichlet_rows }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decomposition::decompose;
+    use crate::mesh::{boxgen, Mesh};
+
+    #[test]
+    fn orthonormal_gluing_rows_and_one_dirichlet_row_per_copy() {
+        let mut mesh = Mesh::default();
+        mesh.push_body("b", boxgen::generate([0.0; 3], [1.0; 3], [5, 5, 5]));
+        let d = decompose(&mesh, 4).unwrap();
+        let dirichlet: Vec<_> = (0..5).map(|v| (v, 2, 0.5)).collect();
+        for gluing in [Gluing::Orthonormal, Gluing::Chain] {
+            let c = build(&d, &dirichlet, None, gluing);
+            assert_eq!(c.layout.dim(), c.c.len());
+            let n = c.layout.dim();
+            // B Bᵀ as a dense matrix
+            let mut bbt = vec![0.0; n * n];
+            let mut by_dof: std::collections::HashMap<(usize, usize), Vec<(usize, f64)>> = Default::default();
+            for (s, r) in c.rows.iter().enumerate() {
+                for &(row, dof, v) in r {
+                    by_dof.entry((s, dof)).or_default().push((row, v));
+                }
+            }
+            for col in by_dof.values() {
+                for &(a, x) in col {
+                    for &(b, y) in col {
+                        bbt[a * n + b] += x * y;
+                    }
+                }
+            }
+            let copies = |v: usize| d.copies[v].len();
+            let held = |v: usize, k: usize| dirichlet.iter().any(|&(w, kk, _)| w == v && kk == k);
+            let glue: usize = (0..mesh.nodes.len()).map(|v| (0..3).filter(|&k| !held(v, k)).count() * (copies(v) - 1)).sum();
+            assert!(glue > 0);
+            assert_eq!(c.gluing_rows, glue);
+            assert_eq!(c.dirichlet_rows, dirichlet.iter().map(|&(v, _, _)| copies(v)).sum::<usize>());
+            assert_eq!(c.gluing_rows + c.dirichlet_rows, n);
+            if gluing == Gluing::Orthonormal {
+                for a in 0..n {
+                    for b in 0..n {
+                        assert!((bbt[a * n + b] - if a == b { 1.0 } else { 0.0 }).abs() < 1e-14);
+                    }
+                }
+            }
+            // Dirichlet rows carry their value, gluing rows 0
+            assert_eq!(c.c.iter().filter(|&&x| x == 0.5).count(), c.dirichlet_rows);
+        }
+    }
+}

@@ -1,0 +1,37 @@
+//! Total FETI (DESIGN §2): every body split into floating subdomains ([`subdomain`]: K_s, R_s,
+//! K_s⁺), the constraint rows B = [B_I; B_E] and c ([`constraints`]), the natural coarse space
+//! G = RᵀBᵀ, e = Rᵀf and the projectors ([`coarse`]), and the dual operator on which the QP
+//! solvers run unchanged ([`dual`]). It is a transform of the QP: λ = λ̂ + P̃ᵀy maps the
+//! solvers' variable y ∈ Ker G_E × Λ onto the feasible multipliers, and [`dual::TfetiDual::recover`]
+//! maps the solution back to λ, α and u.
+
+pub mod coarse;
+pub mod constraints;
+pub mod dual;
+pub mod subdomain;
+
+use crate::decomposition::Decomposition;
+
+/// f_s for every subdomain (per local DOF 3·l + c): each node's load goes to its first copy.
+pub fn subdomain_loads(d: &Decomposition, loads: &[f64]) -> Vec<Vec<f64>> {
+    let mut f: Vec<Vec<f64>> = d.subdomains.iter().map(|sd| vec![0.0; 3 * sd.nodes.len()]).collect();
+    for (v, copies) in d.copies.iter().enumerate() {
+        let (s, l) = copies[0];
+        f[s][3 * l..3 * l + 3].copy_from_slice(&loads[3 * v..3 * v + 3]);
+    }
+    f
+}
+
+/// Rank of every subdomain: largest first onto the least loaded rank (by DOFs), deterministic.
+pub fn assign_ranks(d: &Decomposition, ranks: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..d.subdomains.len()).collect();
+    order.sort_by_key(|&s| (std::cmp::Reverse(d.subdomains[s].nodes.len()), s));
+    let mut load = vec![0usize; ranks];
+    let mut owner = vec![0; d.subdomains.len()];
+    for s in order {
+        let r = (0..ranks).min_by_key(|&r| (load[r], r)).expect("at least one rank");
+        owner[s] = r;
+        load[r] += d.subdomains[s].nodes.len();
+    }
+    owner
+}

@@ -1,0 +1,230 @@
+//! The TFETI path of the pipeline: phases `decompose` (METIS, constraint rows), `factorize`
+//! (assemble K_s and factorize K_s with its fixing DOFs, this rank's subdomains only), `coarse`
+//! (G, e, C), `dual` (b̃), `iterate`, `recover` (λ, α, u), `stress` and `gather`. Subdomains go
+//! to ranks by size (largest first to the least loaded rank); the dual vectors are replicated.
+
+use super::{BodyStats, ContactOutcome, Solution, Timings};
+use crate::comm::Comm;
+use crate::decomposition::{decompose_each, Decomposition};
+use crate::dual::DualOperator;
+use crate::error::{Error, Result};
+use crate::feti::coarse::Coarse;
+use crate::feti::constraints;
+use crate::feti::dual::TfetiDual;
+use crate::feti::subdomain::SubdomainSystem;
+use crate::feti::{assign_ranks, subdomain_loads};
+use crate::fem::element::hex8_center_stress;
+use crate::fem::material::von_mises;
+use crate::model::Model;
+use crate::qp::{self, lambda::Lambda};
+use crate::recovery::contact_state;
+use crate::scene::LoadedScene;
+
+/// Figures of one subdomain.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SubdomainStats {
+    pub body: usize,
+    pub nodes: usize,
+    pub elements: usize,
+    pub interface_nodes: usize,
+    pub nnz_k: usize,
+    pub nnz_l: usize,
+    /// ‖K_s u_s − (f_s − B_sᵀλ)‖ / ‖f_s − B_sᵀλ‖.
+    pub residual: f64,
+    pub rank: usize,
+}
+
+/// What the TFETI path adds to a [`Solution`].
+#[derive(Clone, Debug, Default)]
+pub struct TfetiInfo {
+    pub subdomains: Vec<SubdomainStats>,
+    /// Subdomain of every element.
+    pub element_subdomain: Vec<usize>,
+    /// Multipliers: contact, gluing, Dirichlet.
+    pub contact_rows: usize,
+    pub gluing_rows: usize,
+    pub dirichlet_rows: usize,
+    pub coarse_dim: usize,
+    pub nnz_c: usize,
+    /// max over nodes and copies of |u_copy − u_first| / max |u|.
+    pub gluing_jump: f64,
+    /// ‖Gλ − e‖/‖e‖ at the solution.
+    pub feasibility: f64,
+}
+
+/// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
+pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
+    let mesh = &model.mesh;
+    let dec = &ls.scene.decomposition;
+    let contact = model.pairs.as_ref();
+    let (d, cons, owner) = t.phase(comm, "decompose", || {
+        let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
+        let d = decompose_each(mesh, &parts)?;
+        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing);
+        let owner = assign_ranks(&d, comm.size());
+        Ok((d, cons, owner))
+    })?;
+    let loads = subdomain_loads(&d, &model.loads);
+    let subs = t.phase(comm, "factorize", || {
+        (0..d.subdomains.len())
+            .filter(|&s| owner[s] == comm.rank())
+            .map(|s| {
+                let sd = &d.subdomains[s];
+                SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone())
+            })
+            .collect::<Result<Vec<_>>>()
+    })?;
+    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads))?;
+    let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
+    let (dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(comm, &cons, subs, coarse)))?;
+    let set = match contact {
+        Some(c) => Lambda::new(c),
+        None => Lambda { layout: crate::dual::Layout::contact(0, false), tangent: vec![] },
+    }
+    .with_free(cons.layout.free);
+    let s = &ls.scene.solver;
+    let params = super::solver_params(s);
+    let name = if contact.is_some() { s.method.name() } else { "cg" };
+    let sol = t.phase(comm, "iterate", || {
+        let y0 = vec![0.0; dual.dim()];
+        let r = if contact.is_some() { qp::solve(&dual, &b, &set, &y0, &params) } else { qp::cg::solve(&dual, &b, &y0, &params) };
+        r.map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
+    })?;
+    let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
+    let feasibility = dual.coarse.feasibility(&rec.lambda);
+    let solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
+    let mut solution = solution;
+    solution.tfeti = Some(TfetiInfo {
+        element_subdomain: d.elem_subdomain(mesh.hexes.len()),
+        contact_rows: cons.e_start(),
+        gluing_rows: cons.gluing_rows,
+        dirichlet_rows: cons.dirichlet_rows,
+        coarse_dim,
+        nnz_c,
+        feasibility,
+        ..solution.tfeti.take().unwrap_or_default()
+    });
+    let outcome = contact.map(|c| {
+        let set_i = Lambda::new(c);
+        let (li, ri) = (&rec.lambda[..set_i.layout.dim()], &sol.gradient[..set_i.layout.dim()]);
+        let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9));
+        let bnorm = dual.norm(&b);
+        let kkt = qp::kkt::residuals(&set_i, li, ri, bnorm);
+        ContactOutcome { state, info: sol.info.clone(), bnorm, kkt }
+    });
+    Ok((solution, outcome))
+}
+
+/// Checks K_s u_s = f_s − B_sᵀλ, computes the element stresses (phase `stress`) and gathers u,
+/// the stresses and the figures on rank 0 (phase `gather`), with the gluing jumps.
+#[allow(clippy::too_many_arguments)]
+fn finish<C: Comm>(
+    comm: &C,
+    model: &Model,
+    d: &Decomposition,
+    dual: &TfetiDual<'_, C>,
+    u: &[Vec<f64>],
+    rhs: &[Vec<f64>],
+    owner: &[usize],
+    t: &mut Timings,
+) -> Result<Solution> {
+    let mesh = &model.mesh;
+    let packed = t.phase(comm, "stress", || {
+        let mut buf = Vec::new();
+        for ((ls, us), f) in dual.subs.iter().zip(u).zip(rhs) {
+            let s = ls.sys.index;
+            let sd = &d.subdomains[s];
+            let ku = ls.sys.k.mul(us);
+            let rn = ku.iter().zip(f).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+            let fnorm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let residual = if fnorm > 0.0 { rn / fnorm } else { rn };
+            if !residual.is_finite() || residual > 1e-6 {
+                return Err(Error::numerical(
+                    format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
+                    format!("recovered u does not satisfy K_s u_s = f_s − B_sᵀλ (relative residual {residual:.1e})"),
+                ));
+            }
+            buf.extend(us);
+            for &e in &sd.elems {
+                let ue = mesh.hexes[e].map(|v| {
+                    let l = sd.local(v).expect("element node in subdomain");
+                    [us[3 * l], us[3 * l + 1], us[3 * l + 2]]
+                });
+                buf.push(von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[sd.body])));
+            }
+            buf.extend([ls.sys.k.nnz() as f64, ls.sys.nnz_l() as f64, residual]);
+        }
+        Ok(buf)
+    })?;
+    t.phase(comm, "gather", || {
+        let Some(all) = comm.gather_f64(0, &packed) else {
+            return Ok(Solution::default());
+        };
+        let mut cursor = vec![0usize; comm.size()];
+        let mut sol = Solution {
+            displacement: vec![[0.0; 3]; mesh.nodes.len()],
+            von_mises: vec![0.0; mesh.hexes.len()],
+            bodies: vec![],
+            tfeti: None,
+        };
+        let mut seen = vec![false; mesh.nodes.len()];
+        let mut copies_u: Vec<(usize, [f64; 3])> = Vec::new();
+        let mut stats = Vec::with_capacity(d.subdomains.len());
+        // subdomains in the order each rank packed them (ascending index per rank)
+        for (s, sd) in d.subdomains.iter().enumerate() {
+            let r = owner[s];
+            let data = &all[r];
+            let mut p = cursor[r];
+            for &v in &sd.nodes {
+                let uv = [data[p], data[p + 1], data[p + 2]];
+                if seen[v] {
+                    copies_u.push((v, uv));
+                } else {
+                    sol.displacement[v] = uv;
+                    seen[v] = true;
+                }
+                p += 3;
+            }
+            for &e in &sd.elems {
+                sol.von_mises[e] = data[p];
+                p += 1;
+            }
+            stats.push(SubdomainStats {
+                body: sd.body,
+                nodes: sd.nodes.len(),
+                elements: sd.elems.len(),
+                interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count(),
+                nnz_k: data[p] as usize,
+                nnz_l: data[p + 1] as usize,
+                residual: data[p + 2],
+                rank: r,
+            });
+            cursor[r] = p + 3;
+        }
+        let umax = sol.displacement.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
+        let jump = copies_u
+            .iter()
+            .map(|(v, uv)| (0..3).map(|c| (uv[c] - sol.displacement[*v][c]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        sol.bodies = mesh
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(b, body)| {
+                let mine = stats.iter().filter(|x| x.body == b);
+                BodyStats {
+                    name: body.name.clone(),
+                    nodes: body.nodes.len(),
+                    elements: body.elems.len(),
+                    free_dofs: mine.clone().map(|x| 3 * x.nodes).sum(),
+                    nnz_k: mine.clone().map(|x| x.nnz_k).sum(),
+                    nnz_l: mine.clone().map(|x| x.nnz_l).sum(),
+                    residual: mine.clone().map(|x| x.residual).fold(0.0, f64::max),
+                    rank: mine.map(|x| x.rank).min().unwrap_or(0),
+                }
+            })
+            .collect();
+        sol.tfeti = Some(TfetiInfo { subdomains: stats, gluing_jump: jump / umax, ..Default::default() });
+        Ok(sol)
+    })
+}
