@@ -303,6 +303,26 @@ pub struct Decomposition {
     /// Gluing rows of the interface DOFs.
     #[serde(default)]
     pub gluing: crate::feti::constraints::Gluing,
+    /// How Gλ = e is kept: the oblique projector P̃ (one QP solve) or the orthogonal one with
+    /// SMALSE-M's augmented-Lagrangian loop around the QP solver.
+    #[serde(default)]
+    pub projector: Projector,
+    /// SMALSE-M's penalty ϱ as a multiple of σ_max(PFP) (orthogonal projector only).
+    #[serde(default = "unit")]
+    pub penalty: f64,
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// See [`Decomposition::projector`].
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Projector {
+    #[default]
+    Oblique,
+    Orthogonal,
 }
 
 fn one() -> usize {
@@ -311,7 +331,7 @@ fn one() -> usize {
 
 impl Default for Decomposition {
     fn default() -> Self {
-        Decomposition { subdomains: 1, target_dofs: None, tfeti: false, gluing: Default::default() }
+        Decomposition { subdomains: 1, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
     }
 }
 
@@ -641,6 +661,9 @@ impl Scene {
         }
         if self.decomposition.subdomains == 0 {
             return Err(Error::scene("decomposition.subdomains", "must be at least 1"));
+        }
+        if !(self.decomposition.penalty > 0.0 && self.decomposition.penalty.is_finite()) {
+            return Err(Error::scene("decomposition.penalty", format!("must be a positive number, got {}", self.decomposition.penalty)));
         }
         if let Some(t) = self.decomposition.target_dofs {
             if t < 24 {

@@ -32,13 +32,16 @@ pub struct Coarse {
     /// e = Rᵀf, 6 per subdomain.
     pub e: Vec<f64>,
     chol: Cholesky,
+    /// GGᵀ factorized, for the orthogonal projector (SMALSE-M) only.
+    full: Option<Cholesky>,
     /// Nonzeros of the lower triangle of C.
     pub nnz_c: usize,
 }
 
 impl Coarse {
-    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes C.
-    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>]) -> Result<Coarse> {
+    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes C; with
+    /// `orthogonal` also GGᵀ for the orthogonal projector P.
+    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], orthogonal: bool) -> Result<Coarse> {
         let e_start = cons.e_start();
         let ns = d.subdomains.len();
         let mut e = vec![0.0; NR * ns];
@@ -63,43 +66,12 @@ impl Coarse {
             }
             blocks.push((rows, g));
         }
-        // C = G_E G_Eᵀ, accumulated row of λ_E by row of λ_E
-        let ne = cons.layout.dim() - e_start;
-        let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); ne];
-        for (s, (rows, g)) in blocks.iter().enumerate() {
-            let len = rows.len();
-            for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= e_start) {
-                for k in 0..NR {
-                    by_row[row - e_start].push((NR * s + k, g[k * len + p]));
-                }
-            }
-        }
-        let nc = NR * ns;
-        let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
-        for list in &by_row {
-            for &(i, x) in list {
-                for &(j, y) in list {
-                    if i >= j {
-                        *cols[j].entry(i).or_insert(0.0) += x * y;
-                    }
-                }
-            }
-        }
-        let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
-        for (j, col) in cols.iter().enumerate() {
-            if !col.contains_key(&j) {
-                return Err(singular(d, j / NR, mesh));
-            }
-            for (&i, &v) in col {
-                c.row_idx.push(i);
-                c.values.push(v);
-            }
-            c.col_ptr.push(c.row_idx.len());
-        }
-        let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
-            Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
-        })?;
-        Ok(Coarse { blocks, e_start, e, chol, nnz_c: c.nnz() })
+        let (c, nnz_c) = coarse_matrix(&blocks, e_start, cons.layout.dim(), d, mesh)?;
+        let full = match orthogonal {
+            true => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), d, mesh)?.0),
+            false => None,
+        };
+        Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c })
     }
 
     /// Size of the coarse problem, 6 per subdomain.
@@ -157,6 +129,15 @@ impl Coarse {
         self.sub_gt_mul(&a, y, true);
     }
 
+    /// x ← P x = x − Gᵀ(GGᵀ)⁻¹G x, the orthogonal projector onto Ker G (built with
+    /// `orthogonal = true` only).
+    pub fn project_orthogonal(&self, x: &mut [f64]) {
+        let full = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
+        let mut a = self.g_mul(x, false);
+        full.solve_in_place(&mut a);
+        self.sub_gt_mul(&a, x, false);
+    }
+
     /// λ̂ = (G_Eᵀ C⁻¹ e, 0) in a vector of length `dim`.
     pub fn lambda_hat(&self, dim: usize) -> Vec<f64> {
         let mut a = self.e.clone();
@@ -181,6 +162,45 @@ impl Coarse {
         let den = self.e.iter().map(|v| v * v).sum::<f64>().sqrt();
         if den > 0.0 { num / den } else { num }
     }
+}
+
+/// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
+fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
+    let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
+    for (s, (rows, g)) in blocks.iter().enumerate() {
+        let len = rows.len();
+        for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= first) {
+            for k in 0..NR {
+                by_row[row - first].push((NR * s + k, g[k * len + p]));
+            }
+        }
+    }
+    let nc = NR * blocks.len();
+    let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
+    for list in &by_row {
+        for &(i, x) in list {
+            for &(j, y) in list {
+                if i >= j {
+                    *cols[j].entry(i).or_insert(0.0) += x * y;
+                }
+            }
+        }
+    }
+    let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
+    for (j, col) in cols.iter().enumerate() {
+        if !col.contains_key(&j) {
+            return Err(singular(d, j / NR, mesh));
+        }
+        for (&i, &v) in col {
+            c.row_idx.push(i);
+            c.values.push(v);
+        }
+        c.col_ptr.push(c.row_idx.len());
+    }
+    let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
+        Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
+    })?;
+    Ok((chol, c.nnz()))
 }
 
 fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {

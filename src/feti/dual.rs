@@ -25,7 +25,10 @@ pub struct TfetiDual<'c, C: Comm> {
     pub subs: Vec<LocalSubdomain>,
     pub coarse: Coarse,
     c: Vec<f64>,
-    lambda_hat: Vec<f64>,
+    /// λ̂ = (G_Eᵀ C⁻¹ e, 0): Gλ̂ = e, λ̂_I = 0.
+    pub lambda_hat: Vec<f64>,
+    /// d̃ − Fλ̂ (before projection): the right-hand side once λ = λ̂ + λ̃.
+    pub d_hat: Vec<f64>,
     counter: ProductCounter,
 }
 
@@ -39,6 +42,9 @@ pub struct Recovered {
     pub u: Vec<Vec<f64>>,
     /// f_s − B_sᵀλ for each local subdomain.
     pub rhs: Vec<Vec<f64>>,
+    /// c − Bu for every multiplier: the contact rows' gap (the contact part of the gradient),
+    /// and what the E rows leave unsatisfied.
+    pub gap: Vec<f64>,
 }
 
 impl<'c, C: Comm> TfetiDual<'c, C> {
@@ -48,14 +54,15 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let subs = subs.into_iter().map(|sys| LocalSubdomain { rows: cons.rows[sys.index].clone(), sys }).collect();
         let n = cons.layout.dim();
         let lambda_hat = coarse.lambda_hat(n);
-        let mut dual = TfetiDual { comm, layout: cons.layout, subs, coarse, c: cons.c.clone(), lambda_hat, counter: ProductCounter::default() };
+        let mut dual =
+            TfetiDual { comm, layout: cons.layout, subs, coarse, c: cons.c.clone(), lambda_hat, d_hat: vec![], counter: ProductCounter::default() };
         // d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c
         let mut b = vec![0.0; n];
         let z = dual.pinv_of_rhs(&dual.lambda_hat);
         dual.gather(&z, &mut b);
         b.iter_mut().zip(&dual.c).for_each(|(bi, ci)| *bi -= ci);
+        dual.d_hat = b.clone();
         dual.coarse.project(&mut b);
-        dual.lambda_hat.shrink_to_fit();
         (dual, b)
     }
 
@@ -103,7 +110,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// y = F x (not counted).
-    fn apply_f(&self, x: &[f64], y: &mut [f64]) {
+    pub(crate) fn apply_f(&self, x: &[f64], y: &mut [f64]) {
         let mut z = self.scatter(x);
         for (s, zs) in self.subs.iter().zip(&mut z) {
             s.sys.pinv_in_place(zs);
@@ -121,7 +128,11 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// λ, α and u from the solvers' y.
     pub fn recover(&self, y: &[f64]) -> Recovered {
-        let lambda = self.lambda_of(y);
+        self.recover_lambda(self.lambda_of(y))
+    }
+
+    /// α and u from a feasible λ (Gλ = e).
+    pub fn recover_lambda(&self, lambda: Vec<f64>) -> Recovered {
         let rhs = self.rhs_of(&lambda);
         let mut u: Vec<Vec<f64>> = rhs.clone();
         for (s, us) in self.subs.iter().zip(&mut u) {
@@ -136,7 +147,10 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             let i = s.sys.index;
             s.sys.add_r_mul(&alpha[NR * i..NR * (i + 1)], us);
         }
-        Recovered { lambda, alpha, u, rhs }
+        let mut gap = vec![0.0; self.layout.dim()];
+        self.gather(&u, &mut gap);
+        gap.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
+        Recovered { lambda, alpha, u, rhs, gap }
     }
 }
 

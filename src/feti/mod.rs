@@ -8,6 +8,7 @@
 pub mod coarse;
 pub mod constraints;
 pub mod dual;
+pub mod smalse;
 pub mod subdomain;
 
 use crate::decomposition::Decomposition;

@@ -317,6 +317,7 @@ pub fn solver_params(s: &SolverSettings) -> qp::Params {
         max_outer: s.max_outer,
         max_inner: s.max_inner,
         power_iterations: s.power_iterations,
+        sigma: None,
         gamma: s.gamma,
     }
 }
@@ -380,6 +381,8 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             "nnz_C_lower": f.nnz_c,
             "gluing_jump_relative": f.gluing_jump,
             "coarse_feasibility": f.feasibility,
+            "projector": ls.scene.decomposition.projector,
+            "smalse": f.smalse,
             "subdomains": f.subdomains,
         })),
         "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),

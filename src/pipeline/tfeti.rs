@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::feti::coarse::Coarse;
 use crate::feti::constraints;
 use crate::feti::dual::TfetiDual;
+use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::SubdomainSystem;
 use crate::feti::{assign_ranks, subdomain_loads};
 use crate::fem::element::hex8_center_stress;
@@ -18,7 +19,7 @@ use crate::fem::material::von_mises;
 use crate::model::Model;
 use crate::qp::{self, lambda::Lambda};
 use crate::recovery::contact_state;
-use crate::scene::LoadedScene;
+use crate::scene::{LoadedScene, Projector};
 
 /// Figures of one subdomain.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -50,6 +51,8 @@ pub struct TfetiInfo {
     pub gluing_jump: f64,
     /// ‖Gλ − e‖/‖e‖ at the solution.
     pub feasibility: f64,
+    /// SMALSE-M's outer loop (orthogonal projector only).
+    pub smalse: Option<SmalseInfo>,
 }
 
 /// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
@@ -74,7 +77,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             })
             .collect::<Result<Vec<_>>>()
     })?;
-    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads))?;
+    let orthogonal = dec.projector == Projector::Orthogonal;
+    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, orthogonal))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(comm, &cons, subs, coarse)))?;
     let set = match contact {
@@ -85,12 +89,19 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let s = &ls.scene.solver;
     let params = super::solver_params(s);
     let name = if contact.is_some() { s.method.name() } else { "cg" };
-    let sol = t.phase(comm, "iterate", || {
+    let (sol, smalse) = t.phase(comm, "iterate", || {
         let y0 = vec![0.0; dual.dim()];
-        let r = if contact.is_some() { qp::solve(&dual, &b, &set, &y0, &params) } else { qp::cg::solve(&dual, &b, &y0, &params) };
-        r.map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
+        let r = match (orthogonal, contact.is_some()) {
+            (true, _) => smalse::solve(&dual, &set, &params, dec.penalty).map(|(s, i)| (s, Some(i))),
+            (false, true) => qp::solve(&dual, &b, &set, &y0, &params).map(|s| (s, None)),
+            (false, false) => qp::cg::solve(&dual, &b, &y0, &params).map(|s| (s, None)),
+        };
+        r.map_err(|e| Error::numerical(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e.to_string()))
     })?;
-    let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
+    let rec = t.phase(comm, "recover", || {
+        // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
+        Ok(dual.recover(&sol.lambda))
+    })?;
     let feasibility = dual.coarse.feasibility(&rec.lambda);
     let solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
     let mut solution = solution;
@@ -102,11 +113,13 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         coarse_dim,
         nnz_c,
         feasibility,
+        smalse,
         ..solution.tfeti.take().unwrap_or_default()
     });
     let outcome = contact.map(|c| {
         let set_i = Lambda::new(c);
-        let (li, ri) = (&rec.lambda[..set_i.layout.dim()], &sol.gradient[..set_i.layout.dim()]);
+        // the contact gap c − Bu from the recovered u (= the solvers' gradient on the I rows)
+        let (li, ri) = (&rec.lambda[..set_i.layout.dim()], &rec.gap[..set_i.layout.dim()]);
         let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9));
         let bnorm = dual.norm(&b);
         let kkt = qp::kkt::residuals(&set_i, li, ri, bnorm);

@@ -91,6 +91,9 @@ pub struct Params {
     /// Inner iterations per outer step at most.
     pub max_inner: usize,
     pub power_iterations: usize,
+    /// σ_max(A) when already known (no power iterations then): a caller solving a sequence of
+    /// QPs with the same A (SMALSE-M's outer loop) measures it once.
+    pub sigma: Option<f64>,
     /// MPGP's proportioning constant Γ.
     pub gamma: f64,
 }
@@ -109,6 +112,7 @@ impl Default for Params {
             max_outer: 1000,
             max_inner: 10_000,
             power_iterations: 30,
+            sigma: None,
             gamma: 1.0,
         }
     }
@@ -216,7 +220,7 @@ pub(crate) struct Setup {
 impl Setup {
     pub fn new<A: DualOperator>(a: &A, b: &[f64], p: &Params) -> Result<Setup, QpError> {
         let n0 = a.products();
-        let sigma = power_sigma(a, p.power_iterations);
+        let sigma = p.sigma.unwrap_or_else(|| power_sigma(a, p.power_iterations));
         let n_power = a.products() - n0;
         if !(sigma.is_finite() && sigma > 0.0) {
             return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });

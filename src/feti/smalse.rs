@@ -1,0 +1,120 @@
+//! SMALSE-M on the TFETI dual: the alternative to the oblique projector that keeps the
+//! orthogonal projector P = I − Gᵀ(GGᵀ)⁻¹G (DESIGN §2, Dostál's SMALSE-M with the QP solver as
+//! the inner loop). With λ = λ̂ + λ̃ (λ̂_I = 0, so λ̃_I = λ_I and Λ is unchanged) the problem is
+//!
+//! ```text
+//! min ½λ̃ᵀFλ̃ − λ̃ᵀd̂   subject to  Gλ̃ = 0,  λ̃_I ∈ Λ,        d̂ = d̃ − Fλ̂,
+//! ```
+//!
+//! and each outer step k minimizes the augmented Lagrangian
+//! `½λ̃ᵀ(PFP + ϱQ)λ̃ − λ̃ᵀ(Pd̂ − ν_k)` over Λ (Q = I − P, ν_k = Gᵀμ_k kept as a vector in Im Gᵀ)
+//! with any of the QP solvers, then updates ν_{k+1} = ν_k + ϱQλ̃. ϱ = penalty·σ_max(PFP) (σ measured
+//! once by power iterations; penalty 1 by default): the penalty then does not raise ‖A‖, so the inner solvers keep their
+//! step length, and PFP on Ker G is far better conditioned than P̃FP̃ᵀ (DESIGN §3a). The inner
+//! tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k, Mϱ‖Qλ̃_k‖/‖Pd̂‖)), M = 1, ε_1 =
+//! 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ̃‖ (the infeasibility in the gradient's units) are below
+//! ε‖Pd̂‖.
+
+use super::dual::TfetiDual;
+use crate::comm::Comm;
+use crate::dual::{DualOperator, ProductCounter};
+use crate::qp::lambda::Lambda;
+use crate::qp::{self, Info, Params, QpError, QpSolution};
+
+/// A_ϱ = PFP + ϱQ.
+pub struct Penalized<'a, 'c, C: Comm> {
+    dual: &'a TfetiDual<'c, C>,
+    pub rho: f64,
+    counter: ProductCounter,
+}
+
+impl<'a, 'c, C: Comm> Penalized<'a, 'c, C> {
+    pub fn new(dual: &'a TfetiDual<'c, C>, rho: f64) -> Self {
+        Penalized { dual, rho, counter: ProductCounter::default() }
+    }
+
+    /// Q x = x − P x.
+    fn q(&self, x: &[f64]) -> Vec<f64> {
+        let mut p = x.to_vec();
+        self.dual.coarse.project_orthogonal(&mut p);
+        x.iter().zip(&p).map(|(a, b)| a - b).collect()
+    }
+}
+
+impl<C: Comm> DualOperator for Penalized<'_, '_, C> {
+    fn dim(&self) -> usize {
+        self.dual.dim()
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.counter.tick();
+        let mut w = x.to_vec();
+        self.dual.coarse.project_orthogonal(&mut w);
+        self.dual.apply_f(&w, y);
+        self.dual.coarse.project_orthogonal(y);
+        // + ϱ Q x = ϱ (x − P x)
+        for ((yi, xi), wi) in y.iter_mut().zip(x).zip(&w) {
+            *yi += self.rho * (xi - wi);
+        }
+    }
+
+    fn products(&self) -> usize {
+        self.counter.get()
+    }
+}
+
+/// Counters of the outer loop beside the summed inner [`Info`].
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SmalseInfo {
+    pub outer: usize,
+    pub penalty: f64,
+    /// ϱ‖Qλ̃‖/‖Pd̂‖ at the end.
+    pub feasibility: f64,
+}
+
+/// Solves the TFETI dual by SMALSE-M with `p.method` inside and ϱ = `penalty`·σ_max(PFP); returns λ̃ (λ = λ̂ + λ̃) with the
+/// inner solvers' counters summed (A-products of A_ϱ = F-products).
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty: f64) -> Result<(QpSolution, SmalseInfo), QpError> {
+    let n = dual.dim();
+    let mut b0 = dual.d_hat.clone();
+    dual.coarse.project_orthogonal(&mut b0);
+    let bnorm = dual.norm(&b0).max(f64::MIN_POSITIVE);
+    let mut op = Penalized::new(dual, 0.0);
+    let n_power = p.power_iterations;
+    let sigma = qp::power_sigma(&op, n_power);
+    if !(sigma.is_finite() && sigma > 0.0) {
+        return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
+    }
+    op.rho = penalty * sigma;
+    let sigma = sigma.max(op.rho);
+    let mut lambda = vec![0.0; n];
+    let mut nu = vec![0.0; n];
+    let mut eps_k = p.eps.max(1e-2);
+    let mut total = Info { sigma_est: sigma, n_a_power: n_power, ..Default::default() };
+    let mut sm = SmalseInfo { penalty: op.rho, ..Default::default() };
+    for k in 0..p.max_outer {
+        let b: Vec<f64> = b0.iter().zip(&nu).map(|(a, v)| a - v).collect();
+        let bk = dual.norm(&b).max(f64::MIN_POSITIVE);
+        let inner = Params { eps: eps_k * bnorm / bk, sigma: Some(1.1 * sigma), power_iterations: 0, ..p.clone() };
+        let sol = qp::solve(&op, &b, set, &lambda, &inner)?;
+        lambda = sol.lambda;
+        let err = sol.info.err * bk / bnorm;
+        total.iterations += sol.info.iterations;
+        total.inner_iterations += sol.info.inner_iterations;
+        total.n_a += sol.info.n_a;
+        total.rho = sol.info.rho;
+        total.q = sol.info.q;
+        total.history.extend(sol.info.history);
+        let ql = op.q(&lambda);
+        let feas = op.rho * dual.norm(&ql) / bnorm;
+        sm.outer = k + 1;
+        sm.feasibility = feas;
+        total.err = err.max(feas);
+        if err <= p.eps && feas <= p.eps {
+            return Ok((QpSolution { lambda, gradient: sol.gradient, info: total }, sm));
+        }
+        nu.iter_mut().zip(&ql).for_each(|(v, q)| *v += op.rho * q);
+        eps_k = p.eps.max(eps_k.min(feas));
+    }
+    Err(QpError::NoConvergence { info: Box::new(total), eps: p.eps })
+}
