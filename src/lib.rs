@@ -5,6 +5,7 @@
 //! [`linalg`] (METIS ordering, sparse Cholesky) → [`pipeline`] (named, timed phases) →
 //! [`output`] (HDF5 + XDMF + JSON). All collective communication goes through [`comm`].
 
+pub mod bench;
 pub mod comm;
 pub mod contact;
 pub mod decomposition;

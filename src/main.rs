@@ -55,6 +55,32 @@ enum Cmd {
         #[arg(long)]
         no_error: bool,
     },
+    /// TFETI benchmark: for each N and S (subdomains per body; 0 = monolithic) one
+    /// `mpirun -n RANKS tresca-feti solve`, tabulating nA, iterations, time per phase, peak memory
+    /// and the time of one A-product against its memory-bound floor. Run it without mpirun.
+    BenchTfeti {
+        #[arg(long, default_value = "run/seed.toml")]
+        scene: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(long, value_delimiter = ',', default_value = "16,26,41")]
+        sizes: Vec<usize>,
+        /// Subdomains per body (0: the monolithic dual).
+        #[arg(long, value_delimiter = ',', default_value = "0,1,4,8,16,32")]
+        subdomains: Vec<usize>,
+        /// oblique (P̃) and/or orthogonal (SMALSE-M).
+        #[arg(long, value_delimiter = ',', default_value = "oblique")]
+        projectors: Vec<String>,
+        #[arg(long, default_value_t = 2)]
+        ranks: usize,
+        #[arg(long, default_value_t = 1e-6)]
+        eps: f64,
+        /// Memory bandwidth (GB/s) for the A-product floor (STACK.md: about 15 on this machine).
+        #[arg(long, default_value_t = 15.0)]
+        bandwidth: f64,
+        #[arg(long, default_value = "out/bench_tfeti.csv")]
+        csv: PathBuf,
+    },
     /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
     Check {
         scene: PathBuf,
@@ -92,6 +118,43 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
+fn bench_tfeti(
+    scene: PathBuf,
+    sets: Vec<String>,
+    sizes: Vec<usize>,
+    subdomains: Vec<usize>,
+    projectors: Vec<String>,
+    ranks: usize,
+    eps: f64,
+    bandwidth: f64,
+    csv: PathBuf,
+) -> tresca_feti::Result<()> {
+    use tresca_feti::scene::Projector;
+    use tresca_feti::Error;
+    let projectors = projectors
+        .iter()
+        .map(|p| match p.as_str() {
+            "oblique" => Ok(Projector::Oblique),
+            "orthogonal" => Ok(Projector::Orthogonal),
+            other => Err(Error::scene("--projectors", format!("unknown projector \"{other}\"; known: oblique, orthogonal"))),
+        })
+        .collect::<tresca_feti::Result<Vec<_>>>()?;
+    if !(eps > 0.0 && eps.is_finite()) {
+        return Err(Error::scene("--eps", format!("must be finite and > 0, got {eps}")));
+    }
+    if ranks == 0 {
+        return Err(Error::scene("--ranks", "must be at least 1"));
+    }
+    let exe = std::env::current_exe().map_err(|e| Error::io("current executable", e))?;
+    let args = tresca_feti::bench::Args { exe, scene, sets, sizes, subdomains, projectors, ranks, eps, bandwidth, csv: Some(csv.clone()) };
+    println!("TFETI benchmark: {} ranks, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", ranks);
+    println!("{}", tresca_feti::bench::table_header());
+    tresca_feti::bench::run(&args, |r| println!("{}", r.table()))?;
+    println!("wrote {}", csv.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
@@ -108,6 +171,16 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, eps, bandwidth, csv } = cli.cmd {
+        // a driver of mpirun runs, not an MPI program itself
+        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, eps, bandwidth, csv) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let Some(universe) = mpi::initialize() else {
         eprintln!("error: MPI could not be initialized");
         return ExitCode::FAILURE;
@@ -127,6 +200,7 @@ fn main() -> ExitCode {
             let args = tresca_feti::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
             table1(&comm, &args)
         }
+        Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
         Cmd::Check { scene, set } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
             let r = comm.agree(pipeline::run_check(&scene, &set));

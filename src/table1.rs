@@ -231,20 +231,12 @@ pub fn format_row(row: &Row) -> String {
 
 /// Writes the CSV (one line per N and column).
 pub fn write_csv(path: &Path, args: &Args, rows: &[Row]) -> Result<()> {
-    let io = |e| Error::io(path.display().to_string(), e);
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io)?;
-    }
-    let tmp = path.with_extension("csv.tmp");
-    let written = write_rows(&tmp, args, rows).and_then(|()| std::fs::rename(&tmp, path));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp); // no half-written file left behind
-    }
-    written.map_err(io)
+    let mut bytes = Vec::new();
+    write_rows(&mut bytes, args, rows).map_err(|e| Error::io(path.display().to_string(), e))?;
+    crate::output::write_atomically(path, &bytes)
 }
 
-fn write_rows(tmp: &Path, args: &Args, rows: &[Row]) -> std::io::Result<()> {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+fn write_rows(f: &mut Vec<u8>, args: &Args, rows: &[Row]) -> std::io::Result<()> {
     writeln!(f, "N,n,m,solver,preset,eps,iter,nA,nA_power,inner,time_s,err,kkt,u_error,factorize_s,paper_iter,paper_nA,status")?;
     for r in rows {
         for c in &r.cells {

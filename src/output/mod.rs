@@ -48,6 +48,23 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// `<path with extension ext>` beside `h5`.
+/// Writes `bytes` to `path` through a temporary sibling and a rename, creating the folder: a
+/// failure leaves no half-written file behind.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let io = |e| crate::error::Error::io(path.display().to_string(), e);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written.map_err(io)
+}
+
 pub fn sibling(h5: &Path, ext: &str) -> PathBuf {
     h5.with_extension(ext)
 }

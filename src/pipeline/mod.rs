@@ -239,12 +239,14 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, s.eps.max(1e-9));
     let bnorm = dual.norm(&b);
     let kkt = qp::kkt::residuals(&set, &qp.lambda, &qp.gradient, bnorm);
-    Ok((sol, ContactOutcome { state, info: qp.info, bnorm, kkt }))
+    Ok((sol, ContactOutcome { dim: dual.dim(), state, info: qp.info, bnorm, kkt }))
 }
 
 /// What the contact solve adds to the elastic fields.
 #[derive(Clone, Debug)]
 pub struct ContactOutcome {
+    /// Length of the solvers' dual vector.
+    pub dim: usize,
     pub state: ContactState,
     pub info: qp::Info,
     pub bnorm: f64,
@@ -340,6 +342,10 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     };
     let h5 = ls.output_path();
     let mut report = report(comm, &ls, &model, &sol, outcome.as_ref(), &t);
+    let (mut peak_sum, mut peak_max) = ([peak_rss_bytes()], [peak_rss_bytes()]);
+    comm.sum_f64(&mut peak_sum);
+    comm.max_f64(&mut peak_max);
+    report["memory"] = json!({"peak_rss_bytes_sum_over_ranks": peak_sum[0], "peak_rss_bytes_max_rank": peak_max[0]});
     let before_output = t.clone();
     let files = t.phase(comm, "output", || {
         if !comm.is_root() {
@@ -350,6 +356,14 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     report["timings"] = t.to_json();
     Ok(Summary { report, files, solution: sol })
+}
+
+/// This process's peak resident memory (VmHWM), 0 where /proc is not available.
+pub fn peak_rss_bytes() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok()))
+        .map_or(0.0, |kb| kb * 1024.0)
 }
 
 fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings) -> serde_json::Value {
@@ -417,6 +431,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             let i = &o.info;
             json!({
                 "method": ls.scene.solver.method.name(),
+                "dual_dim": o.dim,
                 "eps": ls.scene.solver.eps,
                 "outer_iterations": i.iterations,
                 "nA": i.n_a,

@@ -123,7 +123,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9));
         let bnorm = dual.norm(&b);
         let kkt = qp::kkt::residuals(&set_i, li, ri, bnorm);
-        ContactOutcome { state, info: sol.info.clone(), bnorm, kkt }
+        ContactOutcome { dim: dual.dim(), state, info: sol.info.clone(), bnorm, kkt }
     });
     Ok((solution, outcome))
 }

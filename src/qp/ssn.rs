@@ -75,7 +75,9 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             CgStop::Rhs => rho * bnorm,
             CgStop::InitialGradient => a.norm(&rhs),
         };
-        let threshold = (tol * scale).max(p.inner_floor * p.eps * rho * bnorm);
+        // never ask less than a reduction by rtol of the current residual: from a warm start
+        // (err_0 small) tol·scale could exceed ‖rhs‖ and the step would be zero
+        let threshold = (tol * scale).min(p.rtol * a.norm(&rhs)).max(p.inner_floor * p.eps * rho * bnorm);
         // J v = v − D(v − ρ A v), also returning A v
         let jacobian = |v: &[f64], jv: &mut [f64], av: &mut [f64]| {
             a.apply(v, av);
