@@ -228,7 +228,23 @@ fn print_summary(s: &pipeline::Summary) {
     println!("problem: {}", r["problem"].as_str().unwrap_or(""));
     let m = &r["mesh"];
     println!("mesh: {} nodes, {} hexahedra, n = {} DOFs ({} free)", m["nodes"], m["elements"], m["dofs"], m["free_dofs"]);
-    for b in r["bodies"].as_array().into_iter().flatten() {
+    if let Some(tf) = r["tfeti"].as_object() {
+        let subs = tf["subdomains"].as_array().map_or(0, |v| v.len());
+        let nnz_l: f64 = tf["subdomains"].as_array().into_iter().flatten().map(|x| x["nnz_l"].as_f64().unwrap_or(0.0)).sum();
+        println!(
+            "TFETI: {subs} subdomains {}, multipliers {} contact + {} gluing + {} Dirichlet, coarse {} × {}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
+            tf["subdomains_per_body"],
+            tf["multipliers"]["contact"],
+            tf["multipliers"]["gluing"],
+            tf["multipliers"]["dirichlet"],
+            tf["coarse_dim"],
+            tf["coarse_dim"],
+            tf["gluing_jump_relative"].as_f64().unwrap_or(f64::NAN),
+            tf["coarse_feasibility"].as_f64().unwrap_or(f64::NAN),
+            tf["projector"].as_str().unwrap_or("")
+        );
+    }
+    for b in r["bodies"].as_array().into_iter().flatten().filter(|_| r["tfeti"].is_null()) {
         println!(
             "  {:<10} {:>8} free DOFs  nnz(L) {:>11}  ‖Ku−f‖/‖f‖ {:.1e}  rank {}",
             b["name"].as_str().unwrap_or(""),

@@ -50,7 +50,11 @@ impl ContactState {
 }
 
 /// Classifies each pair from λ and r = Aλ − b; `tol` is relative (to the largest λν, and to gᵢ).
-pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64], tol: f64) -> ContactState {
+/// A closed pair slips when λ̄τ is on the bound (within `tol`), or when it is better explained
+/// as sliding than as sticking: its relative distance to the bound (along the ray through λ̄τ)
+/// is smaller than its relative slip ‖r̄τ‖/‖b‖ (`bnorm`) — the same comparison as the KKT
+/// friction-law residual, so that a sliding pair an ε-hair inside the bound is not called stuck.
+pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64], tol: f64, bnorm: f64) -> ContactState {
     let m = contact.len();
     let lmax = lambda[..m].iter().fold(0.0f64, |a, v| a.max(*v));
     let mut s = ContactState::default();
@@ -68,10 +72,14 @@ pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64],
             set.tangent[i].is_outside(&out) && lt != [0.0, 0.0]
         };
         s.on_slip_bound += usize::from(on_bound);
+        let sliding = set.layout.friction && lt != [0.0, 0.0] && {
+            let t = set.tangent[i].max_step(&lt, &[-lt[0], -lt[1]]);
+            t / (1.0 + t) < rt[0].hypot(rt[1]) / bnorm.max(f64::MIN_POSITIVE)
+        };
         let closed = lambda[i] > tol * lmax;
         s.status.push(if !closed {
             OPEN
-        } else if on_bound || !set.layout.friction {
+        } else if on_bound || sliding || !set.layout.friction {
             SLIP
         } else {
             STICK

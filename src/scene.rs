@@ -290,10 +290,10 @@ impl Default for SolverSettings {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Decomposition {
-    /// METIS subdomains per body. 1 (the default) is the monolithic dual (Dirichlet
-    /// eliminated, no gluing, no coarse problem) unless `tfeti = true`.
-    #[serde(default = "one")]
-    pub subdomains: usize,
+    /// METIS subdomains per body. 1 is the monolithic dual (Dirichlet eliminated, no gluing,
+    /// no coarse problem) unless `tfeti = true`. Absent: automatic ([`Decomposition::parts`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subdomains: Option<usize>,
     /// Instead of `subdomains`: as many subdomains per body as give about this many DOFs each.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_dofs: Option<usize>,
@@ -316,6 +316,39 @@ fn unit() -> f64 {
     1.0
 }
 
+/// The automatic decomposition (measured, `tresca-feti bench-tfeti`, 2 ranks, seed scene):
+/// bodies up to this many DOFs stay whole (monolithic dual: N = 16 1.4 s against 1.8 s for the
+/// best TFETI run) …
+pub const AUTO_MONOLITHIC_DOFS: usize = 30_000;
+/// … larger ones get at least this many subdomains (N = 26: 10.8 s against 12.9 s monolithic;
+/// N = 41: 64.6 s against 106.5 s, and 71.8 s with 64) …
+pub const AUTO_MIN_SUBDOMAINS: usize = 32;
+/// … and no more than about this many DOFs per subdomain.
+pub const AUTO_TARGET_DOFS: usize = 6_500;
+
+impl Default for Decomposition {
+    fn default() -> Self {
+        Decomposition { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
+    }
+}
+
+impl Decomposition {
+    /// Subdomains for a body with `dofs` DOFs.
+    pub fn parts(&self, dofs: usize) -> usize {
+        match (self.target_dofs, self.subdomains) {
+            (Some(t), _) => dofs.div_ceil(t).max(1),
+            (None, Some(s)) => s,
+            (None, None) if dofs <= AUTO_MONOLITHIC_DOFS => 1,
+            (None, None) => dofs.div_ceil(AUTO_TARGET_DOFS).max(AUTO_MIN_SUBDOMAINS),
+        }
+    }
+
+    /// Whether bodies of `body_dofs` DOFs are solved by TFETI (else by the monolithic dual).
+    pub fn is_tfeti(&self, body_dofs: &[usize]) -> bool {
+        self.tfeti || body_dofs.iter().any(|&d| self.parts(d) > 1)
+    }
+}
+
 /// See [`Decomposition::projector`].
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -323,31 +356,6 @@ pub enum Projector {
     #[default]
     Oblique,
     Orthogonal,
-}
-
-fn one() -> usize {
-    1
-}
-
-impl Default for Decomposition {
-    fn default() -> Self {
-        Decomposition { subdomains: 1, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
-    }
-}
-
-impl Decomposition {
-    /// Subdomains for a body with `dofs` DOFs.
-    pub fn parts(&self, dofs: usize) -> usize {
-        match self.target_dofs {
-            Some(t) => dofs.div_ceil(t).max(1),
-            None => self.subdomains,
-        }
-    }
-
-    /// Whether the scene is solved by TFETI (else by the monolithic dual).
-    pub fn is_tfeti(&self) -> bool {
-        self.tfeti || self.subdomains > 1 || self.target_dofs.is_some()
-    }
 }
 
 /// Fill-reducing ordering of the sparse Cholesky factorizations.
@@ -659,7 +667,7 @@ impl Scene {
                 return Err(Error::scene(format!("solver.{key}"), "must be at least 1"));
             }
         }
-        if self.decomposition.subdomains == 0 {
+        if self.decomposition.subdomains == Some(0) {
             return Err(Error::scene("decomposition.subdomains", "must be at least 1"));
         }
         if !(self.decomposition.penalty > 0.0 && self.decomposition.penalty.is_finite()) {
@@ -669,7 +677,7 @@ impl Scene {
             if t < 24 {
                 return Err(Error::scene("decomposition.target_dofs", format!("must be at least 24 (one element), got {t}")));
             }
-            if self.decomposition.subdomains != 1 {
+            if self.decomposition.subdomains.is_some() {
                 return Err(Error::scene("decomposition.target_dofs", "give either `subdomains` or `target_dofs`, not both"));
             }
         }

@@ -10,6 +10,7 @@ use std::path::Path;
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus};
+use tresca_feti::dual::DualOperator;
 use tresca_feti::comm::SerialComm;
 use tresca_feti::dual::monolithic::MonolithicDual;
 use tresca_feti::model;
@@ -165,8 +166,9 @@ fn compare(n: usize, method: Method) -> Compared {
     for row in 0..nd {
         r_ref[row] = c[row] - brows[row].iter().map(|&(col, coef)| coef * x[col]).sum::<f64>();
     }
-    let ours = contact_state(contact, &set, &sol.lambda, &sol.gradient, 1e-6);
-    let reference = contact_state(contact, &set, &lam_ref, &r_ref, 1e-6);
+    let bnorm = dual.norm(&b);
+    let ours = contact_state(contact, &set, &sol.lambda, &sol.gradient, 1e-6, bnorm);
+    let reference = contact_state(contact, &set, &lam_ref, &r_ref, 1e-6, bnorm);
     let counts = |s: &tresca_feti::recovery::ContactState| [s.count(OPEN), s.count(STICK), s.count(SLIP)];
     eprintln!(
         "N = {n}, {method:?}: Clarabel {status:?} in {} iterations; max|Δu|/max|u| = {:.2e}, |ΔF|/|F| = {force_rel:.2e}, open/stick/slip {:?} vs {:?}",

@@ -210,3 +210,67 @@ fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
         format!("C = G_E G_Eᵀ is singular (body \"{body}\"): every body needs Dirichlet conditions that stop its rigid motion"),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decomposition::decompose;
+    use crate::feti::{constraints, subdomain_loads};
+
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    /// P̃Gᵀ = 0, G(λ̂ + P̃ᵀy) = e for every y, (P̃ᵀy)_I = y_I, P̃ and the orthogonal P idempotent,
+    /// P symmetric, on the seed scene at N = 5 with 3 subdomains per body.
+    #[test]
+    fn projector_identities() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+        let ls = crate::scene::load(&path, &["mesh.n=5".to_string()]).unwrap();
+        let model = crate::model::build(&ls).unwrap();
+        let d = decompose(&model.mesh, 3).unwrap();
+        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), constraints::Gluing::Orthonormal);
+        let loads = subdomain_loads(&d, &model.loads);
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, true).unwrap();
+        let n = cons.layout.dim();
+        let ni = cons.e_start();
+        assert!(ni > 0 && n > ni);
+        let mut s = 5u64;
+        let y: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
+        let z: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // λ = λ̂ + P̃ᵀy is feasible and keeps y_I
+        let mut l = y.clone();
+        c.project_t(&mut l);
+        assert_eq!(&l[..ni], &y[..ni]);
+        let lh = c.lambda_hat(n);
+        assert!(lh[..ni].iter().all(|&v| v == 0.0));
+        let lam: Vec<f64> = l.iter().zip(&lh).map(|(a, b)| a + b).collect();
+        assert!(c.feasibility(&lam) < 1e-12, "{}", c.feasibility(&lam));
+        // P̃ Gᵀα = 0
+        let alpha: Vec<f64> = (0..c.dim()).map(|_| lcg(&mut s)).collect();
+        let mut gta = vec![0.0; n];
+        c.sub_gt_mul(&alpha, &mut gta, false);
+        let before = norm(&gta);
+        c.project(&mut gta);
+        assert!(norm(&gta) < 1e-12 * before);
+        // idempotent; P̃ᵀ is the adjoint of P̃: zᵀP̃y = (P̃ᵀz)ᵀy
+        let mut p1 = y.clone();
+        c.project(&mut p1);
+        let mut p2 = p1.clone();
+        c.project(&mut p2);
+        assert!(p1.iter().zip(&p2).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&p1)));
+        let mut pz = z.clone();
+        c.project_t(&mut pz);
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        assert!((dot(&z, &p1) - dot(&pz, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
+        // the orthogonal projector: G P x = 0, symmetric
+        let mut py = y.clone();
+        c.project_orthogonal(&mut py);
+        assert!(norm(&c.g_mul(&py, false)) < 1e-12 * norm(&y));
+        let mut pzo = z.clone();
+        c.project_orthogonal(&mut pzo);
+        assert!((dot(&z, &py) - dot(&pzo, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
+    }
+}

@@ -236,8 +236,8 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let rhs_refs: Vec<&[f64]> = rhs.iter().map(Vec::as_slice).collect();
     let sol = finish_bodies(comm, model, &refs, &u, &rhs_refs, t)?;
     // the status cannot be sharper than the solution: classify at the solver's tolerance
-    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, s.eps.max(1e-9));
     let bnorm = dual.norm(&b);
+    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, s.eps.max(1e-9), bnorm);
     let kkt = qp::kkt::residuals(&set, &qp.lambda, &qp.gradient, bnorm);
     Ok((sol, ContactOutcome { dim: dual.dim(), state, info: qp.info, bnorm, kkt }))
 }
@@ -336,7 +336,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
     let (sol, outcome) = match &model.pairs {
-        _ if ls.scene.decomposition.is_tfeti() => tfeti::solve(comm, &ls, &model, &mut t)?,
+        _ if ls.scene.decomposition.is_tfeti(&body_dofs(&model)) => tfeti::solve(comm, &ls, &model, &mut t)?,
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
         None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
     };
@@ -356,6 +356,11 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     report["timings"] = t.to_json();
     Ok(Summary { report, files, solution: sol })
+}
+
+/// DOFs of every body (3 per node).
+pub fn body_dofs(model: &Model) -> Vec<usize> {
+    model.mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect()
 }
 
 /// This process's peak resident memory (VmHWM), 0 where /proc is not available.
@@ -559,7 +564,7 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
         );
     }
     let dec = &ls.scene.decomposition;
-    if dec.is_tfeti() {
+    if dec.is_tfeti(&body_dofs(&model)) {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = crate::decomposition::decompose_each(mesh, &parts)?;
         let _ = writeln!(s, "TFETI: {} subdomains ({} per body), {} interface nodes", d.subdomains.len(), parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "), d.interface_nodes());
@@ -568,6 +573,6 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
             let _ = writeln!(s, "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes", mesh.bodies[sd.body].name, sd.elems.len(), sd.nodes.len(), 3 * sd.nodes.len());
         }
     }
-    let _ = write!(s, "dual: {}", if dec.is_tfeti() { "TFETI" } else { "monolithic" });
+    let _ = write!(s, "dual: {}", if dec.is_tfeti(&body_dofs(&model)) { "TFETI" } else { "monolithic" });
     Ok(s)
 }

@@ -120,8 +120,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         let set_i = Lambda::new(c);
         // the contact gap c − Bu from the recovered u (= the solvers' gradient on the I rows)
         let (li, ri) = (&rec.lambda[..set_i.layout.dim()], &rec.gap[..set_i.layout.dim()]);
-        let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9));
         let bnorm = dual.norm(&b);
+        let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9), bnorm);
         let kkt = qp::kkt::residuals(&set_i, li, ri, bnorm);
         ContactOutcome { dim: dual.dim(), state, info: sol.info.clone(), bnorm, kkt }
     });
