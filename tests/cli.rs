@@ -85,6 +85,9 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("nan-load", &seed_with("p = [0.0, 0.0, -1.0]", "p = [0.0, nan, -1.0]"), &off, &["traction[0].p", "finite"]);
     assert_clean_failure("inf-coord", &seed_with("max = [2.0, 1.0, 2.0]", "max = [2.0, inf, 2.0]"), &off, &["body[0].box.max", "finite"]);
     assert_clean_failure("zero-subdomains", SEED, &["--set", "decomposition.subdomains=0"], &["decomposition.subdomains"]);
+    assert_clean_failure("both-subdomains-and-target", SEED, &["--set", "decomposition.subdomains=2", "--set", "decomposition.target_dofs=1000"], &["decomposition.target_dofs", "not both"]);
+    assert_clean_failure("bad-penalty", SEED, &["--set", "decomposition.penalty=-1"], &["decomposition.penalty"]);
+    assert_clean_failure("bad-projector", SEED, &["--set", "decomposition.projector=\"skew\""], &["decomposition.projector"]);
     assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
     assert_clean_failure("floating", &seed_with("face = \"lower.xmin\"", "face = \"upper.xmin\""), &off, &["lower", "floats"]);

@@ -26,6 +26,27 @@ pub trait DualOperator {
     }
 }
 
+/// The entries (row of B, local DOF, coefficient) of B acting on one piece (a body or a
+/// subdomain): z = B_pᵀx on the piece's `ndof` DOFs.
+pub fn scatter_rows(rows: &[(usize, usize, f64)], x: &[f64], ndof: usize) -> Vec<f64> {
+    let mut z = vec![0.0; ndof];
+    for &(r, j, c) in rows {
+        z[j] += c * x[r];
+    }
+    z
+}
+
+/// y = Σ_p B_p z_p over the pieces of this rank, then summed over the ranks.
+pub fn gather_rows<'a, C: crate::comm::Comm>(comm: &C, pieces: impl Iterator<Item = (&'a [(usize, usize, f64)], &'a [f64])>, y: &mut [f64]) {
+    y.fill(0.0);
+    for (rows, z) in pieces {
+        for &(r, j, c) in rows {
+            y[r] += c * z[j];
+        }
+    }
+    comm.sum_f64(y);
+}
+
 /// A counter of A-products shared by the implementations.
 #[derive(Debug, Default)]
 pub struct ProductCounter(Cell<usize>);

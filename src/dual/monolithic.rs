@@ -4,7 +4,7 @@
 //! (gather), and one sum over the ranks: bodies may live on different ranks, the (short) dual
 //! vector is replicated.
 
-use super::{DualOperator, Layout, ProductCounter};
+use super::{gather_rows, scatter_rows, DualOperator, Layout, ProductCounter};
 use crate::comm::Comm;
 use crate::contact::pairing::Contact;
 use crate::fem::assembly::{DofMap, FIXED};
@@ -80,27 +80,12 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
 
     /// Bᵀx restricted to each local body.
     fn scatter(&self, x: &[f64]) -> Vec<Vec<f64>> {
-        self.blocks
-            .iter()
-            .map(|blk| {
-                let mut z = vec![0.0; blk.local.dofs.nfree];
-                for &(r, j, c) in &blk.b {
-                    z[j] += c * x[r];
-                }
-                z
-            })
-            .collect()
+        self.blocks.iter().map(|blk| scatter_rows(&blk.b, x, blk.local.dofs.nfree)).collect()
     }
 
     /// Σ over bodies and ranks of B_b z_b.
     fn gather(&self, z: &[Vec<f64>], y: &mut [f64]) {
-        y.fill(0.0);
-        for (blk, zb) in self.blocks.iter().zip(z) {
-            for &(r, j, c) in &blk.b {
-                y[r] += c * zb[j];
-            }
-        }
-        self.comm.sum_f64(y);
+        gather_rows(self.comm, self.blocks.iter().zip(z).map(|(blk, zb)| (blk.b.as_slice(), zb.as_slice())), y);
     }
 
     /// b = B K⁻¹ f − c, with c = [d; 0] − B_c u_c (the prescribed values moved to the right).

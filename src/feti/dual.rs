@@ -10,7 +10,7 @@ use super::coarse::Coarse;
 use super::constraints::Constraints;
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
-use crate::dual::{DualOperator, Layout, ProductCounter};
+use crate::dual::{gather_rows, scatter_rows, DualOperator, Layout, ProductCounter};
 
 /// A subdomain of this rank with its B entries (row, local DOF, coefficient).
 pub struct LocalSubdomain {
@@ -68,27 +68,12 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// Bᵀ_s x for each local subdomain.
     fn scatter(&self, x: &[f64]) -> Vec<Vec<f64>> {
-        self.subs
-            .iter()
-            .map(|s| {
-                let mut z = vec![0.0; s.sys.ndof()];
-                for &(r, j, c) in &s.rows {
-                    z[j] += c * x[r];
-                }
-                z
-            })
-            .collect()
+        self.subs.iter().map(|s| scatter_rows(&s.rows, x, s.sys.ndof())).collect()
     }
 
     /// y = Σ over subdomains and ranks of B_s z_s.
     fn gather(&self, z: &[Vec<f64>], y: &mut [f64]) {
-        y.fill(0.0);
-        for (s, zs) in self.subs.iter().zip(z) {
-            for &(r, j, c) in &s.rows {
-                y[r] += c * zs[j];
-            }
-        }
-        self.comm.sum_f64(y);
+        gather_rows(self.comm, self.subs.iter().zip(z).map(|(s, zs)| (s.rows.as_slice(), zs.as_slice())), y);
     }
 
     /// K_s⁺(f_s − B_sᵀλ) for each local subdomain.
