@@ -104,7 +104,9 @@ fn case(a: &Args, n: usize, s: usize, projector: Projector, dir: &std::path::Pat
     let o = cmd.output().map_err(|e| Error::io("mpirun", e))?;
     if !o.status.success() {
         let err = String::from_utf8_lossy(&o.stderr);
-        return Err(Error::numerical(format!("case {name}"), err.lines().last().unwrap_or("failed").to_string()));
+        // our one-line error, not mpirun's banner after it
+        let line = err.lines().find_map(|l| l.strip_prefix("error: ")).unwrap_or("failed without an error message");
+        return Err(Error::numerical(format!("case {name}"), line.to_string()));
     }
     let json = out.with_extension("json");
     let text = std::fs::read_to_string(&json).map_err(|e| Error::io(json.display().to_string(), e))?;

@@ -76,12 +76,17 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         gather_rows(self.comm, self.subs.iter().zip(z).map(|(s, zs)| (s.rows.as_slice(), zs.as_slice())), y);
     }
 
+    /// z_s ← K_s⁺ z_s for each local subdomain.
+    fn pinv_all(&self, z: &mut [Vec<f64>]) {
+        for (s, zs) in self.subs.iter().zip(z) {
+            s.sys.pinv_in_place(zs);
+        }
+    }
+
     /// K_s⁺(f_s − B_sᵀλ) for each local subdomain.
     fn pinv_of_rhs(&self, lambda: &[f64]) -> Vec<Vec<f64>> {
         let mut z = self.rhs_of(lambda);
-        for (s, zs) in self.subs.iter().zip(&mut z) {
-            s.sys.pinv_in_place(zs);
-        }
+        self.pinv_all(&mut z);
         z
     }
 
@@ -97,9 +102,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// y = F x (not counted).
     pub(crate) fn apply_f(&self, x: &[f64], y: &mut [f64]) {
         let mut z = self.scatter(x);
-        for (s, zs) in self.subs.iter().zip(&mut z) {
-            s.sys.pinv_in_place(zs);
-        }
+        self.pinv_all(&mut z);
         self.gather(&z, y);
     }
 
@@ -117,12 +120,10 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// α and u from a feasible λ (Gλ = e).
-    pub fn recover_lambda(&self, lambda: Vec<f64>) -> Recovered {
+    fn recover_lambda(&self, lambda: Vec<f64>) -> Recovered {
         let rhs = self.rhs_of(&lambda);
         let mut u: Vec<Vec<f64>> = rhs.clone();
-        for (s, us) in self.subs.iter().zip(&mut u) {
-            s.sys.pinv_in_place(us);
-        }
+        self.pinv_all(&mut u);
         // w = c − B ũ; only its E part enters α
         let mut w = vec![0.0; self.layout.dim()];
         self.gather(&u, &mut w);

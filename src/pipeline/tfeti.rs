@@ -103,19 +103,17 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         Ok(dual.recover(&sol.lambda))
     })?;
     let feasibility = dual.coarse.feasibility(&rec.lambda);
-    let solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
-    let mut solution = solution;
-    solution.tfeti = Some(TfetiInfo {
-        element_subdomain: d.elem_subdomain(mesh.hexes.len()),
-        contact_rows: cons.e_start(),
-        gluing_rows: cons.gluing_rows,
-        dirichlet_rows: cons.dirichlet_rows,
-        coarse_dim,
-        nnz_c,
-        feasibility,
-        smalse,
-        ..solution.tfeti.take().unwrap_or_default()
-    });
+    let mut solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
+    // finish filled the gathered figures (subdomains, gluing jump); add the global ones
+    let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
+    f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
+    f.contact_rows = cons.e_start();
+    f.gluing_rows = cons.gluing_rows;
+    f.dirichlet_rows = cons.dirichlet_rows;
+    f.coarse_dim = coarse_dim;
+    f.nnz_c = nnz_c;
+    f.feasibility = feasibility;
+    f.smalse = smalse;
     let outcome = contact.map(|c| {
         let set_i = Lambda::new(c);
         // the contact gap c − Bu from the recovered u (= the solvers' gradient on the I rows)

@@ -5,7 +5,8 @@
 use super::{curvature, residual, Info, Params, QpError, QpSolution, Setup, Step};
 use crate::dual::DualOperator;
 
-/// Solves A λ = b from λ0 by CG; one "outer" iteration per CG step.
+/// Solves A λ = b from λ0 by CG; one "outer" iteration per CG step, at most
+/// max(max_outer, max_inner) of them (CG steps are the inner iterations of the other solvers).
 pub fn solve<A: DualOperator>(a: &A, b: &[f64], lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
     let n = a.dim();
     let st = Setup { n0: a.products(), n_power: 0, sigma: 0.0, rho: 0.0, bnorm: a.norm(b).max(f64::MIN_POSITIVE) };
