@@ -23,6 +23,10 @@ pub trait Comm {
     fn broadcast_bytes(&self, root: usize, buf: &mut Vec<u8>);
     /// The `local` slices of all ranks, in rank order, on `root` (None elsewhere).
     fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>>;
+    /// Neighbour exchange: sends `send[k].1` to rank `send[k].0` and fills each `recv[k].1`
+    /// (sized by the caller) from rank `recv[k].0`. Ranks list each neighbour once; both
+    /// sides must agree on the sizes. Only the ranks named take part (no collective).
+    fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]);
     fn barrier(&self);
     /// Name and version of the MPI library ("serial" without MPI).
     fn library(&self) -> String;
@@ -81,6 +85,10 @@ impl Comm for SerialComm {
     fn broadcast_bytes(&self, _: usize, _: &mut Vec<u8>) {}
     fn gather_f64(&self, _: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
         Some(vec![local.to_vec()])
+    }
+    fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
+        // one rank has no neighbours
+        assert!(send.is_empty() && recv.is_empty(), "SerialComm has no neighbours");
     }
     fn barrier(&self) {}
     fn library(&self) -> String {
@@ -161,6 +169,22 @@ impl Comm for MpiComm {
             r.gather_varcount_into(local);
             None
         }
+    }
+    fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
+        mpi::request::scope(|scope| {
+            let mut recvs = Vec::with_capacity(recv.len());
+            for (q, buf) in recv.iter_mut() {
+                recvs.push(self.world.process_at_rank(*q as i32).immediate_receive_into(scope, &mut buf[..]));
+            }
+            let sends: Vec<_> =
+                send.iter().map(|(q, buf)| self.world.process_at_rank(*q as i32).immediate_send(scope, &buf[..])).collect();
+            for r in recvs {
+                r.wait();
+            }
+            for s in sends {
+                s.wait();
+            }
+        });
     }
     fn barrier(&self) {
         self.world.barrier();

@@ -1,7 +1,10 @@
 //! The dual problem: multipliers λ of the contact rows, the operator A = B K⁻¹ Bᵀ applied
 //! matrix-free behind [`DualOperator`], the right-hand side b = B K⁻¹ f − c, and the recovery
 //! u = K⁻¹(f − Bᵀλ). [`monolithic`] is the paper's setting (one piece per body, Dirichlet
-//! eliminated); the TFETI operator will implement the same trait.
+//! eliminated, dual vectors replicated on every rank); the TFETI operator
+//! (`feti::dual`) implements the same trait on distributed dual vectors, each rank holding its
+//! own components: the solvers reach the other ranks only through the trait's reductions
+//! (dot, norm, max, min, count), so every rank takes the same branches.
 
 pub mod monolithic;
 
@@ -23,6 +26,22 @@ pub trait DualOperator {
     }
     fn norm(&self, x: &[f64]) -> f64 {
         self.dot(x, x).sqrt()
+    }
+    /// The maximum over the ranks of a value each rank computed from its own components.
+    fn max(&self, v: f64) -> f64 {
+        v
+    }
+    /// The minimum over the ranks (see [`DualOperator::max`]).
+    fn min(&self, v: f64) -> f64 {
+        -self.max(-v)
+    }
+    /// The sum over the ranks of a count each rank made on its own components.
+    fn count(&self, n: usize) -> usize {
+        n
+    }
+    /// The global index of component `i` of this rank's vectors.
+    fn global_index(&self, i: usize) -> usize {
+        i
     }
 }
 

@@ -11,10 +11,15 @@
 //! says so.
 //!
 //! G is small (6·nnz of the B rows' columns per subdomain) and depends only on coordinates and
-//! the constraint rows, so every rank builds it whole and the coarse problem is replicated:
-//! applying P̃ needs no communication.
+//! the constraint rows, so every rank builds it whole and holds C factorized (replicated
+//! coarse problem): applying P̃ costs one reduction of G x (6 per subdomain, each entry from
+//! the one rank that holds the subdomain), one C⁻¹ solve on every rank and Gᵀ on the rows
+//! the rank needs (its blocks and its neighbours'). Vectors are distributed
+//! ([`Distribution`]); the measurement behind keeping C replicated is in the README.
 
 use super::constraints::Constraints;
+use super::distribution::Distribution;
+use crate::comm::Comm;
 use super::subdomain::{rigid_modes, NR};
 use crate::decomposition::Decomposition;
 use crate::error::{Error, Result};
@@ -53,9 +58,7 @@ impl Coarse {
             for k in 0..NR {
                 e[NR * s + k] = r[k * nd..(k + 1) * nd].iter().zip(&loads[s]).map(|(a, b)| a * b).sum();
             }
-            let mut rows: Vec<usize> = cons.rows[s].iter().map(|x| x.0).collect();
-            rows.sort_unstable();
-            rows.dedup();
+            let rows = cons.sorted_rows(s);
             let len = rows.len();
             let mut g = vec![0.0; NR * len];
             for &(row, dof, coef) in &cons.rows[s] {
@@ -79,35 +82,52 @@ impl Coarse {
         self.e.len()
     }
 
-    /// G x, or G_E x_E when `e_only`.
-    fn g_mul(&self, x: &[f64], e_only: bool) -> Vec<f64> {
+    /// a = G x (G_E x_E when `e_only`) from `xl` on the local rows: this rank's subdomains'
+    /// blocks, reduced over the ranks (one contributor per entry: exact).
+    fn g_mul<C: Comm>(&self, dist: &Distribution<'_, C>, xl: &[f64], e_only: bool) -> Vec<f64> {
         let mut out = vec![0.0; self.dim()];
-        for (s, (rows, g)) in self.blocks.iter().enumerate() {
+        for sr in &dist.subs {
+            let s = sr.index;
+            let (rows, g) = &self.blocks[s];
             let len = rows.len();
             for k in 0..NR {
                 let gk = &g[k * len..(k + 1) * len];
                 out[NR * s + k] = rows
                     .iter()
                     .zip(gk)
-                    .filter(|(&r, _)| !e_only || r >= self.e_start)
-                    .map(|(&r, v)| v * x[r])
+                    .zip(&sr.rows)
+                    .filter(|((&r, _), _)| !e_only || r >= self.e_start)
+                    .map(|((_, v), &l)| v * xl[l])
                     .sum();
             }
         }
+        dist.reduce(&mut out);
         out
     }
 
-    /// y −= Gᵀ a (or only its E rows when `e_only`).
-    fn sub_gt_mul(&self, a: &[f64], y: &mut [f64], e_only: bool) {
-        for (s, (rows, g)) in self.blocks.iter().enumerate() {
-            let len = rows.len();
-            for (p, &r) in rows.iter().enumerate() {
-                if e_only && r < self.e_start {
-                    continue;
-                }
-                y[r] -= (0..NR).map(|k| g[k * len + p] * a[NR * s + k]).sum::<f64>();
+    /// v[i] −= (Gᵀa)_r for each (i, local row l of r) (only the E rows when `e_only`); the
+    /// subdomains touching r in ascending order.
+    fn sub_gt<C: Comm>(&self, dist: &Distribution<'_, C>, a: &[f64], v: &mut [f64], rows: impl Iterator<Item = (usize, usize)>, e_only: bool) {
+        for (i, l) in rows {
+            if e_only && dist.local_rows[l] < self.e_start {
+                continue;
+            }
+            for &(s, p) in dist.touching(l) {
+                let g = &self.blocks[s].1;
+                let len = self.blocks[s].0.len();
+                v[i] -= (0..NR).map(|k| g[k * len + p] * a[NR * s + k]).sum::<f64>();
             }
         }
+    }
+
+    /// (index, local row) of every owned row.
+    fn owned_rows<'a, C: Comm>(dist: &'a Distribution<'_, C>) -> impl Iterator<Item = (usize, usize)> + 'a {
+        dist.owned_pos.iter().copied().enumerate()
+    }
+
+    /// (index, local row) of every local row.
+    fn local_rows<C: Comm>(dist: &Distribution<'_, C>) -> impl Iterator<Item = (usize, usize)> {
+        (0..dist.local_len()).map(|l| (l, l))
     }
 
     /// x ← C⁻¹ x.
@@ -115,49 +135,52 @@ impl Coarse {
         self.chol.solve_in_place(x);
     }
 
-    /// z ← P̃ z = z − Gᵀ C⁻¹ G_E z_E.
-    pub fn project(&self, z: &mut [f64]) {
-        let mut a = self.g_mul(z, true);
+    /// z ← P̃ z = z − Gᵀ C⁻¹ G_E z_E (z owned).
+    pub fn project<C: Comm>(&self, dist: &Distribution<'_, C>, z: &mut [f64]) {
+        let zl = dist.ghosted(z);
+        let mut a = self.g_mul(dist, &zl, true);
         self.c_solve(&mut a);
-        self.sub_gt_mul(&a, z, false);
+        self.sub_gt(dist, &a, z, Self::owned_rows(dist), false);
     }
 
-    /// y ← P̃ᵀ y = y − [G_E 0]ᵀ C⁻¹ G y.
-    pub fn project_t(&self, y: &mut [f64]) {
-        let mut a = self.g_mul(y, false);
+    /// yl ← P̃ᵀ yl = yl − [G_E 0]ᵀ C⁻¹ G yl on the local rows (yl ghosted).
+    pub fn project_t_local<C: Comm>(&self, dist: &Distribution<'_, C>, yl: &mut [f64]) {
+        let mut a = self.g_mul(dist, yl, false);
         self.c_solve(&mut a);
-        self.sub_gt_mul(&a, y, true);
+        self.sub_gt(dist, &a, yl, Self::local_rows(dist), true);
     }
 
     /// x ← P x = x − Gᵀ(GGᵀ)⁻¹G x, the orthogonal projector onto Ker G (built with
-    /// `orthogonal = true` only).
-    pub fn project_orthogonal(&self, x: &mut [f64]) {
+    /// `orthogonal = true` only; x owned).
+    pub fn project_orthogonal<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
         let full = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
-        let mut a = self.g_mul(x, false);
+        let xl = dist.ghosted(x);
+        let mut a = self.g_mul(dist, &xl, false);
         full.solve_in_place(&mut a);
-        self.sub_gt_mul(&a, x, false);
+        self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
     }
 
-    /// λ̂ = (G_Eᵀ C⁻¹ e, 0) in a vector of length `dim`.
-    pub fn lambda_hat(&self, dim: usize) -> Vec<f64> {
+    /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows.
+    pub fn lambda_hat_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {
         let mut a = self.e.clone();
         self.c_solve(&mut a);
-        let mut l = vec![0.0; dim];
-        self.sub_gt_mul(&a, &mut l, true);
+        let mut l = vec![0.0; dist.local_len()];
+        self.sub_gt(dist, &a, &mut l, Self::local_rows(dist), true);
         l.iter_mut().for_each(|v| *v = -*v);
         l
     }
 
-    /// α = C⁻¹ G_E w_E: the rigid-body amplitudes that best close the E rows' residual w.
-    pub fn alpha(&self, w: &[f64]) -> Vec<f64> {
-        let mut a = self.g_mul(w, true);
+    /// α = C⁻¹ G_E w_E: the rigid-body amplitudes that best close the E rows' residual w (owned).
+    pub fn alpha<C: Comm>(&self, dist: &Distribution<'_, C>, w: &[f64]) -> Vec<f64> {
+        let wl = dist.ghosted(w);
+        let mut a = self.g_mul(dist, &wl, true);
         self.c_solve(&mut a);
         a
     }
 
-    /// ‖G λ − e‖ / ‖e‖ (or the absolute value when e = 0).
-    pub fn feasibility(&self, lambda: &[f64]) -> f64 {
-        let g = self.g_mul(lambda, false);
+    /// ‖G λ − e‖ / ‖e‖ (or the absolute value when e = 0), λ on the local rows.
+    pub fn feasibility<C: Comm>(&self, dist: &Distribution<'_, C>, lambda_local: &[f64]) -> f64 {
+        let g = self.g_mul(dist, lambda_local, false);
         let num = g.iter().zip(&self.e).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
         let den = self.e.iter().map(|v| v * v).sum::<f64>().sqrt();
         if den > 0.0 { num / den } else { num }
@@ -223,7 +246,8 @@ mod tests {
     }
 
     /// P̃Gᵀ = 0, G(λ̂ + P̃ᵀy) = e for every y, (P̃ᵀy)_I = y_I, P̃ and the orthogonal P idempotent,
-    /// P symmetric, on the seed scene at N = 5 with 3 subdomains per body.
+    /// P symmetric, on the seed scene at N = 5 with 3 subdomains per body (one rank: the owned
+    /// rows are all rows).
     #[test]
     fn projector_identities() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
@@ -233,44 +257,48 @@ mod tests {
         let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), constraints::Gluing::Orthonormal);
         let loads = subdomain_loads(&d, &model.loads);
         let c = Coarse::new(&model.mesh, &d, &cons, &loads, true).unwrap();
+        let comm = crate::comm::SerialComm;
+        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();
         let ni = cons.e_start();
         assert!(ni > 0 && n > ni);
+        assert_eq!(dist.owned, (0..n).collect::<Vec<_>>());
+        assert_eq!(dist.local_rows, dist.owned);
         let mut s = 5u64;
         let y: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
         let z: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         // λ = λ̂ + P̃ᵀy is feasible and keeps y_I
         let mut l = y.clone();
-        c.project_t(&mut l);
+        c.project_t_local(&dist, &mut l);
         assert_eq!(&l[..ni], &y[..ni]);
-        let lh = c.lambda_hat(n);
+        let lh = c.lambda_hat_local(&dist);
         assert!(lh[..ni].iter().all(|&v| v == 0.0));
         let lam: Vec<f64> = l.iter().zip(&lh).map(|(a, b)| a + b).collect();
-        assert!(c.feasibility(&lam) < 1e-12, "{}", c.feasibility(&lam));
+        assert!(c.feasibility(&dist, &lam) < 1e-12, "{}", c.feasibility(&dist, &lam));
         // P̃ Gᵀα = 0
         let alpha: Vec<f64> = (0..c.dim()).map(|_| lcg(&mut s)).collect();
         let mut gta = vec![0.0; n];
-        c.sub_gt_mul(&alpha, &mut gta, false);
+        c.sub_gt(&dist, &alpha, &mut gta, Coarse::local_rows(&dist), false);
         let before = norm(&gta);
-        c.project(&mut gta);
+        c.project(&dist, &mut gta);
         assert!(norm(&gta) < 1e-12 * before);
         // idempotent; P̃ᵀ is the adjoint of P̃: zᵀP̃y = (P̃ᵀz)ᵀy
         let mut p1 = y.clone();
-        c.project(&mut p1);
+        c.project(&dist, &mut p1);
         let mut p2 = p1.clone();
-        c.project(&mut p2);
+        c.project(&dist, &mut p2);
         assert!(p1.iter().zip(&p2).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&p1)));
         let mut pz = z.clone();
-        c.project_t(&mut pz);
+        c.project_t_local(&dist, &mut pz);
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         assert!((dot(&z, &p1) - dot(&pz, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
         // the orthogonal projector: G P x = 0, symmetric
         let mut py = y.clone();
-        c.project_orthogonal(&mut py);
-        assert!(norm(&c.g_mul(&py, false)) < 1e-12 * norm(&y));
+        c.project_orthogonal(&dist, &mut py);
+        assert!(norm(&c.g_mul(&dist, &py, false)) < 1e-12 * norm(&y));
         let mut pzo = z.clone();
-        c.project_orthogonal(&mut pzo);
+        c.project_orthogonal(&dist, &mut pzo);
         assert!((dot(&z, &py) - dot(&pzo, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
     }
 }

@@ -49,6 +49,14 @@ impl Constraints {
     pub fn e_start(&self) -> usize {
         self.layout.contact_dim()
     }
+
+    /// The multipliers whose rows touch subdomain `s`, ascending.
+    pub fn sorted_rows(&self, s: usize) -> Vec<usize> {
+        let mut rows: Vec<usize> = self.rows[s].iter().map(|x| x.0).collect();
+        rows.sort_unstable();
+        rows.dedup();
+        rows
+    }
 }
 
 /// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a

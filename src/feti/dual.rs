@@ -1,5 +1,6 @@
 //! The TFETI dual operator behind [`DualOperator`]: A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
-//! matrix-free (one K_s⁺ solve per subdomain of this rank, one sum over the ranks) and the
+//! matrix-free (one K_s⁺ solve per subdomain of this rank, the neighbour exchanges of
+//! [`Distribution`]) on distributed dual vectors, and the
 //! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (DESIGN §2). The solvers minimize
 //! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`TfetiDual::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
 //! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s, ũ = K⁺(f − Bᵀλ).
@@ -8,33 +9,39 @@
 
 use super::coarse::Coarse;
 use super::constraints::Constraints;
+use super::distribution::Distribution;
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
-use crate::dual::{gather_rows, scatter_rows, DualOperator, Layout, ProductCounter};
+use crate::dual::{DualOperator, Layout, ProductCounter};
 
-/// A subdomain of this rank with its B entries (row, local DOF, coefficient).
+/// A subdomain of this rank with its B entries (position in its sorted rows, local DOF,
+/// coefficient).
 pub struct LocalSubdomain {
     pub sys: SubdomainSystem,
-    pub rows: Vec<(usize, usize, f64)>,
+    pub entries: Vec<(usize, usize, f64)>,
+    /// Number of its rows.
+    pub nrows: usize,
 }
 
-/// A = P̃ F P̃ᵀ over the subdomains of all ranks.
+/// A = P̃ F P̃ᵀ over the subdomains of all ranks, on distributed dual vectors.
 pub struct TfetiDual<'c, C: Comm> {
-    comm: &'c C,
+    pub dist: Distribution<'c, C>,
+    /// The layout of this rank's components.
     pub layout: Layout,
     pub subs: Vec<LocalSubdomain>,
     pub coarse: Coarse,
+    /// c on the owned rows.
     c: Vec<f64>,
-    /// λ̂ = (G_Eᵀ C⁻¹ e, 0): Gλ̂ = e, λ̂_I = 0.
+    /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows: Gλ̂ = e, λ̂_I = 0.
     pub lambda_hat: Vec<f64>,
-    /// d̃ − Fλ̂ (before projection): the right-hand side once λ = λ̂ + λ̃.
+    /// d̃ − Fλ̂ (before projection, owned): the right-hand side once λ = λ̂ + λ̃.
     pub d_hat: Vec<f64>,
     counter: ProductCounter,
 }
 
 /// What [`TfetiDual::recover`] returns.
 pub struct Recovered {
-    /// λ = λ̂ + P̃ᵀy.
+    /// λ = λ̂ + P̃ᵀy on the owned rows.
     pub lambda: Vec<f64>,
     /// α, six per subdomain (all subdomains).
     pub alpha: Vec<f64>,
@@ -42,38 +49,71 @@ pub struct Recovered {
     pub u: Vec<Vec<f64>>,
     /// f_s − B_sᵀλ for each local subdomain.
     pub rhs: Vec<Vec<f64>>,
-    /// c − Bu for every multiplier: the contact rows' gap (the contact part of the gradient),
-    /// and what the E rows leave unsatisfied.
+    /// c − Bu on the owned rows: the contact rows' gap (the contact part of the gradient), and
+    /// what the E rows leave unsatisfied.
     pub gap: Vec<f64>,
+    /// ‖Gλ − e‖/‖e‖.
+    pub feasibility: f64,
 }
 
 impl<'c, C: Comm> TfetiDual<'c, C> {
-    /// The operator over this rank's factorized subdomains `subs` (their global indices in
-    /// `sys.index`), and b̃.
-    pub fn new(comm: &'c C, cons: &Constraints, subs: Vec<SubdomainSystem>, coarse: Coarse) -> (Self, Vec<f64>) {
-        let subs = subs.into_iter().map(|sys| LocalSubdomain { rows: cons.rows[sys.index].clone(), sys }).collect();
-        let n = cons.layout.dim();
-        let lambda_hat = coarse.lambda_hat(n);
-        let mut dual =
-            TfetiDual { comm, layout: cons.layout, subs, coarse, c: cons.c.clone(), lambda_hat, d_hat: vec![], counter: ProductCounter::default() };
+    /// The operator over this rank's factorized subdomains `subs` (ascending global index
+    /// `sys.index`, as in `dist`), and b̃ on the owned rows.
+    pub fn new(dist: Distribution<'c, C>, cons: &Constraints, subs: Vec<SubdomainSystem>, coarse: Coarse) -> (Self, Vec<f64>) {
+        let subs: Vec<LocalSubdomain> = subs
+            .into_iter()
+            .zip(&dist.subs)
+            .map(|(sys, sr)| {
+                assert_eq!(sys.index, sr.index, "subdomains in the distribution's order");
+                let rows = cons.sorted_rows(sys.index);
+                let entries = cons.rows[sys.index].iter().map(|&(r, j, c)| (rows.binary_search(&r).expect("row"), j, c)).collect();
+                LocalSubdomain { sys, entries, nrows: rows.len() }
+            })
+            .collect();
+        let c = dist.restrict(&cons.c);
+        let lambda_hat = coarse.lambda_hat_local(&dist);
+        let layout = dist.layout;
+        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default() };
         // d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c
-        let mut b = vec![0.0; n];
+        let mut b = vec![0.0; layout.dim()];
         let z = dual.pinv_of_rhs(&dual.lambda_hat);
         dual.gather(&z, &mut b);
         b.iter_mut().zip(&dual.c).for_each(|(bi, ci)| *bi -= ci);
         dual.d_hat = b.clone();
-        dual.coarse.project(&mut b);
+        dual.coarse.project(&dual.dist, &mut b);
         (dual, b)
     }
 
-    /// Bᵀ_s x for each local subdomain.
-    fn scatter(&self, x: &[f64]) -> Vec<Vec<f64>> {
-        self.subs.iter().map(|s| scatter_rows(&s.rows, x, s.sys.ndof())).collect()
+    /// Bᵀ_s x for each local subdomain, x on the local rows.
+    fn scatter(&self, xl: &[f64]) -> Vec<Vec<f64>> {
+        self.subs
+            .iter()
+            .zip(&self.dist.subs)
+            .map(|(s, sr)| {
+                let mut z = vec![0.0; s.sys.ndof()];
+                for &(p, j, c) in &s.entries {
+                    z[j] += c * xl[sr.rows[p]];
+                }
+                z
+            })
+            .collect()
     }
 
-    /// y = Σ over subdomains and ranks of B_s z_s.
+    /// y = Σ over subdomains and ranks of B_s z_s, on the owned rows.
     fn gather(&self, z: &[Vec<f64>], y: &mut [f64]) {
-        gather_rows(self.comm, self.subs.iter().zip(z).map(|(s, zs)| (s.rows.as_slice(), zs.as_slice())), y);
+        let v: Vec<Vec<f64>> = self
+            .subs
+            .iter()
+            .zip(z)
+            .map(|(s, zs)| {
+                let mut v = vec![0.0; s.nrows];
+                for &(p, j, c) in &s.entries {
+                    v[p] += c * zs[j];
+                }
+                v
+            })
+            .collect();
+        self.dist.assemble(&v, y);
     }
 
     /// z_s ← K_s⁺ z_s for each local subdomain.
@@ -83,44 +123,40 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         }
     }
 
-    /// K_s⁺(f_s − B_sᵀλ) for each local subdomain.
-    fn pinv_of_rhs(&self, lambda: &[f64]) -> Vec<Vec<f64>> {
-        let mut z = self.rhs_of(lambda);
+    /// K_s⁺(f_s − B_sᵀλ) for each local subdomain (λ on the local rows).
+    fn pinv_of_rhs(&self, lambda_local: &[f64]) -> Vec<Vec<f64>> {
+        let mut z = self.rhs_of(lambda_local);
         self.pinv_all(&mut z);
         z
     }
 
-    /// f_s − B_sᵀλ for each local subdomain.
-    fn rhs_of(&self, lambda: &[f64]) -> Vec<Vec<f64>> {
-        let mut z = self.scatter(lambda);
+    /// f_s − B_sᵀλ for each local subdomain (λ on the local rows).
+    fn rhs_of(&self, lambda_local: &[f64]) -> Vec<Vec<f64>> {
+        let mut z = self.scatter(lambda_local);
         for (s, zs) in self.subs.iter().zip(&mut z) {
             zs.iter_mut().zip(&s.sys.f).for_each(|(v, f)| *v = f - *v);
         }
         z
     }
 
-    /// y = F x (not counted).
-    pub(crate) fn apply_f(&self, x: &[f64], y: &mut [f64]) {
-        let mut z = self.scatter(x);
+    /// y = F w (owned) from w on the local rows (not counted).
+    fn apply_f_local(&self, wl: &[f64], y: &mut [f64]) {
+        let mut z = self.scatter(wl);
         self.pinv_all(&mut z);
         self.gather(&z, y);
     }
 
-    /// λ = λ̂ + P̃ᵀy.
-    pub fn lambda_of(&self, y: &[f64]) -> Vec<f64> {
-        let mut l = y.to_vec();
-        self.coarse.project_t(&mut l);
-        l.iter_mut().zip(&self.lambda_hat).for_each(|(a, b)| *a += b);
-        l
+    /// y = F x on owned vectors (not counted).
+    pub(crate) fn apply_f(&self, x: &[f64], y: &mut [f64]) {
+        self.apply_f_local(&self.dist.ghosted(x), y);
     }
 
-    /// λ, α and u from the solvers' y.
+    /// λ, α and u from the solvers' y: λ = λ̂ + P̃ᵀy, u = K⁺(f − Bᵀλ) + Rα.
     pub fn recover(&self, y: &[f64]) -> Recovered {
-        self.recover_lambda(self.lambda_of(y))
-    }
-
-    /// α and u from a feasible λ (Gλ = e).
-    fn recover_lambda(&self, lambda: Vec<f64>) -> Recovered {
+        let mut lambda = self.dist.ghosted(y);
+        self.coarse.project_t_local(&self.dist, &mut lambda);
+        lambda.iter_mut().zip(&self.lambda_hat).for_each(|(a, b)| *a += b);
+        let feasibility = self.coarse.feasibility(&self.dist, &lambda);
         let rhs = self.rhs_of(&lambda);
         let mut u: Vec<Vec<f64>> = rhs.clone();
         self.pinv_all(&mut u);
@@ -128,7 +164,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let mut w = vec![0.0; self.layout.dim()];
         self.gather(&u, &mut w);
         w.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
-        let alpha = self.coarse.alpha(&w);
+        let alpha = self.coarse.alpha(&self.dist, &w);
         for (s, us) in self.subs.iter().zip(&mut u) {
             let i = s.sys.index;
             s.sys.add_r_mul(&alpha[NR * i..NR * (i + 1)], us);
@@ -136,7 +172,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let mut gap = vec![0.0; self.layout.dim()];
         self.gather(&u, &mut gap);
         gap.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
-        Recovered { lambda, alpha, u, rhs, gap }
+        Recovered { lambda: self.dist.owned_part(&lambda), alpha, u, rhs, gap, feasibility }
     }
 }
 
@@ -147,13 +183,33 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
 
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
-        let mut w = x.to_vec();
-        self.coarse.project_t(&mut w);
-        self.apply_f(&w, y);
-        self.coarse.project(y);
+        let mut wl = self.dist.ghosted(x);
+        self.coarse.project_t_local(&self.dist, &mut wl);
+        self.apply_f_local(&wl, y);
+        self.coarse.project(&self.dist, y);
     }
 
     fn products(&self) -> usize {
         self.counter.get()
+    }
+
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
+        self.dist.dot(x, y)
+    }
+
+    fn max(&self, v: f64) -> f64 {
+        let mut a = [v];
+        self.dist.comm().max_f64(&mut a);
+        a[0]
+    }
+
+    fn count(&self, n: usize) -> usize {
+        let mut a = [n as u64];
+        self.dist.comm().sum_u64(&mut a);
+        a[0] as usize
+    }
+
+    fn global_index(&self, i: usize) -> usize {
+        self.dist.owned[i]
     }
 }

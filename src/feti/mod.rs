@@ -7,6 +7,7 @@
 
 pub mod coarse;
 pub mod constraints;
+pub mod distribution;
 pub mod dual;
 pub mod smalse;
 pub mod subdomain;

@@ -36,7 +36,7 @@ impl<'a, 'c, C: Comm> Penalized<'a, 'c, C> {
     /// Q x = x − P x.
     fn q(&self, x: &[f64]) -> Vec<f64> {
         let mut p = x.to_vec();
-        self.dual.coarse.project_orthogonal(&mut p);
+        self.dual.coarse.project_orthogonal(&self.dual.dist, &mut p);
         x.iter().zip(&p).map(|(a, b)| a - b).collect()
     }
 }
@@ -49,9 +49,9 @@ impl<C: Comm> DualOperator for Penalized<'_, '_, C> {
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
         let mut w = x.to_vec();
-        self.dual.coarse.project_orthogonal(&mut w);
+        self.dual.coarse.project_orthogonal(&self.dual.dist, &mut w);
         self.dual.apply_f(&w, y);
-        self.dual.coarse.project_orthogonal(y);
+        self.dual.coarse.project_orthogonal(&self.dual.dist, y);
         // + ϱ Q x = ϱ (x − P x)
         for ((yi, xi), wi) in y.iter_mut().zip(x).zip(&w) {
             *yi += self.rho * (xi - wi);
@@ -60,6 +60,22 @@ impl<C: Comm> DualOperator for Penalized<'_, '_, C> {
 
     fn products(&self) -> usize {
         self.counter.get()
+    }
+
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
+        self.dual.dot(x, y)
+    }
+
+    fn max(&self, v: f64) -> f64 {
+        self.dual.max(v)
+    }
+
+    fn count(&self, n: usize) -> usize {
+        self.dual.count(n)
+    }
+
+    fn global_index(&self, i: usize) -> usize {
+        self.dual.global_index(i)
     }
 }
 
@@ -77,7 +93,7 @@ pub struct SmalseInfo {
 pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty: f64) -> Result<(QpSolution, SmalseInfo), QpError> {
     let n = dual.dim();
     let mut b0 = dual.d_hat.clone();
-    dual.coarse.project_orthogonal(&mut b0);
+    dual.coarse.project_orthogonal(&dual.dist, &mut b0);
     let bnorm = dual.norm(&b0).max(f64::MIN_POSITIVE);
     let mut op = Penalized::new(dual, 0.0);
     let n_power = p.power_iterations;

@@ -10,6 +10,7 @@ use crate::dual::DualOperator;
 use crate::error::{Error, Result};
 use crate::feti::coarse::Coarse;
 use crate::feti::constraints;
+use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::SubdomainSystem;
@@ -67,6 +68,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         let owner = assign_ranks(&d, comm.size());
         Ok((d, cons, owner))
     })?;
+    let dist = Distribution::new(comm, &cons, &owner);
     let loads = subdomain_loads(&d, &model.loads);
     let subs = t.phase(comm, "factorize", || {
         (0..d.subdomains.len())
@@ -80,12 +82,13 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let orthogonal = dec.projector == Projector::Orthogonal;
     let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, orthogonal))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
-    let (dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(comm, &cons, subs, coarse)))?;
+    let (dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
+    // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
-        Some(c) => Lambda::new(c),
+        Some(c) => Lambda::new(c).restrict(&dual.dist.pairs),
         None => Lambda { layout: crate::dual::Layout::contact(0, false), tangent: vec![] },
     }
-    .with_free(cons.layout.free);
+    .with_free(dual.layout.free);
     let s = &ls.scene.solver;
     let params = super::solver_params(s);
     let name = if contact.is_some() { s.method.name() } else { "cg" };
@@ -102,7 +105,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
         Ok(dual.recover(&sol.lambda))
     })?;
-    let feasibility = dual.coarse.feasibility(&rec.lambda);
+    let feasibility = rec.feasibility;
     let mut solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
     // finish filled the gathered figures (subdomains, gluing jump); add the global ones
     let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
@@ -116,12 +119,14 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     f.smalse = smalse;
     let outcome = contact.map(|c| {
         let set_i = Lambda::new(c);
-        // the contact gap c − Bu from the recovered u (= the solvers' gradient on the I rows)
-        let (li, ri) = (&rec.lambda[..set_i.layout.dim()], &rec.gap[..set_i.layout.dim()]);
+        // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
+        // gradient on the I rows), whole on every rank
+        let ni = set_i.layout.dim();
+        let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
         let bnorm = dual.norm(&b);
-        let state = contact_state(c, &set_i, li, ri, s.eps.max(1e-9), bnorm);
-        let kkt = qp::kkt::residuals(&set_i, li, ri, bnorm);
-        ContactOutcome { dim: dual.dim(), state, info: sol.info.clone(), bnorm, kkt }
+        let state = contact_state(c, &set_i, &li, &ri, s.eps.max(1e-9), bnorm);
+        let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
+        ContactOutcome { dim: dual.count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt }
     });
     Ok((solution, outcome))
 }

@@ -113,7 +113,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             inner += 1;
             let alpha = a.dot(&gf, &d) / dad;
             if feasible {
-                let alpha_f = set.max_step(&x, &d);
+                let alpha_f = a.min(set.max_step(&x, &d));
                 if alpha > alpha_f {
                     // the CG step would leave Λ: go to the boundary and stop
                     for i in 0..n {
@@ -149,7 +149,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         err = err_of(&z, &rz, &mut rt);
         info.inner_iterations += inner;
-        info.history.push(Step::newton(err, tol, q_of(a, &z, &rz, b), &sets, inner, products()));
+        info.history.push(Step::newton(a, err, tol, q_of(a, &z, &rz, b), &sets, inner, products()));
     }
     unreachable!("the outer loop returns")
 }

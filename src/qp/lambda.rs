@@ -47,6 +47,14 @@ impl Lambda {
         Lambda { layout, tangent }
     }
 
+    /// The blocks of the pairs `pairs` (ascending) only: a rank's part of Λ when the dual vectors
+    /// are distributed.
+    pub fn restrict(&self, pairs: &[usize]) -> Self {
+        let layout = Layout { m: pairs.len(), friction: self.layout.friction, free: 0 };
+        let tangent = if layout.friction { pairs.iter().map(|&i| self.tangent[i].clone()).collect() } else { vec![] };
+        Lambda { layout, tangent }
+    }
+
     /// The same set with `free` unconstrained components appended (λ_E).
     pub fn with_free(mut self, free: usize) -> Self {
         self.layout.free = free;

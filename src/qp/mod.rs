@@ -190,7 +190,8 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
 /// σ_max(A) by `iterations` power iterations from a fixed start vector.
 pub fn power_sigma<A: DualOperator>(a: &A, iterations: usize) -> f64 {
     let n = a.dim();
-    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((i * 7919) % 13) as f64).collect();
+    // the same vector for every distribution of the components
+    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((a.global_index(i) * 7919) % 13) as f64).collect();
     let nx = a.norm(&x);
     x.iter_mut().for_each(|v| *v /= nx);
     let mut y = vec![0.0; n];
@@ -260,9 +261,10 @@ pub(crate) fn curvature<A: DualOperator>(a: &A, d: &[f64], ad: &mut [f64], outer
 }
 
 impl Step {
-    /// A Newton step's record with the sets it started from.
-    pub(crate) fn newton(err: f64, tol: f64, q: f64, sets: &lambda::ActiveSets, inner: usize, n_a: usize) -> Step {
-        Step { err, tol, q, normal_active: sets.normal_active, stick: sets.stick, slip: sets.slip, inner, n_a, kind: 'n' }
+    /// A Newton step's record with the sets it started from (counted over all ranks).
+    pub(crate) fn newton<A: DualOperator>(a: &A, err: f64, tol: f64, q: f64, sets: &lambda::ActiveSets, inner: usize, n_a: usize) -> Step {
+        let (normal_active, stick, slip) = (a.count(sets.normal_active), a.count(sets.stick), a.count(sets.slip));
+        Step { err, tol, q, normal_active, stick, slip, inner, n_a, kind: 'n' }
     }
 }
 

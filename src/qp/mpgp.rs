@@ -42,9 +42,9 @@ struct Split {
     active_tangent: usize,
 }
 
-fn split(set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
+fn split<A: DualOperator>(a: &A, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
     let m = set.layout.m;
-    let lmax = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let lmax = a.max(lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs())));
     let (phi, beta, phit) = (&mut out.phi, &mut out.beta, &mut out.phit);
     out.free_normal = 0;
     out.free_tangent = 0;
@@ -111,7 +111,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
     let mut g = vec![0.0; n];
     residual(a, b, &lambda, &mut g);
     let mut sp = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
-    split(set, &lambda, &g, alpha_bar, &mut sp);
+    split(a, set, &lambda, &g, alpha_bar, &mut sp);
     let mut dir = sp.phi.clone();
     let (mut ad, mut y, mut rt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut info: Info = st.info();
@@ -139,7 +139,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                 info.n_a = st.products(a);
                 return Ok(QpSolution { lambda, gradient: g, info });
             }
-            split(set, &lambda, &g, alpha_bar, &mut sp);
+            split(a, set, &lambda, &g, alpha_bar, &mut sp);
             dir.copy_from_slice(&sp.phi);
         }
         if k == p.max_outer {
@@ -148,13 +148,13 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             info.n_a = st.products(a);
             return Err(QpError::NoConvergence { info: Box::new(info), eps: p.eps });
         }
-        let (free_normal, stick, slip) = (sp.free_normal, sp.free_tangent, sp.active_tangent);
+        let (free_normal, stick, slip) = (a.count(sp.free_normal), a.count(sp.free_tangent), a.count(sp.active_tangent));
         let bb = a.dot(&sp.beta, &sp.beta);
         let kind;
         if bb <= p.gamma * p.gamma * a.dot(&sp.phit, &sp.phi) {
             let pap = curvature(a, &dir, &mut ad, k)?;
             let acg = a.dot(&g, &dir) / pap;
-            let af = set.max_step(&lambda, &dir);
+            let af = a.min(set.max_step(&lambda, &dir));
             if acg <= af {
                 kind = 'c';
                 info.inner_iterations += 1;
@@ -162,7 +162,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                     lambda[i] -= acg * dir[i];
                     g[i] -= acg * ad[i];
                 }
-                split(set, &lambda, &g, alpha_bar, &mut sp);
+                split(a, set, &lambda, &g, alpha_bar, &mut sp);
                 let gamma = a.dot(&sp.phi, &ad) / pap;
                 for i in 0..n {
                     dir[i] = sp.phi[i] - gamma * dir[i];
@@ -173,11 +173,11 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                     lambda[i] -= af * dir[i];
                     g[i] -= af * ad[i];
                 }
-                split(set, &lambda, &g, alpha_bar, &mut sp);
+                split(a, set, &lambda, &g, alpha_bar, &mut sp);
                 let phi = std::mem::take(&mut sp.phi);
                 projected_step(&mut lambda, &phi, &mut g, &mut y);
                 sp.phi = phi; // split overwrites every entry
-                split(set, &lambda, &g, alpha_bar, &mut sp);
+                split(a, set, &lambda, &g, alpha_bar, &mut sp);
                 dir.copy_from_slice(&sp.phi);
             }
         } else {
@@ -185,7 +185,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             // the search direction d = β lives in `dir` (reset to φ below)
             dir.copy_from_slice(&sp.beta);
             let d: &[f64] = &dir;
-            let af = set.max_step(&lambda, d);
+            let af = a.min(set.max_step(&lambda, d));
             let mut done = false;
             if af > 0.0 {
                 let dad = curvature(a, d, &mut ad, k)?;
@@ -195,7 +195,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                     lambda[i] -= step * d[i];
                     g[i] -= step * ad[i];
                 }
-                split(set, &lambda, &g, alpha_bar, &mut sp);
+                split(a, set, &lambda, &g, alpha_bar, &mut sp);
                 done = acg <= af;
             }
             if !done {
@@ -204,7 +204,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                     ad[i] = g[i] - sp.phi[i];
                 }
                 projected_step(&mut lambda, &ad, &mut g, &mut y);
-                split(set, &lambda, &g, alpha_bar, &mut sp);
+                split(a, set, &lambda, &g, alpha_bar, &mut sp);
             }
             dir.copy_from_slice(&sp.phi);
         }

@@ -96,7 +96,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         }
         err = err_of(a, set, &lambda, &r, &st, &mut rt);
         info.inner_iterations += inner;
-        info.history.push(Step::newton(err, tol, q_of(a, &lambda, &r, b), &sets, inner, st.products(a)));
+        info.history.push(Step::newton(a, err, tol, q_of(a, &lambda, &r, b), &sets, inner, st.products(a)));
     }
     unreachable!("the outer loop returns")
 }
