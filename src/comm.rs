@@ -28,6 +28,10 @@ pub trait Comm {
     /// sides must agree on the sizes. Only the ranks named take part (no collective).
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]);
     fn barrier(&self);
+    /// The MPI communicator handle, for libraries that take one (MPI-IO); None without MPI.
+    fn mpi_comm(&self) -> Option<mpi::ffi::MPI_Comm> {
+        None
+    }
     /// Name and version of the MPI library ("serial" without MPI).
     fn library(&self) -> String;
 
@@ -188,6 +192,9 @@ impl Comm for MpiComm {
     }
     fn barrier(&self) {
         self.world.barrier();
+    }
+    fn mpi_comm(&self) -> Option<mpi::ffi::MPI_Comm> {
+        Some(self.world.as_raw())
     }
     fn library(&self) -> String {
         mpi::environment::library_version()

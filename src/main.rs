@@ -292,4 +292,7 @@ fn print_summary(s: &pipeline::Summary) {
     println!("time [s]: {} | total {:.3}", phases.join(", "), r["timings"]["total"].as_f64().unwrap_or(0.0));
     let files: Vec<String> = s.files.iter().map(|p| p.display().to_string()).collect();
     println!("wrote {}", files.join(", "));
+    if let Some(n) = r["output_verified_values"].as_u64() {
+        println!("read back: {n} values on {} ranks match the fields in memory", r["ranks"]);
+    }
 }

@@ -377,7 +377,7 @@ pub struct Factorization {
 }
 
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
-pub const FIELDS: [&str; 9] = ["displacement", "von_mises", "body", "subdomain", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
+pub const FIELDS: [&str; 10] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -392,6 +392,10 @@ pub struct OutputSettings {
     pub xdmf: bool,
     #[serde(default = "yes")]
     pub report: bool,
+    /// After writing, every rank reads the HDF5 file back and checks that it holds the fields
+    /// it has in memory, bit for bit (phase `verify`).
+    #[serde(default)]
+    pub verify: bool,
 }
 
 fn default_fields() -> Vec<String> {
@@ -400,7 +404,7 @@ fn default_fields() -> Vec<String> {
 
 impl Default for OutputSettings {
     fn default() -> Self {
-        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true }
+        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false }
     }
 }
 

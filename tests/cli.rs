@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use tresca_feti::output::{self, OutputData};
+use tresca_feti::output::{self, OutputData, Values};
 
 const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
 
@@ -24,15 +24,18 @@ fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
 }
 
-fn mpirun(n: usize, args: &[&str]) -> Output {
-    Command::new("mpirun")
-        .args(["-n", &n.to_string(), "--oversubscribe", BIN])
+fn mpirun_cmd(n: usize, args: &[&str]) -> Command {
+    let mut c = Command::new("mpirun");
+    c.args(["-n", &n.to_string(), "--oversubscribe", BIN])
         .args(args)
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_btl_base_warn_component_unused", "0")
-        .output()
-        .expect("mpirun must be installed (openmpi-bin, see run/packages.txt)")
+        .env("OMPI_MCA_btl_base_warn_component_unused", "0");
+    c
+}
+
+fn mpirun(n: usize, args: &[&str]) -> Output {
+    mpirun_cmd(n, args).output().expect("mpirun must be installed (openmpi-bin, see run/packages.txt)")
 }
 
 const SEED: &str = include_str!("../run/seed.toml");
@@ -148,32 +151,62 @@ fn fields(path: &Path) -> OutputData {
     output::hdf5::read(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-#[test]
-fn one_two_three_ranks_give_identical_fields() {
-    let dir = tmpdir("ranks");
+/// Runs `scene` (with `sets`) under mpirun with 1, 2 and 3 ranks; returns each run's stdout and
+/// fields after checking the run.
+fn on_1_2_3_ranks(name: &str, sets: &[&str]) -> Vec<(String, OutputData)> {
+    let dir = tmpdir(name);
     let scene = root().join("run/seed.toml");
-    let mut results = Vec::new();
-    let mut counters_1: Option<String> = None;
+    let mut runs = Vec::new();
     for n in [1, 2, 3] {
         let out = dir.join(format!("r{n}.h5"));
-        let o = mpirun(n, &["solve", scene.to_str().unwrap(), "--set", "mesh.n=6", "--out", out.to_str().unwrap()]);
-        let stdout = String::from_utf8_lossy(&o.stdout);
+        let mut args = vec!["solve", scene.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let o = mpirun(n, &args);
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
         assert!(o.status.success(), "{n} ranks: {}", String::from_utf8_lossy(&o.stderr));
         assert_eq!(stdout.matches("wrote ").count(), 1, "only rank 0 prints: {stdout}");
         assert!(stdout.contains(&format!("{n} rank(s)")), "{stdout}");
-        // the same iteration counts on every rank count
-        let counters = stdout.lines().find(|l| l.starts_with("solver ")).unwrap_or_else(|| panic!("{stdout}")).to_string();
-        match &counters_1 {
-            Some(c) => assert_eq!(&counters, c, "{n} ranks"),
-            None => counters_1 = Some(counters),
-        }
-        results.push(fields(&out));
+        let data = fields(&out);
+        // the file records the rank count and each element's rank
+        let ranks = data.attributes.iter().find(|a| a.0 == "ranks").map(|a| a.1.clone());
+        assert_eq!(ranks, Some(n.to_string()));
+        let rank = data.fields.iter().find(|f| f.name == "rank").expect("rank field");
+        let Values::I32(r) = &rank.values else { panic!("rank field is not integer") };
+        // two bodies at least (monolithic: one rank per body, the third idle)
+        let busy = (0..n as i32).filter(|k| r.contains(k)).count();
+        assert!(r.iter().all(|&x| (x as usize) < n) && busy >= n.min(2), "{n} ranks: {busy} hold elements");
+        runs.push((stdout, data));
     }
-    for r in &results[1..] {
-        assert_eq!(r.coordinates, results[0].coordinates);
-        for (a, b) in r.fields.iter().zip(&results[0].fields) {
+    let counters = |s: &str| s.lines().find(|l| l.starts_with("solver ")).unwrap_or_else(|| panic!("{s}")).to_string();
+    for (stdout, data) in &runs[1..] {
+        // the same iteration counters, and the same results to the last bit (well within 1e-10)
+        assert_eq!(counters(stdout), counters(&runs[0].0));
+        assert_eq!(data.coordinates, runs[0].1.coordinates);
+        for (a, b) in data.fields.iter().zip(&runs[0].1.fields).filter(|(a, _)| a.name != "rank") {
             assert_eq!(a.name, b.name);
             assert_eq!(a.values, b.values, "field {} differs between rank counts", a.name);
+        }
+    }
+    runs
+}
+
+#[test]
+fn one_two_three_ranks_give_identical_fields() {
+    // the monolithic dual (bodies on ranks, replicated dual vectors)
+    on_1_2_3_ranks("ranks", &["mesh.n=6"]);
+}
+
+/// TFETI with distributed dual vectors: 4 subdomains per body over 1, 2, 3 ranks, with
+/// friction and with the symmetrized solver; each rank reads the parallel HDF5 file back.
+#[test]
+fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
+    for (name, method) in [("tfeti-ssn", "ssn-bicgstab"), ("tfeti-gimssn", "gimssn")] {
+        let m = format!("solver.method=\"{method}\"");
+        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, "output.verify=true"]);
+        for (n, (stdout, _)) in runs.iter().enumerate() {
+            assert!(stdout.contains(&format!("values on {} ranks match the fields in memory", n + 1)), "{stdout}");
         }
     }
 }
@@ -187,6 +220,36 @@ fn bad_scene_under_mpirun_fails_once_on_all_ranks() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.matches("error: mesh.n").count(), 1, "{e}");
     assert!(!out.exists());
+}
+
+/// An error on one rank only (a factorization failing on rank 1, injected) and no convergence
+/// under TFETI: one message, a non-zero exit, no result files, no hang.
+#[test]
+fn failure_on_one_rank_or_no_convergence_stops_all_ranks() {
+    let dir = tmpdir("mpi-fail");
+    let scene = root().join("run/seed.toml");
+    let tfeti = ["--set", "mesh.n=6", "--set", "decomposition.subdomains=2", "--set", "decomposition.tfeti=true"];
+    for (case, extra, env, expect) in [
+        ("fault", vec![], Some("factorize@1"), "injected fault: phase factorize on rank 1"),
+        ("noconv", vec!["--set", "solver.max_outer=2"], None, "no convergence in 2 outer iterations"),
+    ] {
+        let out = dir.join(format!("{case}.h5"));
+        let mut args = vec!["solve", scene.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        args.extend(tfeti);
+        args.extend(extra);
+        let mut cmd = mpirun_cmd(2, &args);
+        if let Some(f) = env {
+            cmd.env("TRESCA_FETI_FAULT", f);
+        }
+        let o = cmd.output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{case}");
+        assert_eq!(e.matches("error: ").count(), 1, "{case}: {e}");
+        assert!(e.contains(expect), "{case}: {e}");
+        for ext in ["h5", "xdmf", "json", "h5.tmp"] {
+            assert!(!out.with_extension(ext).exists(), "{case}: {ext} left behind");
+        }
+    }
 }
 
 #[test]

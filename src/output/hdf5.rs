@@ -1,4 +1,7 @@
-//! The HDF5 result file, written by one process (default file access, no MPI-IO).
+//! The HDF5 result file, written by all ranks together: MPI-IO file access and collective
+//! writes ([`write_collective`]), each rank writing its own rows of the distributed fields
+//! (point selections) and one contiguous share of the replicated ones (hyperslabs); one
+//! process without MPI writes it alone ([`write`]).
 //!
 //! Layout:
 //!
@@ -24,6 +27,7 @@ use ::hdf5::types::{IntSize, TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ::hdf5::{Attribute, Dataset, File, Group, H5Type, IndexType, IterationOrder, Location};
 
 use super::{Center, Field, OutputData, Values};
+use crate::comm::Comm;
 use crate::error::{Error, Result};
 
 const MESH: &str = "mesh";
@@ -32,16 +36,25 @@ const COORDINATES: &str = "coordinates";
 const HEXAHEDRA: &str = "hexahedra";
 const CENTER_ATTR: &str = "center";
 
-/// Writes `data` to the HDF5 file `path` (replacing it); a partly written file is removed.
+/// Writes `data` to the HDF5 file `path` (replacing it) from this one process; a partly
+/// written file is removed.
 ///
 /// Fails on inconsistent data (a field whose length does not match the node/cell count, a hex
 /// referencing a missing node, an unusable field name, a string with an interior NUL) before
 /// anything is created.
 pub fn write(path: &Path, data: &OutputData) -> Result<()> {
+    write_collective(&crate::comm::SerialComm, path, data)
+}
+
+/// Writes `data` to `path` with every rank of `comm` (each passing its own rows of the
+/// distributed fields, `data.rows`, and the same everything else): one file through MPI-IO,
+/// collective transfers. A partly written file is removed by rank 0.
+pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Result<()> {
     let shown = path.display().to_string();
-    validate(data).map_err(|msg| Error::output(&shown, msg))?;
-    let result = write_file(path, data);
-    if result.is_err() {
+    comm.agree(validate(data).map_err(|msg| Error::output(&shown, msg)))?;
+    let par = comm.mpi_comm().map(|raw| Par { comm: raw, rank: comm.rank(), size: comm.size() });
+    let result = write_file(path, data, par.as_ref());
+    if result.is_err() && comm.is_root() {
         let _ = std::fs::remove_file(path);
     }
     result.map_err(|e| match e {
@@ -87,9 +100,18 @@ fn validate(data: &OutputData) -> std::result::Result<(), String> {
         if f.ncomp == 0 {
             return Err(format!("field {:?}: ncomp is 0", f.name));
         }
-        let expected = match f.center {
+        let len = match f.center {
             Center::Node => nnodes,
             Center::Cell => nelems,
+        };
+        let expected = match data.rows.get(&f.name) {
+            Some(rows) => {
+                if let Some(r) = rows.iter().find(|&&r| r >= len) {
+                    return Err(format!("field {:?}: row {r} beyond the {len} {}s", f.name, center_str(f.center)));
+                }
+                rows.len()
+            }
+            None => len,
         };
         let got = values_len(&f.values);
         if got != expected * f.ncomp {
@@ -155,23 +177,34 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-fn write_file(tmp: &Path, data: &OutputData) -> Result<()> {
+/// The ranks writing one file together.
+struct Par {
+    comm: mpi::ffi::MPI_Comm,
+    rank: usize,
+    size: usize,
+}
+
+fn write_file(tmp: &Path, data: &OutputData, par: Option<&Par>) -> Result<()> {
     let file = File::with_options()
+        .with_fapl(|p| match par {
+            Some(par) => p.mpio(par.comm, None),
+            None => p,
+        })
         .with_fcpl(|p| {
             p.attr_creation_order(AttrCreationOrder::Indexed)
                 .link_creation_order(LinkCreationOrder::Indexed)
         })
         .create(tmp)
         .map_err(ctx("cannot create file"))?;
-    write_contents(&file, data)?;
+    write_contents(&file, data, par)?;
     // Every child handle is dropped by now, so this really closes (and flushes) the file.
     file.close().map_err(ctx("closing file"))
 }
 
-fn write_contents(file: &File, data: &OutputData) -> Result<()> {
+fn write_contents(file: &File, data: &OutputData, par: Option<&Par>) -> Result<()> {
     let mesh = file.create_group(MESH).map_err(ctx("creating /mesh"))?;
     let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
-    write_dataset(&mesh, COORDINATES, &[data.coordinates.len(), 3], &coords)?;
+    write_dataset(&mesh, COORDINATES, &[data.coordinates.len(), 3], None, &coords, par)?;
     let hexes = data
         .hexahedra
         .iter()
@@ -179,7 +212,7 @@ fn write_contents(file: &File, data: &OutputData) -> Result<()> {
         .map(|&n| i64::try_from(n))
         .collect::<std::result::Result<Vec<i64>, _>>()
         .map_err(|_| Error::output(String::new(), "node index does not fit in i64"))?;
-    write_dataset(&mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], &hexes)?;
+    write_dataset(&mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], None, &hexes, par)?;
     drop(mesh);
 
     let fields = file
@@ -191,15 +224,19 @@ fn write_contents(file: &File, data: &OutputData) -> Result<()> {
         .create(FIELDS)
         .map_err(ctx("creating /fields"))?;
     for f in &data.fields {
-        let len = values_len(&f.values) / f.ncomp;
+        let len = match f.center {
+            Center::Node => data.coordinates.len(),
+            Center::Cell => data.hexahedra.len(),
+        };
+        let rows = data.rows.get(&f.name).map(Vec::as_slice);
         let shape = if f.ncomp == 1 {
             vec![len]
         } else {
             vec![len, f.ncomp]
         };
         let ds = match &f.values {
-            Values::F64(v) => write_dataset(&fields, &f.name, &shape, v)?,
-            Values::I32(v) => write_dataset(&fields, &f.name, &shape, v)?,
+            Values::F64(v) => write_dataset(&fields, &f.name, &shape, rows, v, par)?,
+            Values::I32(v) => write_dataset(&fields, &f.name, &shape, rows, v, par)?,
         };
         write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
             .map_err(|m| Error::output(String::new(), format!("field {:?}: {m}", f.name)))?;
@@ -212,22 +249,77 @@ fn write_contents(file: &File, data: &OutputData) -> Result<()> {
     Ok(())
 }
 
-fn write_dataset<T: H5Type>(
-    group: &Group,
-    name: &str,
-    shape: &[usize],
-    v: &[T],
-) -> Result<Dataset> {
+/// Creates the dataset `name` of the global `shape` (len or len × ncomp) and writes this
+/// rank's part: the rows `rows` (values `v` in their order), or, for a replicated `v` (rows
+/// None), the rank's contiguous share of the rows. Collective under MPI (a rank with nothing
+/// to write still takes part with an empty selection).
+fn write_dataset<T: H5Type>(group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T], par: Option<&Par>) -> Result<Dataset> {
+    use hdf5_sys::h5::hsize_t;
+    use hdf5_sys::h5d::{H5Dget_space, H5Dwrite};
+    use hdf5_sys::h5p::{H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER, H5P_DEFAULT};
+    use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_elements, H5Sselect_hyperslab, H5Sselect_none};
     let what = || format!("dataset {}/{name}", group.name());
     let ds = group
         .new_dataset::<T>()
         .shape(shape.to_vec())
         .create(name)
         .map_err(|e| ctx(format!("creating {}", what()))(e))?;
-    // hdf5-metno would pass a dangling pointer for an empty slice; nothing to write anyway.
-    if !v.is_empty() {
-        ds.write_raw(v)
-            .map_err(|e| ctx(format!("writing {}", what()))(e))?;
+    let mem_type = ::hdf5::Datatype::from_type::<T>().map_err(|e| ctx(format!("datatype of {}", what()))(e))?;
+    let ncomp = shape.get(1).copied().unwrap_or(1);
+    let (rank, size) = par.map_or((0, 1), |p| (p.rank, p.size));
+    let (lo, hi) = (shape[0] * rank / size, shape[0] * (rank + 1) / size);
+    let vals = match rows {
+        Some(_) => v,
+        None => &v[lo * ncomp..hi * ncomp],
+    };
+    // SAFETY: plain HDF5 C calls on ids this function owns (closed below) or that `ds` keeps
+    // alive; the buffer holds `vals.len()` elements of `T`, matching the memory space.
+    let status = unsafe {
+        let fspace = H5Dget_space(ds.id());
+        match rows {
+            Some(r) if !r.is_empty() => {
+                let coords: Vec<hsize_t> = if shape.len() == 1 {
+                    r.iter().map(|&i| i as hsize_t).collect()
+                } else {
+                    r.iter().flat_map(|&i| (0..ncomp).flat_map(move |c| [i as hsize_t, c as hsize_t])).collect()
+                };
+                H5Sselect_elements(fspace, H5S_seloper_t::H5S_SELECT_SET, r.len() * ncomp, coords.as_ptr());
+            }
+            None if hi > lo => {
+                let start = [lo as hsize_t, 0];
+                let count = [(hi - lo) as hsize_t, ncomp as hsize_t];
+                H5Sselect_hyperslab(fspace, H5S_seloper_t::H5S_SELECT_SET, start.as_ptr(), std::ptr::null(), count.as_ptr(), std::ptr::null());
+            }
+            _ => {
+                H5Sselect_none(fspace);
+            }
+        }
+        let mdims = [vals.len().max(1) as hsize_t];
+        let mspace = H5Screate_simple(1, mdims.as_ptr(), std::ptr::null());
+        if vals.is_empty() {
+            H5Sselect_none(mspace);
+        }
+        let dxpl = match par {
+            Some(_) => {
+                let d = H5Pcreate(*H5P_CLS_DATASET_XFER);
+                H5Pset_dxpl_mpio(d, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE);
+                d
+            }
+            None => H5P_DEFAULT,
+        };
+        // HDF5 wants a non-null buffer even when nothing is selected
+        let one = std::mem::MaybeUninit::<T>::uninit();
+        let buf = if vals.is_empty() { one.as_ptr() } else { vals.as_ptr() };
+        let st = H5Dwrite(ds.id(), mem_type.id(), mspace, fspace, dxpl, buf.cast());
+        if par.is_some() {
+            H5Pclose(dxpl);
+        }
+        H5Sclose(mspace);
+        H5Sclose(fspace);
+        st
+    };
+    if status < 0 {
+        return Err(Error::output(String::new(), format!("writing {}: H5Dwrite failed", what())));
     }
     Ok(ds)
 }
@@ -248,6 +340,40 @@ fn write_str_attr(loc: &Location, name: &str, value: &str) -> std::result::Resul
 
 // ---------------------------------------------------------------------------------------------
 // reading
+
+/// Reads `path` back and checks that it holds `data` bit for bit: the mesh, this rank's rows
+/// of the distributed fields (`data.rows`) and the other fields whole. Returns the number of
+/// values compared; a difference is an error naming the field and the row.
+pub fn verify(path: &Path, data: &OutputData) -> Result<usize> {
+    let shown = path.display().to_string();
+    let back = read(path)?;
+    let fail = |m: String| Error::output(&shown, format!("read back: {m}"));
+    if back.coordinates != data.coordinates || back.hexahedra != data.hexahedra {
+        return Err(fail("the mesh differs from the one in memory".into()));
+    }
+    let mut checked = 3 * data.coordinates.len() + 8 * data.hexahedra.len();
+    for f in &data.fields {
+        let g = back.fields.iter().find(|g| g.name == f.name).ok_or_else(|| fail(format!("field {:?} missing", f.name)))?;
+        let n = f.ncomp;
+        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let rows: Vec<usize> = match data.rows.get(&f.name) {
+            Some(r) => r.clone(),
+            None => (0..values_len(&f.values) / n).collect(),
+        };
+        for (k, &row) in rows.iter().enumerate() {
+            let ok = match (&f.values, &g.values) {
+                (Values::F64(a), Values::F64(b)) => b.len() >= (row + 1) * n && same(&a[k * n..(k + 1) * n], &b[row * n..(row + 1) * n]),
+                (Values::I32(a), Values::I32(b)) => b.len() >= (row + 1) * n && a[k * n..(k + 1) * n] == b[row * n..(row + 1) * n],
+                _ => false,
+            };
+            if !ok {
+                return Err(fail(format!("field {:?} differs at row {row}", f.name)));
+            }
+        }
+        checked += rows.len() * n;
+    }
+    Ok(checked)
+}
 
 type R<T> = std::result::Result<T, String>;
 
@@ -313,6 +439,7 @@ fn read_file(path: &Path) -> R<OutputData> {
         hexahedra,
         fields,
         attributes,
+        rows: Default::default(),
     })
 }
 
@@ -504,6 +631,7 @@ mod tests {
                 ("version".into(), "tresca-feti 0.1.0 — ✓".into()),
                 ("report".into(), big),
             ],
+            rows: Default::default(),
         }
     }
 

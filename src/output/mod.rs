@@ -41,10 +41,15 @@ pub struct OutputData {
     pub fields: Vec<Field>,
     /// String attributes on the root group (resolved scene, versions, timings, report).
     pub attributes: Vec<(String, String)>,
+    /// Distributed fields: field name → the rows (nodes or cells) this rank holds, whose
+    /// values the field's `values` are (in this order). A field not listed holds every row
+    /// (replicated; under MPI each rank writes one contiguous share).
+    pub rows: std::collections::BTreeMap<String, Vec<usize>>,
 }
 
 use std::path::{Path, PathBuf};
 
+use crate::comm::Comm;
 use crate::error::{Error, Result};
 
 /// `<path with extension ext>` beside `h5`.
@@ -75,13 +80,16 @@ fn tmp(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// Writes the HDF5 file, the XDMF sidecar (if `xdmf`) and the JSON report (if given), each
-/// first under `<name>.tmp`; only when all succeeded are they renamed to their final names.
-/// On failure the temporary files are removed. Returns the final paths.
-pub fn write_all(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<Vec<PathBuf>> {
-    if let Some(dir) = h5.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display().to_string(), e))?;
-    }
+/// Writes the HDF5 file (all ranks together, [`hdf5::write_collective`]), the XDMF sidecar (if
+/// `xdmf`) and the JSON report (if given; both by rank 0), each first under `<name>.tmp`; only
+/// when all succeeded on every rank are they renamed to their final names. On failure the
+/// temporary files are removed and every rank returns the error. Returns the final paths.
+pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<Vec<PathBuf>> {
+    let dir = comm.agree(match h5.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if comm.is_root() => std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display().to_string(), e)),
+        _ => Ok(()),
+    });
+    dir?;
     let mut targets = vec![h5.to_path_buf()];
     if xdmf {
         targets.push(sibling(h5, "xdmf"));
@@ -90,8 +98,21 @@ pub fn write_all(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde
         targets.push(sibling(h5, "json"));
     }
     let temps: Vec<PathBuf> = targets.iter().map(|p| tmp(p)).collect();
-    let result = (|| -> Result<()> {
-        hdf5::write(&temps[0], data)?;
+    let written = comm.agree(hdf5::write_collective(comm, &temps[0], data));
+    let result = written.and_then(|()| {
+        comm.agree(if comm.is_root() { finish(h5, data, xdmf, report, &targets, &temps) } else { Ok(()) })
+    });
+    if result.is_err() && comm.is_root() {
+        for t in &temps {
+            let _ = std::fs::remove_file(t);
+        }
+    }
+    result.map(|_| targets)
+}
+
+/// Rank 0's part of [`write_all`]: the sidecars and the renames.
+fn finish(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>, targets: &[PathBuf], temps: &[PathBuf]) -> Result<()> {
+    {
         let mut i = 1;
         if xdmf {
             let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
@@ -102,15 +123,9 @@ pub fn write_all(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde
             let text = serde_json::to_string_pretty(r).map_err(|e| Error::output(targets[i].display().to_string(), e.to_string()))?;
             std::fs::write(&temps[i], text + "\n").map_err(|e| Error::io(temps[i].display().to_string(), e))?;
         }
-        for (t, p) in temps.iter().zip(&targets) {
+        for (t, p) in temps.iter().zip(targets) {
             std::fs::rename(t, p).map_err(|e| Error::io(p.display().to_string(), e))?;
         }
         Ok(())
-    })();
-    if result.is_err() {
-        for t in &temps {
-            let _ = std::fs::remove_file(t);
-        }
     }
-    result.map(|_| targets)
 }

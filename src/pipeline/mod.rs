@@ -42,7 +42,7 @@ impl Timings {
     /// collective.
     pub fn phase<C: Comm, T>(&mut self, comm: &C, name: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
         let t0 = Instant::now();
-        let r = f();
+        let r = f().and_then(|v| injected_fault(comm, name).map_or(Ok(v), Err));
         let mut t = [t0.elapsed().as_secs_f64()];
         let r = comm.agree(r);
         comm.max_f64(&mut t);
@@ -62,6 +62,16 @@ impl Timings {
         m.insert("total".into(), json!(self.total()));
         serde_json::Value::Object(m)
     }
+}
+
+/// `TRESCA_FETI_FAULT=<phase>@<rank>` makes that phase fail on that rank after it ran (to
+/// test that an error on one rank stops all of them; meant for rank-local phases such as
+/// `factorize`).
+fn injected_fault<C: Comm>(comm: &C, phase: &str) -> Option<Error> {
+    let spec = std::env::var("TRESCA_FETI_FAULT").ok()?;
+    let (p, r) = spec.split_once('@')?;
+    (p == phase && r.parse::<usize>().ok() == Some(comm.rank()))
+        .then(|| Error::numerical("injected fault", format!("phase {phase} on rank {}", comm.rank())))
 }
 
 /// Figures of one body's linear solve.
@@ -86,6 +96,20 @@ pub struct Solution {
     pub bodies: Vec<BodyStats>,
     /// Subdomains, interface and coarse figures when solved by TFETI.
     pub tfeti: Option<tfeti::TfetiInfo>,
+    /// This rank's own rows of the fields, as it writes them to the file (every rank).
+    pub local: LocalFields,
+    /// Rank that computed each element (every rank).
+    pub element_rank: Vec<usize>,
+}
+
+/// The rows of the distributed fields one rank holds: the nodes it writes (each node once over
+/// all ranks) with their displacements, its elements with their von Mises stress.
+#[derive(Clone, Debug, Default)]
+pub struct LocalFields {
+    pub nodes: Vec<usize>,
+    pub displacement: Vec<[f64; 3]>,
+    pub cells: Vec<usize>,
+    pub von_mises: Vec<f64>,
 }
 
 /// What `solve` reports back to the command line.
@@ -215,7 +239,16 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
             })
             .collect::<Result<Vec<_>>>()
     })?;
-    t.phase(comm, "gather", || Ok(gather(comm, model, &results)))
+    let mut sol = t.phase(comm, "gather", || Ok(gather(comm, model, &results)))?;
+    for (lb, r) in bodies.iter().zip(&results) {
+        let body = &mesh.bodies[lb.body];
+        sol.local.nodes.extend(body.nodes.clone());
+        sol.local.displacement.extend(&r.u);
+        sol.local.cells.extend(body.elems.clone());
+        sol.local.von_mises.extend(&r.vm);
+    }
+    sol.element_rank = mesh.elem_body().into_iter().map(|b| owner(b, comm.size())).collect();
+    Ok(sol)
 }
 
 /// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), solve the
@@ -276,7 +309,7 @@ fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
         displacement: vec![[0.0; 3]; mesh.nodes.len()],
         von_mises: vec![0.0; mesh.hexes.len()],
         bodies: vec![BodyStats::default(); mesh.bodies.len()],
-        tfeti: None,
+        ..Default::default()
     };
     let mut cursor = vec![0usize; comm.size()];
     for (b, body) in mesh.bodies.iter().enumerate() {
@@ -347,13 +380,18 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     comm.max_f64(&mut peak_max);
     report["memory"] = json!({"peak_rss_bytes_sum_over_ranks": peak_sum[0], "peak_rss_bytes_max_rank": peak_max[0]});
     let before_output = t.clone();
-    let files = t.phase(comm, "output", || {
-        if !comm.is_root() {
-            return Ok(vec![]);
-        }
-        let data = output_data(&ls, &model, &sol, outcome.as_ref(), &before_output, &report);
-        output::write_all(&h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&report))
-    })?;
+    // every rank writes its rows; the root attributes carry rank 0's report
+    let mut text = report.to_string().into_bytes();
+    comm.broadcast_bytes(0, &mut text);
+    let report_text = String::from_utf8_lossy(&text).into_owned();
+    let data = output_data(comm, &ls, &model, &sol, outcome.as_ref(), &before_output, &report_text);
+    let files = t.phase(comm, "output", || output::write_all(comm, &h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&report)))?;
+    if ls.scene.output.verify {
+        let checked = t.phase(comm, "verify", || output::hdf5::verify(&h5, &data))?;
+        let mut total = [checked as u64];
+        comm.sum_u64(&mut total);
+        report["output_verified_values"] = json!(total[0]);
+    }
     report["timings"] = t.to_json();
     Ok(Summary { report, files, solution: sol })
 }
@@ -464,20 +502,29 @@ fn history_json(info: &qp::Info) -> serde_json::Value {
         .collect::<Vec<_>>())
 }
 
-fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &serde_json::Value) -> OutputData {
+/// This rank's share of the result file: its rows of u and of the stresses, the replicated
+/// fields whole.
+fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str) -> OutputData {
     let mesh = &model.mesh;
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
     let mut fields = Vec::new();
+    let mut rows = std::collections::BTreeMap::new();
+    let local = &sol.local;
     if want("displacement") {
         fields.push(Field {
             name: "displacement".into(),
             center: Center::Node,
             ncomp: 3,
-            values: Values::F64(sol.displacement.iter().flatten().copied().collect()),
+            values: Values::F64(local.displacement.iter().flatten().copied().collect()),
         });
+        rows.insert("displacement".to_string(), local.nodes.clone());
     }
     if want("von_mises") {
-        fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(sol.von_mises.clone()) });
+        fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(local.von_mises.clone()) });
+        rows.insert("von_mises".to_string(), local.cells.clone());
+    }
+    if want("rank") {
+        fields.push(Field { name: "rank".into(), center: Center::Cell, ncomp: 1, values: Values::I32(sol.element_rank.iter().map(|&r| r as i32).collect()) });
     }
     if let (true, Some(f)) = (want("subdomain"), &sol.tfeti) {
         fields.push(Field {
@@ -500,12 +547,13 @@ fn output_data(ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<
         ("versions".into(), crate::versions().to_string()),
         ("timings".into(), t.to_json().to_string()),
         ("report".into(), report.to_string()),
+        ("ranks".into(), comm.size().to_string()),
     ];
     if let (Some(o), Some(c)) = (outcome, &model.pairs) {
         fields.extend(contact_fields(mesh.nodes.len(), c, &o.state, want));
         attributes.push(("solver_history".into(), history_json(&o.info).to_string()));
     }
-    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes }
+    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes, rows }
 }
 
 /// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print

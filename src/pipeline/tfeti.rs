@@ -172,7 +172,7 @@ fn finish<C: Comm>(
         }
         Ok(buf)
     })?;
-    t.phase(comm, "gather", || {
+    let mut sol = t.phase(comm, "gather", || {
         let Some(all) = comm.gather_f64(0, &packed) else {
             return Ok(Solution::default());
         };
@@ -180,8 +180,7 @@ fn finish<C: Comm>(
         let mut sol = Solution {
             displacement: vec![[0.0; 3]; mesh.nodes.len()],
             von_mises: vec![0.0; mesh.hexes.len()],
-            bodies: vec![],
-            tfeti: None,
+            ..Default::default()
         };
         let mut seen = vec![false; mesh.nodes.len()];
         let mut copies_u: Vec<(usize, [f64; 3])> = Vec::new();
@@ -242,5 +241,27 @@ fn finish<C: Comm>(
             .collect();
         sol.tfeti = Some(TfetiInfo { subdomains: stats, gluing_jump: jump / umax, ..Default::default() });
         Ok(sol)
-    })
+    })?;
+    // this rank's rows for the file: a node from the subdomain of its first copy
+    for (ls, us) in dual.subs.iter().zip(u) {
+        let s = ls.sys.index;
+        let sd = &d.subdomains[s];
+        for (l, &v) in sd.nodes.iter().enumerate() {
+            if d.copies[v][0].0 == s {
+                sol.local.nodes.push(v);
+                sol.local.displacement.push([us[3 * l], us[3 * l + 1], us[3 * l + 2]]);
+            }
+        }
+    }
+    let mut cells: Vec<(usize, f64)> = Vec::new();
+    let mut p = 0;
+    for ls in &dual.subs {
+        let sd = &d.subdomains[ls.sys.index];
+        p += 3 * sd.nodes.len();
+        cells.extend(sd.elems.iter().zip(&packed[p..p + sd.elems.len()]).map(|(&e, &v)| (e, v)));
+        p += sd.elems.len() + 3;
+    }
+    (sol.local.cells, sol.local.von_mises) = cells.into_iter().unzip();
+    sol.element_rank = d.elem_subdomain(mesh.hexes.len()).into_iter().map(|s| owner[s]).collect();
+    Ok(sol)
 }
