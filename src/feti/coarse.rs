@@ -18,7 +18,7 @@
 //! ([`Distribution`]); the measurement behind keeping C replicated is in the README.
 
 use super::constraints::Constraints;
-use super::distribution::Distribution;
+use super::distribution::{Clock, Distribution};
 use crate::comm::Comm;
 use super::subdomain::{rigid_modes, NR};
 use crate::decomposition::Decomposition;
@@ -135,18 +135,23 @@ impl Coarse {
         self.chol.solve_in_place(x);
     }
 
+    /// x ← C⁻¹ x, timed on `dist`'s clock.
+    fn c_solve_timed<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
+        Clock::time(&dist.clock.coarse_solve, || self.chol.solve_in_place(x));
+    }
+
     /// z ← P̃ z = z − Gᵀ C⁻¹ G_E z_E (z owned).
     pub fn project<C: Comm>(&self, dist: &Distribution<'_, C>, z: &mut [f64]) {
         let zl = dist.ghosted(z);
         let mut a = self.g_mul(dist, &zl, true);
-        self.c_solve(&mut a);
+        self.c_solve_timed(dist, &mut a);
         self.sub_gt(dist, &a, z, Self::owned_rows(dist), false);
     }
 
     /// yl ← P̃ᵀ yl = yl − [G_E 0]ᵀ C⁻¹ G yl on the local rows (yl ghosted).
     pub fn project_t_local<C: Comm>(&self, dist: &Distribution<'_, C>, yl: &mut [f64]) {
         let mut a = self.g_mul(dist, yl, false);
-        self.c_solve(&mut a);
+        self.c_solve_timed(dist, &mut a);
         self.sub_gt(dist, &a, yl, Self::local_rows(dist), true);
     }
 

@@ -16,10 +16,38 @@
 //! subdomain, reduces those partial sums (one contributor each) and adds them in subdomain
 //! order. So 1, 2 or 3 ranks take the same branches and give the same digits.
 
+use std::cell::Cell;
+use std::time::Instant;
+
 use crate::comm::Comm;
 use crate::dual::Layout;
 
 use super::constraints::Constraints;
+
+/// Seconds spent in the parts of the A-products and solver reductions on this rank.
+#[derive(Debug, Default)]
+pub struct Clock {
+    /// K_s⁺ solves.
+    pub pinv: Cell<f64>,
+    /// Neighbour exchanges (waiting for the neighbours included).
+    pub exchange: Cell<f64>,
+    /// Reductions: coarse vectors and dot products.
+    pub reduce: Cell<f64>,
+    /// C⁻¹ solves.
+    pub coarse_solve: Cell<f64>,
+    /// Whole A-products.
+    pub apply: Cell<f64>,
+}
+
+impl Clock {
+    /// Runs `f`, adding its time to `cell`.
+    pub fn time<T>(cell: &Cell<f64>, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let r = f();
+        cell.set(cell.get() + t0.elapsed().as_secs_f64());
+        r
+    }
+}
 
 /// Where one entry of a subdomain's contribution goes.
 #[derive(Clone, Copy, Debug)]
@@ -71,6 +99,7 @@ pub struct Distribution<'c, C: Comm> {
     rev_recv: Vec<(usize, Vec<usize>)>,
     /// Slots of owned row k: `slot_ptr[k]..slot_ptr[k + 1]`, one per touching subdomain.
     slot_ptr: Vec<usize>,
+    pub clock: Clock,
 }
 
 impl<'c, C: Comm> Distribution<'c, C> {
@@ -198,6 +227,7 @@ impl<'c, C: Comm> Distribution<'c, C> {
             rev_send,
             rev_recv: rev_recv.into_iter().collect(),
             slot_ptr,
+            clock: Clock::default(),
         }
     }
 
@@ -215,6 +245,17 @@ impl<'c, C: Comm> Distribution<'c, C> {
         &self.touch[self.touch_ptr[l]..self.touch_ptr[l + 1]]
     }
 
+    /// Values this rank sends per forward exchange and per reverse exchange, and its number of
+    /// neighbours.
+    pub fn message_sizes(&self) -> (usize, usize, usize) {
+        let fwd = self.fwd_send.iter().map(|x| x.1.len()).sum();
+        let rev = self.rev_send.iter().map(|x| x.1).sum();
+        let mut n: Vec<usize> = self.fwd_send.iter().map(|x| x.0).chain(self.fwd_recv.iter().map(|x| x.0)).chain(self.rev_send.iter().map(|x| x.0)).collect();
+        n.sort_unstable();
+        n.dedup();
+        (fwd, rev, n.len())
+    }
+
     /// The owned vector `x` on the local rows (owned values, ghosts from their owners).
     pub fn ghosted(&self, x: &[f64]) -> Vec<f64> {
         let mut xl = vec![0.0; self.local_len()];
@@ -223,7 +264,7 @@ impl<'c, C: Comm> Distribution<'c, C> {
         }
         let send: Vec<(usize, Vec<f64>)> = self.fwd_send.iter().map(|(q, ks)| (*q, ks.iter().map(|&k| x[k]).collect())).collect();
         let mut recv: Vec<(usize, Vec<f64>)> = self.fwd_recv.iter().map(|(q, ls)| (*q, vec![0.0; ls.len()])).collect();
-        self.comm.exchange(&send, &mut recv);
+        Clock::time(&self.clock.exchange, || self.comm.exchange(&send, &mut recv));
         for ((_, ls), (_, buf)) in self.fwd_recv.iter().zip(&recv) {
             for (&l, &v) in ls.iter().zip(buf) {
                 xl[l] = v;
@@ -251,7 +292,7 @@ impl<'c, C: Comm> Distribution<'c, C> {
             }
         }
         let mut recv: Vec<(usize, Vec<f64>)> = self.rev_recv.iter().map(|(q, ss)| (*q, vec![0.0; ss.len()])).collect();
-        self.comm.exchange(&send, &mut recv);
+        Clock::time(&self.clock.exchange, || self.comm.exchange(&send, &mut recv));
         for ((_, ss), (_, buf)) in self.rev_recv.iter().zip(&recv) {
             for (&i, &x) in ss.iter().zip(buf) {
                 slots[i] = x;
@@ -264,7 +305,7 @@ impl<'c, C: Comm> Distribution<'c, C> {
 
     /// Sums a coarse-sized vector over the ranks; exact when each entry comes from one rank.
     pub fn reduce(&self, a: &mut [f64]) {
-        self.comm.sum_f64(a);
+        Clock::time(&self.clock.reduce, || self.comm.sum_f64(a));
     }
 
     /// Dot product of two owned vectors, independent of the rank count (module doc).
@@ -273,7 +314,7 @@ impl<'c, C: Comm> Distribution<'c, C> {
         for ((&c, a), b) in self.chunk.iter().zip(x).zip(y) {
             partial[c] += a * b;
         }
-        self.comm.sum_f64(&mut partial);
+        Clock::time(&self.clock.reduce, || self.comm.sum_f64(&mut partial));
         partial.iter().sum()
     }
 

@@ -9,7 +9,7 @@
 
 use super::coarse::Coarse;
 use super::constraints::Constraints;
-use super::distribution::Distribution;
+use super::distribution::{Clock, Distribution};
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
 use crate::dual::{DualOperator, Layout, ProductCounter};
@@ -118,9 +118,11 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// z_s ← K_s⁺ z_s for each local subdomain.
     fn pinv_all(&self, z: &mut [Vec<f64>]) {
-        for (s, zs) in self.subs.iter().zip(z) {
-            s.sys.pinv_in_place(zs);
-        }
+        Clock::time(&self.dist.clock.pinv, || {
+            for (s, zs) in self.subs.iter().zip(z) {
+                s.sys.pinv_in_place(zs);
+            }
+        });
     }
 
     /// K_s⁺(f_s − B_sᵀλ) for each local subdomain (λ on the local rows).
@@ -183,10 +185,12 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
 
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
-        let mut wl = self.dist.ghosted(x);
-        self.coarse.project_t_local(&self.dist, &mut wl);
-        self.apply_f_local(&wl, y);
-        self.coarse.project(&self.dist, y);
+        Clock::time(&self.dist.clock.apply, || {
+            let mut wl = self.dist.ghosted(x);
+            self.coarse.project_t_local(&self.dist, &mut wl);
+            self.apply_f_local(&wl, y);
+            self.coarse.project(&self.dist, y);
+        });
     }
 
     fn products(&self) -> usize {

@@ -440,6 +440,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             "coarse_feasibility": f.feasibility,
             "projector": ls.scene.decomposition.projector,
             "smalse": f.smalse,
+            "distribution": f.distribution,
             "subdomains": f.subdomains,
         })),
         "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),

@@ -54,6 +54,50 @@ pub struct TfetiInfo {
     pub feasibility: f64,
     /// SMALSE-M's outer loop (orthogonal projector only).
     pub smalse: Option<SmalseInfo>,
+    /// How the dual vectors and the work of an A-product are spread over the ranks.
+    pub distribution: DistributionStats,
+}
+
+/// The distribution of the multipliers and the time in each part of the A-products (max over
+/// the ranks; times summed over the solve, power iterations included).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct DistributionStats {
+    pub owned_rows_min: usize,
+    pub owned_rows_max: usize,
+    pub ghost_rows_max: usize,
+    pub neighbours_max: usize,
+    /// Values sent per A-product (all ranks): two ghost exchanges and one of contributions.
+    pub values_sent_per_product: usize,
+    pub apply_s: f64,
+    pub pinv_s: f64,
+    pub exchange_s: f64,
+    pub reduce_s: f64,
+    pub coarse_solve_s: f64,
+}
+
+impl DistributionStats {
+    fn new<C: Comm>(dist: &Distribution<'_, C>) -> Self {
+        let comm = dist.comm();
+        let (owned, ghosts) = (dist.owned.len(), dist.local_len() - dist.owned.len());
+        let (fwd, rev, nbrs) = dist.message_sizes();
+        let c = &dist.clock;
+        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get()];
+        comm.max_f64(&mut mx);
+        let mut sent = [(2 * fwd + rev) as u64];
+        comm.sum_u64(&mut sent);
+        DistributionStats {
+            owned_rows_max: mx[0] as usize,
+            owned_rows_min: (-mx[1]) as usize,
+            ghost_rows_max: mx[2] as usize,
+            neighbours_max: mx[3] as usize,
+            values_sent_per_product: sent[0] as usize,
+            apply_s: mx[4],
+            pinv_s: mx[5],
+            exchange_s: mx[6],
+            reduce_s: mx[7],
+            coarse_solve_s: mx[8],
+        }
+    }
 }
 
 /// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
@@ -106,6 +150,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         Ok(dual.recover(&sol.lambda))
     })?;
     let feasibility = rec.feasibility;
+    let distribution = DistributionStats::new(&dual.dist);
     let mut solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
     // finish filled the gathered figures (subdomains, gluing jump); add the global ones
     let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
@@ -117,6 +162,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     f.nnz_c = nnz_c;
     f.feasibility = feasibility;
     f.smalse = smalse;
+    f.distribution = distribution;
     let outcome = contact.map(|c| {
         let set_i = Lambda::new(c);
         // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
