@@ -85,6 +85,9 @@ enum Cmd {
         /// Extra launcher arguments, split at whitespace, e.g. "--oversubscribe" or "--bind-to core".
         #[arg(long, allow_hyphen_values = true, default_value = "")]
         mpirun_args: String,
+        /// Runs of each case; the row is the fastest (least total time), against other load.
+        #[arg(long, default_value_t = 1)]
+        repeat: usize,
         #[arg(long, default_value_t = 1e-6)]
         eps: f64,
         /// Memory bandwidth (GB/s) for the A-product floor (STACK.md: about 15 on this machine).
@@ -141,6 +144,7 @@ fn bench_tfeti(
     weak: bool,
     mpirun: String,
     mpirun_args: String,
+    repeat: usize,
     eps: f64,
     bandwidth: f64,
     csv: PathBuf,
@@ -157,6 +161,9 @@ fn bench_tfeti(
         .collect::<tresca_feti::Result<Vec<_>>>()?;
     if !(eps > 0.0 && eps.is_finite()) {
         return Err(Error::scene("--eps", format!("must be finite and > 0, got {eps}")));
+    }
+    if repeat == 0 {
+        return Err(Error::scene("--repeat", "must be at least 1"));
     }
     if ranks.is_empty() {
         return Err(Error::scene("--ranks", "give at least one rank count"));
@@ -194,12 +201,14 @@ fn bench_tfeti(
         weak,
         mpirun,
         mpirun_args,
+        repeat,
         eps,
         bandwidth,
         csv: Some(csv.clone()),
     };
     let mode = if weak { "weak scaling (N·P^{1/3}, S·P), " } else { "" };
-    println!("TFETI benchmark: {mode}ranks {list} ({}), ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.mpirun);
+    let best = if repeat > 1 { format!(", best of {repeat} runs") } else { String::new() };
+    println!("TFETI benchmark: {mode}ranks {list} ({}){best}, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.mpirun);
     println!("{}", tresca_feti::bench::table_header());
     tresca_feti::bench::run(&args, |r| println!("{}", r.table()))?;
     println!("wrote {}", csv.display());
@@ -222,9 +231,9 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, eps, bandwidth, csv } = cli.cmd {
+    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } = cli.cmd {
         // a driver of mpirun runs, not an MPI program itself
-        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, eps, bandwidth, csv) {
+        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");

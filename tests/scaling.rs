@@ -52,14 +52,14 @@ fn num(row: &HashMap<String, String>, k: &str) -> f64 {
 #[test]
 fn strong_scaling_runs_every_rank_count() {
     let csv = tmpdir("strong").join("s.csv");
-    let o = bench(&["--sizes", "4", "--subdomains", "2", "--ranks", "1,2", "--csv", csv.to_str().unwrap()]);
+    let o = bench(&["--sizes", "4", "--subdomains", "2", "--ranks", "1,2", "--repeat", "2", "--csv", csv.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}\n{stdout}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("ranks 1,2 (mpirun)"), "{stdout}");
     let rows = read_csv(&csv);
     assert_eq!(rows.len(), 2);
     for (row, p) in rows.iter().zip(["1", "2"]) {
-        assert_eq!(row["ranks"], p);
+        assert_eq!((row["ranks"].as_str(), row["runs"].as_str()), (p, "2"));
         assert_eq!((row["mode"].as_str(), row["case"].as_str(), row["N"].as_str(), row["S"].as_str()), ("strong", "n4_s2_oblique", "4", "2"));
         assert!(num(row, "nA") > 0.0 && num(row, "outer") > 0.0 && num(row, "inner") > 0.0 && num(row, "coarse_dim") > 0.0, "{row:?}");
         assert!(num(row, "total_s") > 0.0 && num(row, "iterate_s") > 0.0 && num(row, "peak_GB_max") > 0.0, "{row:?}");
@@ -96,6 +96,7 @@ fn bad_arguments_give_one_line() {
         (&["--ranks", "1,0,2"], 1, "error: --ranks"),
         (&["--ranks", "1,two"], 2, "error: invalid value 'two' for '--ranks"),
         (&["--sizes", "1"], 1, "error: --sizes"),
+        (&["--repeat", "0"], 1, "error: --repeat"),
         (&["--mpirun", "/nonexistent/mpirun", "--sizes", "3", "--subdomains", "1", "--ranks", "1"], 1, "error: --mpirun /nonexistent/mpirun"),
         (&["--mpirun-args", "--no-such-mpirun-option", "--sizes", "3", "--subdomains", "1", "--ranks", "1"], 1, "error: case n3_s1_oblique_p1"),
     ] {
