@@ -72,6 +72,16 @@ fn strong_scaling_runs_every_rank_count() {
     for k in ["dofs", "multipliers", "coarse_dim", "outer", "nA", "nA_power", "nnz_L"] {
         assert_eq!(rows[0][k], rows[1][k], "{k}");
     }
+    // and run/scaling-plot draws it, where gnuplot is installed (run/packages.txt)
+    if Command::new("gnuplot").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        let dir = csv.parent().unwrap().join("plots");
+        let o = Command::new(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("run/scaling-plot")).arg(&csv).arg(&dir).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for png in ["speedup.png", "efficiency.png", "phases_n4_s2_oblique.png"] {
+            let bytes = std::fs::read(dir.join(png)).unwrap_or_else(|e| panic!("{png}: {e}"));
+            assert!(bytes.starts_with(b"\x89PNG") && bytes.len() > 10_000, "{png}");
+        }
+    }
 }
 
 #[test]
