@@ -1,9 +1,12 @@
-//! `tresca-feti bench-tfeti`: the TFETI benchmark of a scene over mesh sizes N and subdomain
-//! counts S (S = 0: the monolithic dual) and projectors. Every case is a fresh
-//! `mpirun -n P tresca-feti solve` (so that each has its own peak memory), whose JSON report
-//! gives nA, outer iterations, the time of each phase, the peak memory and Σ nnz(L). The time
-//! of one A-product, t_A = iterate / (nA + power iterations), is set against its memory-bound
-//! floor 2·8·Σ nnz(L) / bandwidth (both triangular solves stream every factor once).
+//! `tresca-feti bench-tfeti`: the TFETI benchmark of a scene over mesh sizes N, subdomain
+//! counts S (S = 0: the monolithic dual), projectors and rank counts P, and the strong and weak
+//! scaling studies built on it. Every case is a fresh `mpirun -n P tresca-feti solve` (or
+//! `srun -n P …`, so that each has its own peak memory), whose JSON report gives nA, the
+//! iterations, the time of each phase, the peak memory and Σ nnz(L). The time of one A-product,
+//! t_A = iterate / (nA + power iterations), is set against its memory-bound floor
+//! 2·8·Σ nnz(L) / bandwidth (both triangular solves stream every factor once). Weak scaling:
+//! the sizes and subdomain counts are those of 1 rank, and P ranks get N_P = round(N₁·P^{1/3})
+//! and S_P = S₁·P (DOFs ∝ N³: constant work per rank), whether or not 1 is in the rank list.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -21,27 +24,51 @@ pub struct Args {
     /// Subdomains per body; 0 = monolithic.
     pub subdomains: Vec<usize>,
     pub projectors: Vec<Projector>,
-    pub ranks: usize,
+    /// Rank counts; every case runs on each.
+    pub ranks: Vec<usize>,
+    /// Weak scaling: `sizes` and `subdomains` are those of 1 rank.
+    pub weak: bool,
+    /// The launcher (`mpirun`, `srun`, a path), called as `LAUNCHER -n P ARGS… exe solve …`.
+    pub mpirun: String,
+    /// Extra launcher arguments, before the executable.
+    pub mpirun_args: Vec<String>,
+    /// Runs of each case; the fastest (least total) is kept, against other load on the machine.
+    pub repeat: usize,
     pub eps: f64,
     /// Memory bandwidth in GB/s for the floor.
     pub bandwidth: f64,
     pub csv: Option<PathBuf>,
 }
 
+/// The phases, as they appear in the CSV (`<name>_s`); `factorize` includes the monolithic
+/// dual's assembly, `total` leaves out the output.
+pub const PHASES: [&str; 9] = ["decompose", "factorize", "coarse", "dual", "iterate", "recover", "stress", "gather", "total"];
+
 /// One measured case.
 #[derive(Clone, Debug, Default)]
 pub struct Row {
+    /// `strong` (the same problem on every rank count) or `weak`.
+    pub mode: String,
+    /// The case a scaling curve follows: `n16_s32_oblique`, `n16_mono`; for weak scaling N and S
+    /// are those of 1 rank.
+    pub case: String,
+    pub ranks: usize,
+    /// Runs this row is the fastest of.
+    pub runs: usize,
     pub n: usize,
     pub s: usize,
     pub projector: String,
     pub dofs: u64,
     pub multipliers: u64,
+    pub coarse_dim: u64,
     pub outer: u64,
+    pub inner: u64,
     pub n_a: u64,
     pub n_a_power: u64,
-    /// decompose, factorize (assembly included), coarse + dual setup, iterate, recover, total.
-    pub phases: [f64; 6],
-    pub peak_gb: f64,
+    /// Seconds, in the order of [`PHASES`].
+    pub phases: [f64; 9],
+    pub peak_gb_sum: f64,
+    pub peak_gb_max: f64,
     pub nnz_l: f64,
     pub t_a: f64,
     pub floor: f64,
@@ -49,16 +76,16 @@ pub struct Row {
     pub max_u: f64,
 }
 
-pub const HEADER: &str = "N,S,projector,dofs,multipliers,outer,nA,nA_power,decompose_s,factorize_s,setup_s,iterate_s,recover_s,total_s,peak_GB,nnz_L,tA_ms,floor_ms,tA_over_floor,kkt,max_u";
+pub const HEADER: &str = "mode,case,ranks,runs,N,S,projector,dofs,multipliers,coarse_dim,outer,inner,nA,nA_power,decompose_s,factorize_s,coarse_s,dual_s,iterate_s,recover_s,stress_s,gather_s,total_s,peak_GB_sum,peak_GB_max,nnz_L,tA_ms,floor_ms,tA_over_floor,kkt,max_u";
 
 impl Row {
     pub fn csv(&self) -> String {
-        let p = &self.phases;
+        let phases: Vec<String> = self.phases.iter().map(|t| format!("{t:.4}")).collect();
         format!(
-            "{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{:.2},{:.2},{:.2},{:.2e},{:.6e}",
-            self.n, self.s, self.projector, self.dofs, self.multipliers, self.outer, self.n_a, self.n_a_power,
-            p[0], p[1], p[2], p[3], p[4], p[5], self.peak_gb, self.nnz_l, self.t_a * 1e3, self.floor * 1e3,
-            self.t_a / self.floor, self.kkt, self.max_u
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{:.4},{},{:.3},{:.3},{:.3},{:.2e},{:.6e}",
+            self.mode, self.case, self.ranks, self.runs, self.n, self.s, self.projector, self.dofs, self.multipliers, self.coarse_dim,
+            self.outer, self.inner, self.n_a, self.n_a_power, phases.join(","), self.peak_gb_sum, self.peak_gb_max,
+            self.nnz_l, self.t_a * 1e3, self.floor * 1e3, self.t_a / self.floor, self.kkt, self.max_u
         )
     }
 
@@ -66,27 +93,50 @@ impl Row {
         let p = &self.phases;
         let s = if self.s == 0 { "mono".to_string() } else { self.s.to_string() };
         format!(
-            "| {:>3} | {:>4} | {:<10} | {:>7} | {:>4} | {:>5} | {:>6.2} | {:>7.2} | {:>6.2} | {:>7.2} | {:>6.2} | {:>7.2} | {:>5.2} | {:>7.1} | {:>7.1} | {:>4.2} |",
-            self.n, s, self.projector, self.multipliers, self.outer, self.n_a, p[0], p[1], p[2], p[3], p[4], p[5],
-            self.peak_gb, self.t_a * 1e3, self.floor * 1e3, self.t_a / self.floor
+            "| {:>3} | {:>3} | {:>4} | {:<10} | {:>7} | {:>4} | {:>5} | {:>6.2} | {:>6.2} | {:>6.2} | {:>6.2} | {:>7.2} | {:>7.2} | {:>6.2} | {:>6.2} | {:>7.2} | {:>6.3} | {:>6.3} | {:>7.1} | {:>7.1} | {:>4.2} |",
+            self.ranks, self.n, s, self.projector, self.multipliers, self.outer, self.n_a, p[0], p[1], p[2], p[3], p[4], p[5],
+            p[6], p[7], p[8], self.peak_gb_sum, self.peak_gb_max, self.t_a * 1e3, self.floor * 1e3, self.t_a / self.floor
         )
     }
 }
 
 pub fn table_header() -> String {
-    "|   N |    S | projector  | dual dim | iter |    nA | decomp | factor | setup | iterate | recover |   total | mem GB | tA ms | floor ms | tA/floor |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|".into()
+    "| ranks |   N |    S | projector  | dual dim | iter |    nA | decomp | factor | coarse |   dual | iterate | recover | stress | gather |   total | mem GB Σ | mem GB max | tA ms | floor ms | tA/floor |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|".into()
+}
+
+/// Mesh size and subdomains per body on `p` ranks of a case given for 1 rank: the same for
+/// strong scaling; for weak scaling round(N·p^{1/3}) and S·p (S = 0 stays monolithic).
+pub fn scaled(weak: bool, n: usize, s: usize, p: usize) -> (usize, usize) {
+    if !weak {
+        return (n, s);
+    }
+    (((n as f64) * (p as f64).cbrt()).round() as usize, s * p)
 }
 
 fn f(v: &serde_json::Value) -> f64 {
     v.as_f64().unwrap_or(0.0)
 }
 
+fn u(v: &serde_json::Value) -> u64 {
+    v.as_u64().unwrap_or(0)
+}
+
+/// One run: `case` names the curve, (n, s) the problem solved on `ranks` ranks.
+struct Case<'a> {
+    name: &'a str,
+    ranks: usize,
+    n: usize,
+    s: usize,
+    projector: Projector,
+}
+
 /// Runs one case and reads its report.
-fn case(a: &Args, n: usize, s: usize, projector: Projector, dir: &std::path::Path) -> Result<Row> {
-    let name = format!("N{n}_S{s}_{projector:?}").to_lowercase();
+fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
+    let Case { ranks, n, s, projector, .. } = *c;
+    let name = format!("N{n}_S{s}_{projector:?}_P{ranks}").to_lowercase();
     let out = dir.join(format!("{name}.h5"));
-    let mut cmd = Command::new("mpirun");
-    cmd.arg("-n").arg(a.ranks.to_string()).arg(&a.exe).arg("solve").arg(&a.scene);
+    let mut cmd = Command::new(&a.mpirun);
+    cmd.arg("-n").arg(ranks.to_string()).args(&a.mpirun_args).arg(&a.exe).arg("solve").arg(&a.scene);
     let mut sets = a.sets.clone();
     sets.push(format!("mesh.n={n}"));
     sets.push(format!("solver.eps={:e}", a.eps));
@@ -101,44 +151,65 @@ fn case(a: &Args, n: usize, s: usize, projector: Projector, dir: &std::path::Pat
         cmd.arg("--set").arg(x);
     }
     cmd.arg("--out").arg(&out);
-    let o = cmd.output().map_err(|e| Error::io("mpirun", e))?;
+    let o = cmd.output().map_err(|e| Error::io(format!("--mpirun {}", a.mpirun), e))?;
     if !o.status.success() {
         let err = String::from_utf8_lossy(&o.stderr);
-        // our one-line error, not mpirun's banner after it
-        let line = err.lines().find_map(|l| l.strip_prefix("error: ")).unwrap_or("failed without an error message");
+        // our one-line error, not mpirun's banner after it; else the launcher's first line
+        let line = err
+            .lines()
+            .find_map(|l| l.strip_prefix("error: "))
+            .or_else(|| err.lines().map(str::trim).find(|l| !l.is_empty() && !l.chars().all(|c| c == '-')))
+            .unwrap_or("failed without an error message");
         return Err(Error::numerical(format!("case {name}"), line.to_string()));
     }
     let json = out.with_extension("json");
     let text = std::fs::read_to_string(&json).map_err(|e| Error::io(json.display().to_string(), e))?;
     let r: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse { file: json.display().to_string(), msg: e.to_string() })?;
+    // a launcher that starts P separate 1-rank programs (srun without PMI support) shows here
+    if u(&r["ranks"]) != ranks as u64 {
+        return Err(Error::numerical(
+            format!("case {name}"),
+            format!("the report says {} rank(s), not {ranks}: does --mpirun {} start one MPI job?", r["ranks"], a.mpirun),
+        ));
+    }
     let t = &r["timings"];
     let sv = &r["solver"];
-    let nnz_l = match r["tfeti"].as_object() {
+    let tf = &r["tfeti"];
+    let nnz_l = match tf.as_object() {
         Some(tf) => tf["subdomains"].as_array().into_iter().flatten().map(|x| f(&x["nnz_l"])).sum(),
         None => r["bodies"].as_array().into_iter().flatten().map(|x| f(&x["nnz_L"])).sum(),
     };
-    let mult = sv["dual_dim"].as_u64().unwrap_or(0);
-    let (n_a, n_a_power) = (sv["nA"].as_u64().unwrap_or(0), sv["nA_power"].as_u64().unwrap_or(0));
+    let (n_a, n_a_power) = (u(&sv["nA"]), u(&sv["nA_power"]));
     let phases = [
         f(&t["decompose"]),
         f(&t["assemble"]) + f(&t["factorize"]),
-        f(&t["coarse"]) + f(&t["dual"]),
+        f(&t["coarse"]),
+        f(&t["dual"]),
         f(&t["iterate"]),
         f(&t["recover"]),
+        f(&t["stress"]),
+        f(&t["gather"]),
         f(&t["total"]) - f(&t["output"]),
     ];
-    let t_a = phases[3] / (n_a + n_a_power).max(1) as f64;
+    let t_a = phases[4] / (n_a + n_a_power).max(1) as f64;
     Ok(Row {
+        mode: if a.weak { "weak" } else { "strong" }.into(),
+        case: c.name.into(),
+        ranks,
+        runs: 1,
         n,
         s,
         projector: if s == 0 { "-".into() } else { format!("{projector:?}").to_lowercase() },
-        dofs: r["mesh"]["dofs"].as_u64().unwrap_or(0),
-        multipliers: mult,
-        outer: sv["outer_iterations"].as_u64().unwrap_or(0),
+        dofs: u(&r["mesh"]["dofs"]),
+        multipliers: u(&sv["dual_dim"]),
+        coarse_dim: u(&tf["coarse_dim"]),
+        outer: u(&sv["outer_iterations"]),
+        inner: u(&sv["inner_iterations"]),
         n_a,
         n_a_power,
         phases,
-        peak_gb: f(&r["memory"]["peak_rss_bytes_sum_over_ranks"]) / 1e9,
+        peak_gb_sum: f(&r["memory"]["peak_rss_bytes_sum_over_ranks"]) / 1e9,
+        peak_gb_max: f(&r["memory"]["peak_rss_bytes_max_rank"]) / 1e9,
         nnz_l,
         t_a,
         floor: 2.0 * 8.0 * nnz_l / (a.bandwidth * 1e9),
@@ -147,30 +218,72 @@ fn case(a: &Args, n: usize, s: usize, projector: Projector, dir: &std::path::Pat
     })
 }
 
-/// Runs every case (projectors only for S > 0), calling `each` after each.
+/// Runs every case (projectors only for S > 0) on every rank count, `repeat` times keeping the
+/// fastest, calling `each` after each;
+/// the CSV is written after each case, so an interrupted study keeps what it measured.
 pub fn run(a: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
     let dir = std::env::temp_dir().join(format!("tresca-feti-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(dir.display().to_string(), e))?;
     let mut rows = Vec::new();
-    for &n in &a.sizes {
-        for &s in &a.subdomains {
-            let projectors: Vec<Projector> = if s == 0 { vec![Projector::Oblique] } else { a.projectors.clone() };
-            for p in projectors {
-                let row = case(a, n, s, p, &dir)?;
-                each(&row);
-                rows.push(row);
+    let result = (|| {
+        for &n in &a.sizes {
+            for &s in &a.subdomains {
+                let projectors: Vec<Projector> = if s == 0 { vec![Projector::Oblique] } else { a.projectors.clone() };
+                for projector in projectors {
+                    let name = if s == 0 { format!("n{n}_mono") } else { format!("n{n}_s{s}_{projector:?}").to_lowercase() };
+                    for &ranks in &a.ranks {
+                        let (n, s) = scaled(a.weak, n, s, ranks);
+                        let c = Case { name: &name, ranks, n, s, projector };
+                        let mut row = case(a, &c, &dir)?;
+                        for _ in 1..a.repeat {
+                            let again = case(a, &c, &dir)?;
+                            if again.phases[8] < row.phases[8] {
+                                row = again;
+                            }
+                        }
+                        row.runs = a.repeat.max(1);
+                        each(&row);
+                        rows.push(row);
+                        write_csv(a, &rows)?;
+                    }
+                }
             }
         }
-    }
+        Ok(())
+    })();
     let _ = std::fs::remove_dir_all(&dir);
-    if let Some(path) = &a.csv {
-        let mut text = String::from(HEADER);
+    result.map(|()| rows)
+}
+
+fn write_csv(a: &Args, rows: &[Row]) -> Result<()> {
+    let Some(path) = &a.csv else { return Ok(()) };
+    let mut text = String::from(HEADER);
+    text.push('\n');
+    for r in rows {
+        text.push_str(&r.csv());
         text.push('\n');
-        for r in &rows {
-            text.push_str(&r.csv());
-            text.push('\n');
-        }
-        crate::output::write_atomically(path, text.as_bytes())?;
     }
-    Ok(rows)
+    crate::output::write_atomically(path, text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weak_scaling_keeps_the_work_per_rank() {
+        assert_eq!(scaled(false, 16, 32, 8), (16, 32));
+        assert_eq!(scaled(true, 10, 4, 1), (10, 4));
+        assert_eq!(scaled(true, 10, 4, 2), (13, 8));
+        assert_eq!(scaled(true, 10, 4, 8), (20, 32));
+        assert_eq!(scaled(true, 10, 4, 16), (25, 64));
+        assert_eq!(scaled(true, 16, 0, 64), (64, 0));
+    }
+
+    #[test]
+    fn header_and_row_have_the_same_columns() {
+        let r = Row { floor: 1.0, ..Row::default() };
+        assert_eq!(r.csv().split(',').count(), HEADER.split(',').count());
+        assert_eq!(table_header().lines().next().unwrap().matches('|').count(), r.table().matches('|').count());
+    }
 }

@@ -55,9 +55,10 @@ enum Cmd {
         #[arg(long)]
         no_error: bool,
     },
-    /// TFETI benchmark: for each N and S (subdomains per body; 0 = monolithic) one
-    /// `mpirun -n RANKS tresca-feti solve`, tabulating nA, iterations, time per phase, peak memory
-    /// and the time of one A-product against its memory-bound floor. Run it without mpirun.
+    /// TFETI benchmark and scaling study: for each N, S (subdomains per body; 0 = monolithic)
+    /// and rank count P one `mpirun -n P tresca-feti solve`, tabulating nA, iterations, time per
+    /// phase, peak memory and the time of one A-product against its memory-bound floor. Run it
+    /// without mpirun.
     BenchTfeti {
         #[arg(long, default_value = "run/seed.toml")]
         scene: PathBuf,
@@ -71,8 +72,22 @@ enum Cmd {
         /// oblique (P̃) and/or orthogonal (SMALSE-M).
         #[arg(long, value_delimiter = ',', default_value = "oblique")]
         projectors: Vec<String>,
-        #[arg(long, default_value_t = 2)]
-        ranks: usize,
+        /// Rank counts: every case runs on each (e.g. 1,2,4,8,16).
+        #[arg(long, value_delimiter = ',', default_value = "2")]
+        ranks: Vec<usize>,
+        /// Weak scaling: SIZES and SUBDOMAINS are those of 1 rank; P ranks solve
+        /// N = round(N·P^{1/3}) with S·P subdomains per body (constant work per rank).
+        #[arg(long)]
+        weak: bool,
+        /// The launcher, called as `MPIRUN -n P MPIRUN_ARGS… tresca-feti solve …` (`srun` on Slurm).
+        #[arg(long, default_value = "mpirun")]
+        mpirun: String,
+        /// Extra launcher arguments, split at whitespace, e.g. "--oversubscribe" or "--bind-to core".
+        #[arg(long, allow_hyphen_values = true, default_value = "")]
+        mpirun_args: String,
+        /// Runs of each case; the row is the fastest (least total time), against other load.
+        #[arg(long, default_value_t = 1)]
+        repeat: usize,
         #[arg(long, default_value_t = 1e-6)]
         eps: f64,
         /// Memory bandwidth (GB/s) for the A-product floor (STACK.md: about 15 on this machine).
@@ -125,7 +140,11 @@ fn bench_tfeti(
     sizes: Vec<usize>,
     subdomains: Vec<usize>,
     projectors: Vec<String>,
-    ranks: usize,
+    ranks: Vec<usize>,
+    weak: bool,
+    mpirun: String,
+    mpirun_args: String,
+    repeat: usize,
     eps: f64,
     bandwidth: f64,
     csv: PathBuf,
@@ -143,12 +162,53 @@ fn bench_tfeti(
     if !(eps > 0.0 && eps.is_finite()) {
         return Err(Error::scene("--eps", format!("must be finite and > 0, got {eps}")));
     }
-    if ranks == 0 {
-        return Err(Error::scene("--ranks", "must be at least 1"));
+    if repeat == 0 {
+        return Err(Error::scene("--repeat", "must be at least 1"));
+    }
+    if ranks.is_empty() {
+        return Err(Error::scene("--ranks", "give at least one rank count"));
+    }
+    if let Some(&p) = ranks.iter().find(|&&p| p == 0) {
+        return Err(Error::scene("--ranks", format!("every rank count must be at least 1, got {p}")));
+    }
+    if sizes.is_empty() || subdomains.is_empty() {
+        return Err(Error::scene(if sizes.is_empty() { "--sizes" } else { "--subdomains" }, "give at least one value"));
+    }
+    if let Some(&n) = sizes.iter().find(|&&n| n < 2) {
+        return Err(Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
+    }
+    if !(bandwidth > 0.0 && bandwidth.is_finite()) {
+        return Err(Error::scene("--bandwidth", format!("must be finite and > 0, got {bandwidth}")));
+    }
+    if mpirun.trim().is_empty() {
+        return Err(Error::scene("--mpirun", "must name a launcher (mpirun, srun or a path)"));
+    }
+    // a CSV that cannot be written fails now, not after the whole run
+    if let Some(d) = csv.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| Error::io(d.display().to_string(), e))?;
     }
     let exe = std::env::current_exe().map_err(|e| Error::io("current executable", e))?;
-    let args = tresca_feti::bench::Args { exe, scene, sets, sizes, subdomains, projectors, ranks, eps, bandwidth, csv: Some(csv.clone()) };
-    println!("TFETI benchmark: {} ranks, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", ranks);
+    let mpirun_args = mpirun_args.split_whitespace().map(String::from).collect();
+    let list = ranks.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(",");
+    let args = tresca_feti::bench::Args {
+        exe,
+        scene,
+        sets,
+        sizes,
+        subdomains,
+        projectors,
+        ranks,
+        weak,
+        mpirun,
+        mpirun_args,
+        repeat,
+        eps,
+        bandwidth,
+        csv: Some(csv.clone()),
+    };
+    let mode = if weak { "weak scaling (N·P^{1/3}, S·P), " } else { "" };
+    let best = if repeat > 1 { format!(", best of {repeat} runs") } else { String::new() };
+    println!("TFETI benchmark: {mode}ranks {list} ({}){best}, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.mpirun);
     println!("{}", tresca_feti::bench::table_header());
     tresca_feti::bench::run(&args, |r| println!("{}", r.table()))?;
     println!("wrote {}", csv.display());
@@ -171,9 +231,9 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, eps, bandwidth, csv } = cli.cmd {
+    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } = cli.cmd {
         // a driver of mpirun runs, not an MPI program itself
-        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, eps, bandwidth, csv) {
+        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
