@@ -273,8 +273,9 @@ fn write_dataset<T: H5Type>(group: &Group, name: &str, shape: &[usize], rows: Op
         None => &v[lo * ncomp..hi * ncomp],
     };
     // SAFETY: plain HDF5 C calls on ids this function owns (closed below) or that `ds` keeps
-    // alive; the buffer holds `vals.len()` elements of `T`, matching the memory space.
-    let status = unsafe {
+    // alive; the buffer holds `vals.len()` elements of `T`, matching the memory space. They run
+    // under hdf5-metno's global lock, like its own calls (HDF5 is not thread-safe).
+    let status = ::hdf5::sync::sync(|| unsafe {
         let fspace = H5Dget_space(ds.id());
         match rows {
             Some(r) if !r.is_empty() => {
@@ -317,7 +318,7 @@ fn write_dataset<T: H5Type>(group: &Group, name: &str, shape: &[usize], rows: Op
         H5Sclose(mspace);
         H5Sclose(fspace);
         st
-    };
+    });
     if status < 0 {
         return Err(Error::output(String::new(), format!("writing {}: H5Dwrite failed", what())));
     }
