@@ -112,20 +112,18 @@ pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, re
 
 /// Rank 0's part of [`write_all`]: the sidecars and the renames.
 fn finish(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>, targets: &[PathBuf], temps: &[PathBuf]) -> Result<()> {
-    {
-        let mut i = 1;
-        if xdmf {
-            let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            xdmf::write(&temps[i], &name, data)?;
-            i += 1;
-        }
-        if let Some(r) = report {
-            let text = serde_json::to_string_pretty(r).map_err(|e| Error::output(targets[i].display().to_string(), e.to_string()))?;
-            std::fs::write(&temps[i], text + "\n").map_err(|e| Error::io(temps[i].display().to_string(), e))?;
-        }
-        for (t, p) in temps.iter().zip(targets) {
-            std::fs::rename(t, p).map_err(|e| Error::io(p.display().to_string(), e))?;
-        }
-        Ok(())
+    let mut i = 1;
+    if xdmf {
+        let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        xdmf::write(&temps[i], &name, data)?;
+        i += 1;
     }
+    if let Some(r) = report {
+        let text = serde_json::to_string_pretty(r).map_err(|e| Error::output(targets[i].display().to_string(), e.to_string()))?;
+        std::fs::write(&temps[i], text + "\n").map_err(|e| Error::io(temps[i].display().to_string(), e))?;
+    }
+    for (t, p) in temps.iter().zip(targets) {
+        std::fs::rename(t, p).map_err(|e| Error::io(p.display().to_string(), e))?;
+    }
+    Ok(())
 }

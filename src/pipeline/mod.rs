@@ -1,7 +1,8 @@
 //! One pipeline of named, timed phases (scene → mesh → assemble → factorize → solve → stress →
 //! gather → output), generic over the communicator. Bodies are distributed over the ranks
 //! (body b on rank b mod P); each rank assembles and factorizes only its own bodies, rank 0
-//! gathers the fields and writes the files. Every phase ends with [`Comm::agree`], so an error on
+//! gathers the fields for the report, and all ranks write the HDF5 file together, each its own
+//! rows (`output::hdf5::write_collective`). Every phase ends with [`Comm::agree`], so an error on
 //! any rank stops all ranks with the same message.
 //!
 //! Two paths share the phases: the monolithic dual (one piece per body, Dirichlet eliminated,

@@ -1,7 +1,8 @@
 //! The TFETI path of the pipeline: phases `decompose` (METIS, constraint rows), `factorize`
 //! (assemble K_s and factorize K_s with its fixing DOFs, this rank's subdomains only), `coarse`
 //! (G, e, C), `dual` (b̃), `iterate`, `recover` (λ, α, u), `stress` and `gather`. Subdomains go
-//! to ranks by size (largest first to the least loaded rank); the dual vectors are replicated.
+//! to ranks by size (largest first to the least loaded rank); the dual vectors are distributed
+//! (`feti::distribution`), each rank holding the multipliers its subdomains own.
 
 use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
