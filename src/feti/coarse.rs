@@ -130,13 +130,8 @@ impl Coarse {
         (0..dist.local_len()).map(|l| (l, l))
     }
 
-    /// x ← C⁻¹ x.
-    pub fn c_solve(&self, x: &mut [f64]) {
-        self.chol.solve_in_place(x);
-    }
-
     /// x ← C⁻¹ x, timed on `dist`'s clock.
-    fn c_solve_timed<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
+    fn c_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
         Clock::time(&dist.clock.coarse_solve, || self.chol.solve_in_place(x));
     }
 
@@ -144,14 +139,14 @@ impl Coarse {
     pub fn project<C: Comm>(&self, dist: &Distribution<'_, C>, z: &mut [f64]) {
         let zl = dist.ghosted(z);
         let mut a = self.g_mul(dist, &zl, true);
-        self.c_solve_timed(dist, &mut a);
+        self.c_solve(dist, &mut a);
         self.sub_gt(dist, &a, z, Self::owned_rows(dist), false);
     }
 
     /// yl ← P̃ᵀ yl = yl − [G_E 0]ᵀ C⁻¹ G yl on the local rows (yl ghosted).
     pub fn project_t_local<C: Comm>(&self, dist: &Distribution<'_, C>, yl: &mut [f64]) {
         let mut a = self.g_mul(dist, yl, false);
-        self.c_solve_timed(dist, &mut a);
+        self.c_solve(dist, &mut a);
         self.sub_gt(dist, &a, yl, Self::local_rows(dist), true);
     }
 
@@ -168,7 +163,7 @@ impl Coarse {
     /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows.
     pub fn lambda_hat_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {
         let mut a = self.e.clone();
-        self.c_solve(&mut a);
+        self.c_solve(dist, &mut a);
         let mut l = vec![0.0; dist.local_len()];
         self.sub_gt(dist, &a, &mut l, Self::local_rows(dist), true);
         l.iter_mut().for_each(|v| *v = -*v);
@@ -179,7 +174,7 @@ impl Coarse {
     pub fn alpha<C: Comm>(&self, dist: &Distribution<'_, C>, w: &[f64]) -> Vec<f64> {
         let wl = dist.ghosted(w);
         let mut a = self.g_mul(dist, &wl, true);
-        self.c_solve(&mut a);
+        self.c_solve(dist, &mut a);
         a
     }
 

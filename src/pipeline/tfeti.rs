@@ -4,7 +4,7 @@
 //! to ranks by size (largest first to the least loaded rank); the dual vectors are distributed
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own.
 
-use super::{BodyStats, ContactOutcome, Solution, Timings};
+use super::{BodyStats, ContactOutcome, LocalFields, Solution, Timings};
 use crate::comm::Comm;
 use crate::decomposition::{decompose_each, Decomposition};
 use crate::dual::DualOperator;
@@ -195,8 +195,9 @@ fn finish<C: Comm>(
     t: &mut Timings,
 ) -> Result<Solution> {
     let mesh = &model.mesh;
-    let packed = t.phase(comm, "stress", || {
+    let (packed, local) = t.phase(comm, "stress", || {
         let mut buf = Vec::new();
+        let mut local = LocalFields::default();
         for ((ls, us), f) in dual.subs.iter().zip(u).zip(rhs) {
             let s = ls.sys.index;
             let sd = &d.subdomains[s];
@@ -211,16 +212,24 @@ fn finish<C: Comm>(
                 ));
             }
             buf.extend(us);
+            // this rank's rows for the file: a node from the subdomain of its first copy
+            for (l, &v) in sd.nodes.iter().enumerate().filter(|(_, &v)| d.copies[v][0].0 == s) {
+                local.nodes.push(v);
+                local.displacement.push([us[3 * l], us[3 * l + 1], us[3 * l + 2]]);
+            }
             for &e in &sd.elems {
                 let ue = mesh.hexes[e].map(|v| {
                     let l = sd.local(v).expect("element node in subdomain");
                     [us[3 * l], us[3 * l + 1], us[3 * l + 2]]
                 });
-                buf.push(von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[sd.body])));
+                let vm = von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[sd.body]));
+                buf.push(vm);
+                local.cells.push(e);
+                local.von_mises.push(vm);
             }
             buf.extend([ls.sys.k.nnz() as f64, ls.sys.nnz_l() as f64, residual]);
         }
-        Ok(buf)
+        Ok((buf, local))
     })?;
     let mut sol = t.phase(comm, "gather", || {
         let Some(all) = comm.gather_f64(0, &packed) else {
@@ -292,26 +301,7 @@ fn finish<C: Comm>(
         sol.tfeti = Some(TfetiInfo { subdomains: stats, gluing_jump: jump / umax, ..Default::default() });
         Ok(sol)
     })?;
-    // this rank's rows for the file: a node from the subdomain of its first copy
-    for (ls, us) in dual.subs.iter().zip(u) {
-        let s = ls.sys.index;
-        let sd = &d.subdomains[s];
-        for (l, &v) in sd.nodes.iter().enumerate() {
-            if d.copies[v][0].0 == s {
-                sol.local.nodes.push(v);
-                sol.local.displacement.push([us[3 * l], us[3 * l + 1], us[3 * l + 2]]);
-            }
-        }
-    }
-    let mut cells: Vec<(usize, f64)> = Vec::new();
-    let mut p = 0;
-    for ls in &dual.subs {
-        let sd = &d.subdomains[ls.sys.index];
-        p += 3 * sd.nodes.len();
-        cells.extend(sd.elems.iter().zip(&packed[p..p + sd.elems.len()]).map(|(&e, &v)| (e, v)));
-        p += sd.elems.len() + 3;
-    }
-    (sol.local.cells, sol.local.von_mises) = cells.into_iter().unzip();
+    sol.local = local;
     sol.element_rank = d.elem_subdomain(mesh.hexes.len()).into_iter().map(|s| owner[s]).collect();
     Ok(sol)
 }
