@@ -21,6 +21,7 @@ pub mod pipeline;
 pub mod qp;
 pub mod recovery;
 pub mod scene;
+pub mod socp;
 pub mod table1;
 
 pub use error::{Error, Result};
