@@ -23,6 +23,7 @@ pub mod recovery;
 pub mod scene;
 pub mod socp;
 pub mod table1;
+pub mod workprecision;
 
 pub use error::{Error, Result};
 

@@ -96,6 +96,42 @@ enum Cmd {
         #[arg(long, default_value = "out/bench_tfeti.csv")]
         csv: PathBuf,
     },
+    /// Run time against error: every solver (and Clarabel on the primal SOCP) at every ε of a
+    /// sweep, on the seed scene for each N: time, A-products, the error in u and λ against a
+    /// tight reference, KKT residuals; a summary of the time to each target error; CSV. One rank,
+    /// one thread (run it without mpirun); plots: `run/work-precision-plot CSV DIR`.
+    WorkPrecision {
+        #[arg(long, default_value = "run/seed.toml")]
+        scene: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(long, value_delimiter = ',', default_value = "8,16,24")]
+        sizes: Vec<usize>,
+        /// Tolerances ε (the dual solvers' ‖r̃_ρ‖ ≤ ε‖b‖; Clarabel's gap and feasibility tolerances).
+        #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10")]
+        eps: Vec<f64>,
+        /// Clarabel's tolerances (its time hardly depends on ε; each solve is long).
+        #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
+        clarabel_eps: Vec<f64>,
+        /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), clarabel.
+        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::workprecision::Solver::parse,
+              default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,clarabel")]
+        solvers: Vec<tresca_feti::workprecision::Solver>,
+        /// ε of the reference solve (SSN-BiCGSTAB).
+        #[arg(long, default_value_t = 1e-12)]
+        reference_eps: f64,
+        /// Errors in u the summary gives the time to.
+        #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8")]
+        targets: Vec<f64>,
+        /// A solve slower than this (seconds) ends its solver's sweep at that N.
+        #[arg(long, default_value_t = 120.0)]
+        max_seconds: f64,
+        /// A-products a dual solve may use.
+        #[arg(long, default_value_t = 50_000)]
+        max_products: usize,
+        #[arg(long, default_value = "out/work_precision.csv")]
+        csv: PathBuf,
+    },
     /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
     Check {
         scene: PathBuf,
@@ -129,6 +165,55 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     if let (true, Some(path)) = (comm.is_root(), &args.csv) {
         table1::write_csv(path, args, &rows)?;
         println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::workprecision::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::workprecision as wp;
+    use tresca_feti::Error;
+    let positive = |key: &str, v: f64| if v > 0.0 && v.is_finite() { Ok(()) } else { Err(Error::scene(key, format!("must be finite and > 0, got {v}"))) };
+    for &e in &args.eps {
+        positive("--eps", e)?;
+    }
+    for &e in &args.clarabel_eps {
+        positive("--clarabel-eps", e)?;
+    }
+    for &t in &args.targets {
+        positive("--targets", t)?;
+    }
+    positive("--reference-eps", args.reference_eps)?;
+    positive("--max-seconds", args.max_seconds)?;
+    if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
+        return Err(Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
+    }
+    if let Some(d) = args.csv.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| Error::io(d.display().to_string(), e))?;
+    }
+    // one thread: the dual solvers and Clarabel on equal terms
+    faer::set_global_parallelism(faer::Par::Seq);
+    let root = comm.is_root();
+    let (problems, points) = wp::run(
+        comm,
+        args,
+        |p| {
+            if root {
+                println!("N = {}: n = {}, m = {}, assembly + factorization {:.2} s, reference {}/{} nA", p.n, p.dofs, p.pairs, p.factorize_s, p.reference.iterations, p.reference.n_a);
+            }
+        },
+        |pt| {
+            if root {
+                println!("{}", wp::format_point(pt));
+            }
+        },
+    )?;
+    if root {
+        println!("\nTime to an error in u (max-norm, relative to the reference), fastest ε of the sweep; one rank, one thread:");
+        print!("{}", wp::summary(&problems, &points, &args.solvers, &args.targets));
+        if let Some(path) = &args.csv {
+            wp::write_csv(path, &problems, &points)?;
+            println!("wrote {}", path.display());
+        }
     }
     Ok(())
 }
@@ -259,6 +344,10 @@ fn main() -> ExitCode {
         Cmd::Table1 { scene, set, sizes, eps, solvers, csv, no_error } => {
             let args = tresca_feti::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
             table1(&comm, &args)
+        }
+        Cmd::WorkPrecision { scene, set, sizes, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
+            let args = tresca_feti::workprecision::Args { scene, sets: set, sizes, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
+            work_precision(&comm, &args)
         }
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
         Cmd::Check { scene, set } => {

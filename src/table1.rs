@@ -120,7 +120,7 @@ pub struct Row {
 }
 
 /// max|u − u_ref| / max|u_ref| over all bodies and ranks.
-fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
+pub fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
     let mut v = [0.0f64, 0.0];
     for (a, b) in u.iter().zip(reference) {
         for (x, y) in a.iter().zip(b) {

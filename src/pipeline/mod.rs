@@ -352,6 +352,7 @@ pub fn solver_params(s: &SolverSettings) -> qp::Params {
         inner_floor: s.inner_floor,
         max_outer: s.max_outer,
         max_inner: s.max_inner,
+        max_products: usize::MAX,
         power_iterations: s.power_iterations,
         sigma: None,
         gamma: s.gamma,

@@ -66,7 +66,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
                 return Ok(QpSolution { lambda: z, gradient: rz, info });
             }
         }
-        if k == p.max_outer {
+        if k == p.max_outer || products() >= p.max_products {
             info.iterations = k;
             info.err = err;
             info.n_a = products();

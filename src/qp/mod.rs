@@ -90,6 +90,8 @@ pub struct Params {
     pub max_outer: usize,
     /// Inner iterations per outer step at most.
     pub max_inner: usize,
+    /// A-products (power iterations excluded) at most: a budget checked between outer steps.
+    pub max_products: usize,
     pub power_iterations: usize,
     /// σ_max(A) when already known (no power iterations then): a caller solving a sequence of
     /// QPs with the same A (SMALSE-M's outer loop) measures it once.
@@ -111,6 +113,7 @@ impl Default for Params {
             inner_floor: 0.1,
             max_outer: 1000,
             max_inner: 10_000,
+            max_products: usize::MAX,
             power_iterations: 30,
             sigma: None,
             gamma: 1.0,
@@ -158,7 +161,7 @@ pub struct Info {
 /// Why a solve failed.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum QpError {
-    #[error("no convergence in {} outer iterations (‖r̃‖/‖b‖ = {:.3e}, ε = {eps:.1e})", info.iterations, info.err)]
+    #[error("no convergence in {} outer iterations, {} A-products (‖r̃‖/‖b‖ = {:.3e}, ε = {eps:.1e})", info.iterations, info.n_a, info.err)]
     NoConvergence { info: Box<Info>, eps: f64 },
     #[error("breakdown: dᵀAd = {p_ap:.3e} ≤ 0 at outer iteration {outer} (A not positive definite on the free set)")]
     Breakdown { outer: usize, p_ap: f64 },

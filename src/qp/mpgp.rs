@@ -142,7 +142,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             split(a, set, &lambda, &g, alpha_bar, &mut sp);
             dir.copy_from_slice(&sp.phi);
         }
-        if k == p.max_outer {
+        if k == p.max_outer || st.products(a) >= p.max_products {
             info.iterations = k;
             info.err = err;
             info.n_a = st.products(a);

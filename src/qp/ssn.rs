@@ -54,7 +54,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             std::mem::swap(&mut r, &mut rz);
             err = ez;
         }
-        if k == p.max_outer {
+        if k == p.max_outer || st.products(a) >= p.max_products {
             info.iterations = k;
             info.err = err;
             info.n_a = st.products(a);

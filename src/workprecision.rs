@@ -1,0 +1,301 @@
+//! `tresca-feti work-precision`: run time against error. For each mesh size N of a scene (the
+//! seed scene by default) and each solver — the dual solvers of [`crate::qp`] with the scene's
+//! settings, and Clarabel on the primal SOCP ([`crate::socp`]) — sweep the tolerance ε and
+//! record the wall time of the solve, the A-products, the error in u (max-norm, relative) and in
+//! λ (2-norm, relative) against a tight reference (SSN-BiCGSTAB at `reference_eps`), and the KKT
+//! residual measured the same way for every solver. A solver is one more [`Solver`] value.
+//!
+//! Time is that of the solve on one rank (σ_max's power iterations included); the set-up every
+//! dual solver shares (assembly, factorization) and Clarabel's (building the SOCP) are recorded
+//! beside it. A solver's sweep stops (the tighter ε are recorded as skipped) once a solve fails
+//! or takes longer than `max_seconds`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::comm::Comm;
+use crate::dual::monolithic::MonolithicDual;
+use crate::dual::DualOperator;
+use crate::error::{Error, Result};
+use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
+use crate::qp::lambda::Lambda;
+use crate::qp::{self, kkt, Method, Params};
+use crate::socp::PrimalSocp;
+use crate::table1::{u_error, Column};
+
+/// One row of the study: a dual solver (with its parameter preset) or Clarabel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Solver {
+    Dual(Column),
+    Clarabel,
+}
+
+impl Solver {
+    /// `clarabel`, or a dual solver's name with an optional `:paper` preset.
+    pub fn parse(s: &str) -> std::result::Result<Solver, String> {
+        if s == "clarabel" {
+            return Ok(Solver::Clarabel);
+        }
+        Column::parse(s).map(Solver::Dual).map_err(|e| format!("{e}, or clarabel"))
+    }
+
+    pub fn label(&self) -> String {
+        match self {
+            Solver::Dual(c) => c.label(),
+            Solver::Clarabel => "clarabel".into(),
+        }
+    }
+}
+
+/// What `work-precision` is asked to do.
+#[derive(Clone, Debug)]
+pub struct Args {
+    pub scene: PathBuf,
+    pub sets: Vec<String>,
+    pub sizes: Vec<usize>,
+    /// Tolerances, swept from the loosest to the tightest.
+    pub eps: Vec<f64>,
+    /// Clarabel's (its time hardly depends on ε: a few points suffice).
+    pub clarabel_eps: Vec<f64>,
+    pub solvers: Vec<Solver>,
+    pub csv: Option<PathBuf>,
+    /// ε of the reference solve.
+    pub reference_eps: f64,
+    /// A-products a dual solve may use.
+    pub max_products: usize,
+    /// A solve slower than this ends its solver's sweep at that N.
+    pub max_seconds: f64,
+    /// Accuracies in u the summary reports the time to.
+    pub targets: Vec<f64>,
+}
+
+/// How one point of the sweep ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Status {
+    Ok,
+    Failed(String),
+    /// Not run: a looser ε of the same solver failed or took longer than `max_seconds`.
+    Skipped,
+}
+
+/// One solve: a solver at one ε on the problem of size N.
+#[derive(Clone, Debug)]
+pub struct Point {
+    pub n: usize,
+    pub solver: Solver,
+    pub eps: f64,
+    pub status: Status,
+    pub iterations: usize,
+    pub n_a: usize,
+    pub n_a_power: usize,
+    pub inner: usize,
+    pub setup_s: f64,
+    pub solve_s: f64,
+    pub err_u: f64,
+    pub err_lambda: f64,
+    pub kkt: f64,
+    /// The solver's own final measure (dual: ‖r̃_ρ‖/‖b‖; Clarabel: NaN).
+    pub residual: f64,
+}
+
+/// The problem at one N.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    pub n: usize,
+    pub dofs: usize,
+    pub pairs: usize,
+    /// Assembly and factorization (shared by the dual solvers).
+    pub factorize_s: f64,
+    pub reference: qp::Info,
+    /// The scene's solver: the default the summary compares with.
+    pub default: Method,
+}
+
+/// ‖λ − λ_ref‖ / ‖λ_ref‖.
+fn lambda_error(lambda: &[f64], reference: &[f64]) -> f64 {
+    let d: f64 = lambda.iter().zip(reference).map(|(a, b)| (a - b) * (a - b)).sum();
+    let r: f64 = reference.iter().map(|v| v * v).sum();
+    (d / r.max(f64::MIN_POSITIVE)).sqrt()
+}
+
+/// Runs the study; `progress` sees each problem when it is set up and each point when it is done.
+pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem), mut on_point: impl FnMut(&Point)) -> Result<(Vec<Problem>, Vec<Point>)> {
+    if comm.size() != 1 {
+        return Err(Error::scene("work-precision", "runs on one rank (Clarabel needs every body on it): run it without mpirun"));
+    }
+    let sorted = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(|a, b| b.total_cmp(a));
+        v
+    };
+    let (eps_dual, eps_clarabel) = (sorted(&args.eps), sorted(&args.clarabel_eps));
+    let (mut problems, mut points) = (Vec::new(), Vec::new());
+    for &n in &args.sizes {
+        let mut sets = vec![format!("mesh.n={n}")];
+        sets.extend(args.sets.iter().cloned());
+        let ls = crate::scene::load(&args.scene, &sets)?;
+        let model = crate::model::build(&ls)?;
+        let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "work-precision needs a scene with contact"))?;
+        let mut t = Timings::default();
+        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
+        let factorize_s: f64 = t.phases.iter().map(|p| p.1).sum();
+        let (dual, b) = MonolithicDual::new(comm, contact, bodies);
+        let set = Lambda::new(contact);
+        let base = solver_params(&ls.scene.solver);
+        let zero = vec![0.0; dual.dim()];
+        let bnorm = dual.norm(&b);
+        let p = Params { method: Method::SsnBicgstab, eps: args.reference_eps, max_outer: 10_000, ..base.clone() };
+        let what = format!("the reference solve (SSN-BiCGSTAB, ε = {:.0e}) at N = {n}", args.reference_eps);
+        let reference = qp::solve(&dual, &b, &set, &zero, &p).map_err(|e| Error::numerical(&what, e.to_string()))?;
+        let u_ref = dual.recover(&reference.lambda).0;
+        let problem = Problem { n, dofs: 3 * model.mesh.nodes.len(), pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: ls.scene.solver.method };
+        on_problem(&problem);
+        let socp = if args.solvers.contains(&Solver::Clarabel) { Some(PrimalSocp::new(&dual, &b, &set)?) } else { None };
+        for &solver in &args.solvers {
+            let mut stop = false;
+            let eps = if solver == Solver::Clarabel { &eps_clarabel } else { &eps_dual };
+            for &e in eps {
+                let mut pt = Point {
+                    n,
+                    solver,
+                    eps: e,
+                    status: Status::Skipped,
+                    iterations: 0,
+                    n_a: 0,
+                    n_a_power: 0,
+                    inner: 0,
+                    setup_s: factorize_s,
+                    solve_s: f64::NAN,
+                    err_u: f64::NAN,
+                    err_lambda: f64::NAN,
+                    kkt: f64::NAN,
+                    residual: f64::NAN,
+                };
+                if !stop {
+                    let t0 = Instant::now();
+                    match solver {
+                        Solver::Dual(c) => {
+                            let p = Params { max_outer: usize::MAX, max_products: args.max_products, ..c.params(&base, e) };
+                            let r = qp::solve(&dual, &b, &set, &zero, &p);
+                            pt.solve_s = t0.elapsed().as_secs_f64();
+                            match r {
+                                Ok(sol) => {
+                                    pt.status = Status::Ok;
+                                    let i = &sol.info;
+                                    (pt.iterations, pt.n_a, pt.n_a_power, pt.inner, pt.residual) = (i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err);
+                                    pt.err_u = u_error(comm, &dual.recover(&sol.lambda).0, &u_ref);
+                                    pt.err_lambda = lambda_error(&sol.lambda, &reference.lambda);
+                                    pt.kkt = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
+                                }
+                                Err(err) => pt.status = Status::Failed(err.to_string()),
+                            }
+                        }
+                        Solver::Clarabel => {
+                            let socp = socp.as_ref().expect("built above");
+                            pt.setup_s = socp.build_s;
+                            match socp.solve(e) {
+                                Ok(sol) => {
+                                    pt.solve_s = sol.solve_s;
+                                    pt.status = Status::Ok;
+                                    pt.iterations = sol.iterations as usize;
+                                    pt.err_u = u_error(comm, &sol.u, &u_ref);
+                                    pt.err_lambda = lambda_error(&sol.lambda, &reference.lambda);
+                                    pt.kkt = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
+                                }
+                                Err(err) => {
+                                    pt.solve_s = t0.elapsed().as_secs_f64();
+                                    pt.status = Status::Failed(err.to_string());
+                                }
+                            }
+                        }
+                    }
+                    stop = pt.status != Status::Ok || pt.solve_s > args.max_seconds;
+                }
+                on_point(&pt);
+                points.push(pt);
+            }
+        }
+        problems.push(problem);
+    }
+    Ok((problems, points))
+}
+
+/// The fastest solve of `solver` at size `n` whose error in u is at most `target`.
+pub fn time_to<'a>(points: &'a [Point], n: usize, solver: Solver, target: f64) -> Option<&'a Point> {
+    points
+        .iter()
+        .filter(|p| p.n == n && p.solver == solver && p.status == Status::Ok && p.err_u <= target)
+        .min_by(|a, b| a.solve_s.total_cmp(&b.solve_s))
+}
+
+/// One printed line per point.
+pub fn format_point(p: &Point) -> String {
+    let head = format!("N = {:>2}  {:<18} ε = {:.0e}", p.n, p.solver.label(), p.eps);
+    match &p.status {
+        Status::Ok => format!(
+            "{head}: {:>5} it {:>6} nA {:>9.3} s  err(u) {:.1e}  err(λ) {:.1e}  KKT {:.1e}",
+            p.iterations, p.n_a, p.solve_s, p.err_u, p.err_lambda, p.kkt
+        ),
+        Status::Failed(e) => format!("{head}: failed after {:.1} s: {e}", p.solve_s),
+        Status::Skipped => format!("{head}: skipped (a looser ε failed or took longer than the limit)"),
+    }
+}
+
+/// The summary: per N and solver, the time (and ε, nA) to reach each target error in u, and the
+/// ratio to the default solver's time.
+pub fn summary(problems: &[Problem], points: &[Point], solvers: &[Solver], targets: &[f64]) -> String {
+    let mut s = String::new();
+    for pr in problems {
+        let default = Solver::Dual(Column { method: pr.default, preset: crate::table1::Preset::Default });
+        s += &format!(
+            "N = {} (n = {}, m = {}; assembly + factorization {:.2} s; reference {}/{} nA, ‖r̃‖/‖b‖ = {:.1e})\n",
+            pr.n, pr.dofs, pr.pairs, pr.factorize_s, pr.reference.iterations, pr.reference.n_a, pr.reference.err
+        );
+        s += &format!("  {:<18}", "solver");
+        for t in targets {
+            s += &format!(" | {:<36}", format!("err(u) ≤ {t:.0e}: time (ε, nA) ×default"));
+        }
+        s += "\n";
+        for &solver in solvers {
+            s += &format!("  {:<18}", solver.label() + if solver == default { " (default)" } else { "" });
+            for &t in targets {
+                let cell = match (time_to(points, pr.n, solver, t), time_to(points, pr.n, default, t)) {
+                    (Some(p), d) => {
+                        let ratio = d.map(|d| format!(" {:.1}×", p.solve_s / d.solve_s)).unwrap_or_default();
+                        let na = if matches!(solver, Solver::Clarabel) { format!("{} it", p.iterations) } else { format!("{} nA", p.n_a) };
+                        format!("{:.3} s ({:.0e}, {na}){ratio}", p.solve_s, p.eps)
+                    }
+                    (None, _) => "not reached".into(),
+                };
+                s += &format!(" | {cell:<36}");
+            }
+            s += "\n";
+        }
+    }
+    s
+}
+
+/// Writes the CSV (one line per point).
+pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<()> {
+    let mut f = Vec::new();
+    let io = |e| Error::io(path.display().to_string(), e);
+    writeln!(f, "N,n,m,solver,default,eps,status,iter,nA,nA_power,inner,setup_s,solve_s,err_u,err_lambda,kkt,residual").map_err(io)?;
+    for p in points {
+        let pr = problems.iter().find(|pr| pr.n == p.n).expect("a point's problem");
+        let is_default = matches!(p.solver, Solver::Dual(c) if c.method == pr.default && c.preset == crate::table1::Preset::Default);
+        let status = match &p.status {
+            Status::Ok => "ok".to_string(),
+            Status::Skipped => "skipped".to_string(),
+            // one field without quotes: the plot script splits at commas
+            Status::Failed(e) => format!("failed: {}", e.replace(['"', ','], ";")),
+        };
+        writeln!(
+            f,
+            "{},{},{},{},{},{:e},{status},{},{},{},{},{:.4},{:.5},{:e},{:e},{:e},{:e}",
+            p.n, pr.dofs, pr.pairs, p.solver.label(), is_default as u8, p.eps, p.iterations, p.n_a, p.n_a_power, p.inner, p.setup_s, p.solve_s, p.err_u, p.err_lambda, p.kkt, p.residual
+        )
+        .map_err(io)?;
+    }
+    crate::output::write_atomically(path, &f)
+}
