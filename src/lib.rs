@@ -22,6 +22,7 @@ pub mod qp;
 pub mod recovery;
 pub mod scene;
 pub mod socp;
+pub mod stress;
 pub mod table1;
 pub mod workprecision;
 

@@ -132,6 +132,22 @@ enum Cmd {
         #[arg(long, default_value = "out/work_precision.csv")]
         csv: PathBuf,
     },
+    /// The numerical-stability suite: solve every scene of a folder (run/stress/*.toml) and
+    /// print a table (iterations, nA, time, residuals, KKT, status). Exit code 1 if a run
+    /// returns a result that fails its checks (non-finite, above ε, KKT above KKT_FACTOR·ε);
+    /// a run that stops with a stated reason is listed as stopped.
+    Stress {
+        #[arg(long, default_value = "run/stress")]
+        dir: PathBuf,
+        /// Override a value in every scene, e.g. `--set solver.method="gimssn"`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Folder for the results (<scene>.h5/.xdmf/.json) and stress.csv.
+        #[arg(long, default_value = "out/stress")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 100.0)]
+        kkt_factor: f64,
+    },
     /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
     Check {
         scene: PathBuf,
@@ -165,6 +181,34 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     if let (true, Some(path)) = (comm.is_root(), &args.csv) {
         table1::write_csv(path, args, &rows)?;
         println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn stress<C: Comm>(comm: &C, args: &tresca_feti::stress::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::stress::{self, Outcome};
+    if !(args.kkt_factor > 0.0 && args.kkt_factor.is_finite()) {
+        return Err(tresca_feti::Error::scene("--kkt-factor", format!("must be finite and > 0, got {}", args.kkt_factor)));
+    }
+    let root = comm.is_root();
+    if root {
+        println!("stress suite: {} ({} rank(s)); converged = ε met and KKT ≤ {}·ε", args.dir.display(), comm.size(), args.kkt_factor);
+        println!("{}", stress::header());
+    }
+    let rows = stress::run(comm, args, |r| {
+        if root {
+            println!("{}", stress::format_row(r));
+        }
+    })?;
+    let count = |f: fn(&Outcome) -> bool| rows.iter().filter(|r| f(&r.outcome)).count();
+    let (ok, stopped, wrong) = (count(|o| *o == Outcome::Converged), count(|o| matches!(o, Outcome::Stopped(_))), count(|o| matches!(o, Outcome::Wrong(_))));
+    if root {
+        let csv = args.out.join("stress.csv");
+        stress::write_csv(&csv, &rows)?;
+        println!("{} scenes: {ok} converged, {stopped} stopped with a reason, {wrong} wrong; wrote {}", rows.len(), csv.display());
+    }
+    if wrong > 0 {
+        return Err(tresca_feti::Error::numerical("the stress suite", format!("{wrong} scene(s) returned a result that fails its checks (see the table)")));
     }
     Ok(())
 }
@@ -349,6 +393,7 @@ fn main() -> ExitCode {
             let args = tresca_feti::workprecision::Args { scene, sets: set, sizes, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
             work_precision(&comm, &args)
         }
+        Cmd::Stress { dir, set, out, kkt_factor } => stress(&comm, &tresca_feti::stress::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
         Cmd::Check { scene, set } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
