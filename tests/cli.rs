@@ -2,40 +2,16 @@
 //! the key or file, exit code ≠ 0, no panic, no result file), and runs under `mpirun` with 1, 2
 //! and 3 ranks giving identical fields.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
-use tresca_feti::output::{self, OutputData, Values};
-
-const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tresca-feti-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{fields, mpirun, mpirun_cmd, root, tmpdir, BIN};
+use tresca_feti::output::{OutputData, Values};
 
 fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
-}
-
-fn mpirun_cmd(n: usize, args: &[&str]) -> Command {
-    let mut c = Command::new("mpirun");
-    c.args(["-n", &n.to_string(), "--oversubscribe", BIN])
-        .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_btl_base_warn_component_unused", "0");
-    c
-}
-
-fn mpirun(n: usize, args: &[&str]) -> Output {
-    mpirun_cmd(n, args).output().expect("mpirun must be installed (openmpi-bin, see run/packages.txt)")
 }
 
 const SEED: &str = include_str!("../run/seed.toml");
@@ -378,10 +354,6 @@ fn check_prints_resolved_scene_and_sizes() {
     assert!(s.contains("contact pair 0: slave upper.zmin (36 nodes) against master lower.zmax (36 nodes)"), "{s}");
     assert!(s.contains("contact: m = 36 node-to-node pairs, Σw = 2.000000e0"), "{s}");
     assert!(s.contains("multipliers: 36 normal + 72 tangential"), "{s}");
-}
-
-fn fields(path: &Path) -> OutputData {
-    output::hdf5::read(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Runs `scene` (with `sets`) under mpirun with 1, 2 and 3 ranks; returns each run's stdout and
