@@ -376,6 +376,9 @@ pub struct Factorization {
     pub ordering: OrderingKind,
 }
 
+/// Most nodes of one body: its 3 DOFs per node must fit the 32-bit indices of METIS.
+pub const MAX_BODY_NODES: usize = i32::MAX as usize / 3;
+
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
 pub const FIELDS: [&str; 10] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
 
@@ -582,9 +585,21 @@ impl Scene {
                     if (0..3).any(|d| bx.max[d] <= bx.min[d]) {
                         return Err(Error::scene(k("box"), "max must exceed min in every direction"));
                     }
+                    if (0..3).any(|d| !(bx.max[d] - bx.min[d]).is_finite()) {
+                        return Err(Error::scene(k("box"), "max − min overflows: the box is too large for floating point"));
+                    }
                     if let Some(n) = bx.nodes {
                         if n.iter().any(|&v| v < 2) {
                             return Err(Error::scene(k("box.nodes"), format!("need at least 2 nodes per direction, got {n:?}")));
+                        }
+                        let total: f64 = n.iter().map(|&v| v as f64).product();
+                        if total > MAX_BODY_NODES as f64 {
+                            // the nodes come from mesh.n unless the box gives its own
+                            let key = if n == [self.mesh.n; 3] { "mesh.n".to_string() } else { k("box.nodes") };
+                            return Err(Error::scene(
+                                key,
+                                format!("body \"{}\" would have {total:.3e} nodes ({n:?}); at most {MAX_BODY_NODES} are supported", b.name),
+                            ));
                         }
                     }
                 }
@@ -636,7 +651,7 @@ impl Scene {
                         }
                     }
                     finite(k("friction.direction"), direction)?;
-                    if direction.iter().map(|v| v * v).sum::<f64>() == 0.0 {
+                    if direction.iter().all(|&v| v == 0.0) {
                         return Err(Error::scene(k("friction.direction"), "must be a non-zero vector"));
                     }
                 }

@@ -2,40 +2,16 @@
 //! the key or file, exit code ≠ 0, no panic, no result file), and runs under `mpirun` with 1, 2
 //! and 3 ranks giving identical fields.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
-use tresca_feti::output::{self, OutputData, Values};
-
-const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tresca-feti-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{fields, mpirun, mpirun_cmd, root, tmpdir, BIN};
+use tresca_feti::output::{OutputData, Values};
 
 fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
-}
-
-fn mpirun_cmd(n: usize, args: &[&str]) -> Command {
-    let mut c = Command::new("mpirun");
-    c.args(["-n", &n.to_string(), "--oversubscribe", BIN])
-        .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_btl_base_warn_component_unused", "0");
-    c
-}
-
-fn mpirun(n: usize, args: &[&str]) -> Output {
-    mpirun_cmd(n, args).output().expect("mpirun must be installed (openmpi-bin, see run/packages.txt)")
 }
 
 const SEED: &str = include_str!("../run/seed.toml");
@@ -115,6 +91,239 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["SSN-BICGSTAB", "no convergence"]);
 }
 
+const GMSH: &str = include_str!("../run/gmsh_blocks.toml");
+
+/// The Gmsh scene (`run/gmsh_blocks.toml`) reading both bodies from `mesh` instead.
+fn gmsh_scene(mesh: &Path) -> String {
+    assert!(GMSH.contains("\"../mesh/two_blocks.msh\""));
+    GMSH.replace("\"../mesh/two_blocks.msh\"", &format!("\"{}\"", mesh.display()))
+}
+
+/// `mesh/two_blocks.msh` with `from` replaced by `to` (exactly once).
+fn msh_with(from: &str, to: &str) -> String {
+    let full = std::fs::read_to_string(root().join("mesh/two_blocks.msh")).unwrap();
+    assert_eq!(full.matches(from).count(), 1, "two_blocks.msh: `{from}` is not unique");
+    full.replacen(from, to, 1)
+}
+
+/// A seed scene with `extra` appended (more `[[face]]`, `[[contact.pair]]` entries, …).
+fn seed_plus(extra: &str) -> String {
+    format!("{SEED}\n{extra}")
+}
+
+/// Bad-input cases collected first and then checked four at a time (each run is mostly the
+/// start-up of MPI, waiting rather than computing).
+#[derive(Default)]
+struct Failures(Vec<(String, String, Vec<String>, Vec<String>)>);
+
+impl Failures {
+    fn add(&mut self, name: &str, scene: &str, extra: &[&str], expect: &[&str]) {
+        assert!(self.0.iter().all(|c| c.0 != name), "case name {name} used twice");
+        let owned = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+        self.0.push((name.into(), scene.into(), owned(extra), owned(expect)));
+    }
+
+    fn check(self) {
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        std::thread::scope(|scope| {
+            for _ in 0..4 {
+                scope.spawn(|| {
+                    while let Some((name, scene, extra, expect)) = self.0.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed)) {
+                        let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+                        let expect: Vec<&str> = expect.iter().map(String::as_str).collect();
+                        assert_clean_failure(name, scene, &extra, &expect);
+                    }
+                });
+            }
+        });
+    }
+}
+
+/// Malformed scenes and meshes beyond `bad_input_gives_one_line_and_no_file`: duplicate names,
+/// contact faces that do not meet, NaN/inf anywhere, broken `.msh` files, sizes out of range.
+/// Each must fail with exit code 1, one line naming the key or file, and no output file.
+#[test]
+fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
+    let mut bad = Failures::default();
+    let off = ["--set", "mesh.n=3", "--set", "contact.enabled=false"];
+    let n4 = ["--set", "mesh.n=4"];
+    let face = |name: &str, body: &str, from: &str| {
+        format!("[[face]]\nname = \"{name}\"\nbody = \"{body}\"\nfrom = \"{from}\"\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 2.0]\n")
+    };
+
+    // duplicate names
+    let twice = face("patch", "upper", "zmax") + &face("patch", "upper", "zmax");
+    bad.add("dup-face", &seed_plus(&twice), &off, &["face[1].name", "upper.patch", "already exists"]);
+    bad.add("face-like-box-face", &seed_plus(&face("zmin", "upper", "zmax")), &off, &["face[0].name", "upper.zmin", "already exists"]);
+    bad.add("face-unknown-body", &seed_plus(&face("patch", "middle", "zmax")), &off, &["face[0].body", "middle"]);
+    bad.add("face-unknown-from", &seed_plus(&face("patch", "upper", "top")), &off, &["face[0].from", "upper.top"]);
+    let empty = face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [5.0, 0.0, 0.0]").replace("max = [1.0, 1.0, 2.0]", "max = [6.0, 1.0, 2.0]");
+    bad.add("face-empty-box", &seed_plus(&empty), &off, &["face[0].min", "upper.zmax"]);
+    let lower_body = "[[body]]\nname = \"lower\"\nmaterial = \"lower\"";
+    let dup_body = seed_with(lower_body, "[[body]]\nname = \"upper\"\nmaterial = \"lower\"");
+    bad.add("dup-body", &dup_body, &off, &["body[1].name", "duplicate body name \"upper\""]);
+    let dup_mat = seed_with("name = \"lower\"\nE = 50000.0", "name = \"upper\"\nE = 50000.0");
+    bad.add("dup-material", &dup_mat, &off, &["material[1].name", "duplicate material name \"upper\""]);
+
+    // contact faces that do not meet, or do not match node to node
+    let pair = |slave: &str, master: &str| seed_with("slave = \"upper.zmin\"\nmaster = \"lower.zmax\"", &format!("slave = \"{slave}\"\nmaster = \"{master}\""));
+    bad.add("pair-zmin-xmin", &pair("upper.zmin", "lower.xmin"), &n4, &["contact.pair[0]", "upper.zmin", "lower.xmin", "do not face each other"]);
+    bad.add("pair-zmax-zmax", &pair("upper.zmax", "lower.zmax"), &n4, &["contact.pair[0]", "upper.zmax", "lower.zmax", "do not face each other"]);
+    bad.add("pair-zmin-zmin", &pair("upper.zmin", "lower.zmin"), &n4, &["contact.pair[0]", "do not face each other"]);
+    // opposite normals but the master lies behind the slave
+    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "overlap"]);
+    bad.add("pair-same-body", &pair("upper.zmin", "upper.zmax"), &n4, &["contact.pair[0]", "same body"]);
+    bad.add("pair-unknown-body", &pair("upper.zmin", "ground.zmax"), &n4, &["contact.pair[0].master", "ground.zmax"]);
+    let lower_box = "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }";
+    let upper_box = "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0] }";
+    let more_nodes = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [5, 4, 4] }");
+    bad.add("pair-node-count", &more_nodes, &n4, &["contact.pair[0]", "16 nodes", "20", "node-to-node"]);
+    // the same node count (5 × 4) on both faces, but in other places
+    let crossed = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [4, 5, 4] }")
+        .replacen(upper_box, "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = [5, 4, 4] }", 1);
+    bad.add("pair-crossed-grids", &crossed, &n4, &["contact.pair[0]", "do not match node to node"]);
+    // shifted sideways by half an element (h = 2/3 at N = 4)
+    let shifted = seed_with(upper_box, "box = { min = [0.3333333333333333, 0.0, 1.0], max = [2.3333333333333333, 1.0, 2.0] }");
+    bad.add("pair-half-shift", &shifted, &n4, &["contact.pair[0]", "do not match node to node", "0.333333"]);
+    let overlap = seed_with(upper_box, "box = { min = [0.0, 0.0, 0.9], max = [2.0, 1.0, 2.0] }");
+    bad.add("overlap", &overlap, &n4, &["contact.pair[0]", "bodies overlap", "1.000e-1"]);
+    // the same interface twice, or once from each side: doubled constraints and friction
+    let entry = "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\nfriction = { type = \"tresca\", g = 0.09 }\n";
+    bad.add("pair-twice", &seed_plus(entry), &n4, &["contact.pair[1]", "already a pair of contact.pair[0]"]);
+    let swapped = entry.replace("upper.zmin", "X").replace("lower.zmax", "upper.zmin").replace("X", "lower.zmax");
+    bad.add("pair-swapped", &seed_plus(&swapped), &n4, &["contact.pair[1]", "lower.zmax", "already a pair of contact.pair[0]"]);
+
+    // NaN and inf anywhere
+    for (name, set, key) in [
+        ("nan-E", "material.0.E=nan", "material[0].E"),
+        ("inf-E", "material.1.E=inf", "material[1].E"),
+        ("nan-nu", "material.0.nu=nan", "material[0].nu"),
+        ("nan-g", "contact.pair.0.friction.g=nan", "contact.pair[0].friction.g"),
+        ("inf-g", "contact.pair.0.friction.g=inf", "contact.pair[0].friction.g"),
+        ("inf-traction", "traction.1.p=[0.0, -inf, 0.0]", "traction[1].p"),
+        ("nan-dirichlet", "dirichlet.0.value=[0.0, nan, 0.0]", "dirichlet[0].value"),
+        ("inf-dirichlet", "dirichlet.1.value=[inf, 0.0, 0.0]", "dirichlet[1].value"),
+        ("nan-box-min", "body.1.box.min=[nan, 0.0, 0.0]", "body[1].box.min"),
+        ("inf-box-max", "body.1.box.max=[2.0, 1.0, -inf]", "body[1].box.max"),
+        ("nan-eps", "solver.eps=nan", "solver.eps"),
+        ("inf-eps", "solver.eps=inf", "solver.eps"),
+        ("nan-rho", "solver.rho_factor=nan", "solver.rho_factor"),
+        ("inf-rho", "solver.rho_factor=inf", "solver.rho_factor"),
+        ("nan-gamma", "solver.gamma=nan", "solver.gamma"),
+        ("nan-rtol", "solver.rtol=nan", "solver.rtol"),
+        ("nan-tolerance", "contact.pair.0.tolerance=nan", "contact.pair[0].tolerance"),
+        ("nan-penalty", "decomposition.penalty=nan", "decomposition.penalty"),
+        ("nan-g2", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=nan, direction=[1.0, 0.0, 0.0]}", "contact.pair[0].friction.g2"),
+        ("inf-direction", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[inf, 0.0, 0.0]}", "contact.pair[0].friction.direction"),
+    ] {
+        bad.add(name, SEED, &["--set", "mesh.n=3", "--set", set], &[key]);
+    }
+    let nan_face = face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [0.0, nan, 0.0]");
+    bad.add("nan-face-min", &seed_plus(&nan_face), &off, &["face[0].min", "finite"]);
+    // finite ends whose difference is not
+    bad.add("box-overflow", SEED, &["--set", "mesh.n=3", "--set", "body.1.box.min=[-1e308, 0.0, 0.0]", "--set", "body.1.box.max=[1e308, 1.0, 1.0]"], &["body[1].box", "overflows"]);
+    let dir = tmpdir("bad-meshes");
+    let inf_translate = gmsh_scene(&root().join("mesh/two_blocks.msh")).replacen("volume = \"upper\"", "volume = \"upper\", translate = [0.0, inf, 0.0]", 1);
+    bad.add("inf-translate", &inf_translate, &[], &["body[0].gmsh.translate", "finite"]);
+
+    // sizes and solver settings out of range
+    bad.add("N-zero", SEED, &["--set", "mesh.n=0"], &["mesh.n", "at least 2"]);
+    bad.add("N-huge", SEED, &["--set", "mesh.n=100000"], &["mesh.n", "upper", "at most"]);
+    bad.add("box-nodes-huge", SEED, &["--set", "body.0.box.nodes=[3, 3, 1000000000]"], &["body[0].box.nodes", "at most"]);
+    bad.add("box-nodes-one", SEED, &["--set", "body.0.box.nodes=[1, 3, 3]"], &["body[0].box.nodes", "at least 2"]);
+    bad.add("box-nodes-negative", SEED, &["--set", "body.0.box.nodes=[3, -3, 3]"], &["body[0].box.nodes[1]", "-3"]);
+    bad.add("subdomains-negative", SEED, &["--set", "decomposition.subdomains=-2"], &["decomposition.subdomains", "-2"]);
+    bad.add("target-dofs-zero", SEED, &["--set", "decomposition.target_dofs=0"], &["decomposition.target_dofs", "at least 24"]);
+    bad.add("subdomains-exceed-n6", SEED, &["--set", "mesh.n=6", "--set", "decomposition.subdomains=126"], &["decomposition.subdomains", "126", "125 elements"]);
+    // as many subdomains as elements: METIS leaves a part empty
+    bad.add("subdomains-empty-part", SEED, &["--set", "mesh.n=6", "--set", "decomposition.subdomains=125"], &["upper", "empty", "fewer subdomains"]);
+    for (name, set, key) in [
+        ("eps-negative", "solver.eps=-1e-6", "solver.eps"),
+        ("eps-zero", "solver.eps=0.0", "solver.eps"),
+        ("rho-zero", "solver.rho_factor=0.0", "solver.rho_factor"),
+        ("max-outer-zero", "solver.max_outer=0", "solver.max_outer"),
+        ("max-inner-zero", "solver.max_inner=0", "solver.max_inner"),
+        ("power-zero", "solver.power_iterations=0", "solver.power_iterations"),
+        ("g-negative", "contact.pair.0.friction.g=-0.09", "contact.pair[0].friction.g"),
+        ("g1-negative", "contact.pair.0.friction={type=\"orthotropic\", g1=-0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}", "contact.pair[0].friction.g1"),
+        ("direction-zero", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 0.0]}", "contact.pair[0].friction.direction"),
+        ("direction-normal", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}", "contact.pair[0].friction.direction"),
+        ("tolerance-negative", "contact.pair.0.tolerance=-1.0", "contact.pair[0].tolerance"),
+        ("dirichlet-missing-face", "dirichlet.0.face=\"upper.nope\"", "dirichlet[0].face"),
+        ("dirichlet-no-components", "dirichlet.0.components=[]", "dirichlet[0].components"),
+        ("traction-unknown-body", "traction.0.face=\"middle.zmax\"", "traction[0].face"),
+        ("traction-no-body", "traction.0.face=\"zmax\"", "traction[0].face"),
+        ("unknown-material", "body.0.material=\"steel\"", "body[0].material"),
+    ] {
+        bad.add(name, SEED, &["--set", "mesh.n=3", "--set", set], &[key]);
+    }
+    bad.add("direction-normal-named", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}"], &["normal to the contact face upper.zmin"]);
+
+    // .msh files
+    let full = std::fs::read_to_string(root().join("mesh/two_blocks.msh")).unwrap();
+    let lines: Vec<&str> = full.lines().collect();
+    let first = |n: usize| lines[..n].iter().map(|l| format!("{l}\n")).collect::<String>();
+    let without = |line: &str| {
+        assert_eq!(lines.iter().filter(|l| **l == line).count(), 1, "{line}");
+        lines.iter().filter(|l| **l != line).map(|l| format!("{l}\n")).collect::<String>()
+    };
+    let noise: String = (0..4000u32).map(|i| char::from(b' ' + ((i.wrapping_mul(2654435761) >> 13) % 94) as u8)).collect();
+    let meshes: Vec<(&str, String, Vec<&str>)> = vec![
+        ("header-only.msh", first(3), vec!["no $Nodes section"]),
+        ("no-elements.msh", first(576), vec!["no $Elements section"]),
+        ("mid-nodes.msh", first(150), vec!["not a readable Gmsh 4.1 mesh", "node section"]),
+        ("mid-elements.msh", first(700), vec!["not a readable Gmsh 4.1 mesh", "element section"]),
+        ("no-end-elements.msh", first(lines.len() - 1), vec!["expected $EndElements"]),
+        ("empty.msh", String::new(), vec!["does not start with $MeshFormat"]),
+        ("text.msh", "Lorem ipsum dolor sit amet\nconsectetur adipiscing elit\n".into(), vec!["does not start with $MeshFormat"]),
+        ("noise.msh", noise, vec!["does not start with $MeshFormat"]),
+        ("no-end-nodes.msh", without("$EndNodes"), vec!["expected $EndNodes", "$Nodes section", "line 576"]),
+        ("no-end-entities.msh", without("$EndEntities"), vec!["expected $EndEntities"]),
+        ("no-end-names.msh", without("$EndPhysicalNames"), vec!["expected $EndPhysicalNames"]),
+        ("unknown-type.msh", msh_with("\n3 2 5 54\n", "\n3 2 1000 54\n"), vec!["unknown element type", "value 1000", "line 721"]),
+        ("hex-undefined-node.msh", msh_with("189 88 184 224 164 15 64 144 66 ", "189 88 184 224 164 15 64 144 999 "), vec!["hexahedron 189", "node 999", "not in $Nodes"]),
+        ("quad-undefined-node.msh", msh_with("\n2 23 89 90 24 \n", "\n2 23 89 90 999 \n"), vec!["quadrangle 2", "node 999", "not in $Nodes"]),
+        ("dup-node.msh", msh_with("0 2 0 1\n2\n0 0 1\n", "0 2 0 1\n1\n0 0 1\n"), vec!["node 1 is defined twice"]),
+        ("nan-node.msh", msh_with("0 2 0 1\n2\n0 0 1\n", "0 2 0 1\n2\n0 nan 1\n"), vec!["node 2", "non-finite coordinate", "NaN"]),
+        ("inf-node.msh", msh_with("0 2 0 1\n2\n0 0 1\n", "0 2 0 1\n2\n0 0 1e400\n"), vec!["node 2", "non-finite coordinate", "inf"]),
+        ("twisted.msh", msh_with("189 88 184 224 164 15 64 144 66 ", "189 184 88 224 164 15 64 144 66 "), vec!["hexahedron 189", "twisted"]),
+        ("v22.msh", msh_with("4.1 0 8\n", "2.2 0 8\n"), vec!["format version 2.2", "msh41"]),
+        ("v40.msh", msh_with("4.1 0 8\n", "4.0 0 8\n"), vec!["format version 4.0"]),
+        ("binary-flag.msh", msh_with("4.1 0 8\n", "4.1 1 8\n"), vec!["binary", "line 3"]),
+    ];
+    for (file, text, expect) in &meshes {
+        let path = dir.join(file);
+        std::fs::write(&path, text).unwrap();
+        let mut e = vec![*file];
+        e.extend(expect);
+        bad.add(file, &gmsh_scene(&path), &[], &e);
+    }
+    let ok = dir.join("ok.msh");
+    std::fs::write(&ok, &full).unwrap();
+    bad.add("no-volume", &gmsh_scene(&ok).replacen("volume = \"upper\"", "volume = \"nope\"", 1), &[], &["ok.msh", "no physical volume named \"nope\"", "\"upper\", \"lower\""]);
+    let tet = gmsh_scene(&root().join("mesh/tet.msh")).replacen("volume = \"upper\"", "volume = \"body\"", 1);
+    bad.add("tet-volume", &tet, &[], &["tet.msh", "physical volume \"body\"", "no 8-node hexahedra", "Tet4"]);
+    bad.check();
+}
+
+/// Degenerate friction data that is allowed: an orthotropic bound of zero along one axis (the
+/// ellipse is a segment) and a direction whose squared length overflows.
+#[test]
+fn degenerate_but_valid_friction_still_solves() {
+    for (name, friction) in [
+        ("g1-zero", "{type=\"orthotropic\", g1=0.0, g2=0.03, direction=[1.0, 0.0, 0.0]}"),
+        ("direction-huge", "{type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1e300, 0.0, 1e300]}"),
+        ("direction-tiny", "{type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1e-300, 0.0, 1e-300]}"),
+    ] {
+        let dir = tmpdir(name);
+        let out = dir.join("r.h5");
+        let set = format!("contact.pair.0.friction={friction}");
+        let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=4", "--set", &set, "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(out.exists(), "{name}");
+    }
+}
+
 #[test]
 fn unwritable_output_is_one_line() {
     let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=3", "--set", "contact.enabled=false", "--out", "/proc/no/such/dir/r.h5"]);
@@ -145,10 +354,6 @@ fn check_prints_resolved_scene_and_sizes() {
     assert!(s.contains("contact pair 0: slave upper.zmin (36 nodes) against master lower.zmax (36 nodes)"), "{s}");
     assert!(s.contains("contact: m = 36 node-to-node pairs, Σw = 2.000000e0"), "{s}");
     assert!(s.contains("multipliers: 36 normal + 72 tangential"), "{s}");
-}
-
-fn fields(path: &Path) -> OutputData {
-    output::hdf5::read(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Runs `scene` (with `sets`) under mpirun with 1, 2 and 3 ranks; returns each run's stdout and

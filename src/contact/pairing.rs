@@ -114,7 +114,13 @@ fn node_areas(mesh: &Mesh, face: &Face) -> HashMap<usize, f64> {
 
 /// First tangent: `dir` projected into the plane ⟂ n, normalized.
 fn tangent(n: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
-    let d = unit(dir);
+    // a direction whose squared length under- or overflows is scaled first
+    let d = if dot(dir, dir).is_normal() {
+        unit(dir)
+    } else {
+        let s = dir.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        unit(dir.map(|v| v / s))
+    };
     let p = sub(d, n.map(|v| v * dot(d, n)));
     (dot(p, p).sqrt() > 1e-6).then(|| unit(p))
 }
@@ -127,6 +133,8 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
     });
     let size = dot(sub(hi, lo), sub(hi, lo)).sqrt().max(f64::MIN_POSITIVE);
     let mut c = Contact::default();
+    // (slave, master) node couples, unordered, and the entry that made each
+    let mut couples: HashMap<(usize, usize), usize> = HashMap::new();
     for (k, (p, &(sf, mf))) in pairs.iter().zip(faces).enumerate() {
         let key = format!("contact.pair[{k}]");
         let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
@@ -188,6 +196,15 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             };
             if let Some(prev) = used.insert(m, s) {
                 return Err(Error::scene(key, format!("master node {m} of {} is matched by two slave nodes ({prev} and {s})", master.name)));
+            }
+            if let Some(prev) = couples.insert((s.min(m), s.max(m)), k) {
+                return Err(Error::scene(
+                    key,
+                    format!(
+                        "the slave node at ({:.6}, {:.6}, {:.6}) of {} and its master node are already a pair of contact.pair[{prev}]: give each interface once",
+                        xs[0], xs[1], xs[2], slave.name
+                    ),
+                ));
             }
             if dot(n, mnormals[&m]) > -0.5 {
                 return Err(Error::scene(
@@ -332,6 +349,12 @@ mod tests {
             assert!(sub(c.t1[i], [s, s, 0.0]).iter().all(|v| v.abs() < 1e-14));
             assert_eq!(c.bound[i], SlipBound::Ellipse(0.1 * c.area[i], 0.05 * c.area[i]));
         }
+        // a direction whose squared length overflows or underflows is still (1, 1, 0)/√2 in the plane
+        for scale in [1e300, 1e-300] {
+            let p = seed_pair(Friction::Orthotropic { g1: 0.1, g2: 0.05, direction: [scale, scale, 0.5 * scale] });
+            let c = pair(&m, &[p], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+            assert!(sub(c.t1[0], [s, s, 0.0]).iter().all(|v| v.abs() < 1e-14), "{scale}: {:?}", c.t1[0]);
+        }
         let p = seed_pair(Friction::Orthotropic { g1: 0.1, g2: 0.05, direction: [0.0, 0.0, 1.0] });
         let e = pair(&m, &[p], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
         assert!(e.contains("direction") && e.contains("normal"), "{e}");
@@ -351,5 +374,14 @@ mod tests {
         let m = blocks(4, 4, [0.05, 0.0, 0.0], I);
         let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
         assert!(e.contains("do not match node to node"), "{e}");
+        // one interface given twice, or from both sides
+        let m = blocks(4, 4, [0.0; 3], I);
+        let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
+        let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
+        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None };
+        let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
+        let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
     }
 }

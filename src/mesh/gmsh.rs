@@ -39,6 +39,14 @@ fn parse(bytes: &[u8], volume: Option<&str>) -> Result<BodyGeometry, String> {
         mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e))
     })
     .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
+    for (present, section) in [
+        (msh.data.nodes.is_some(), "$Nodes"),
+        (msh.data.elements.is_some(), "$Elements"),
+    ] {
+        if !present {
+            return Err(format!("{UNREADABLE}: it has no {section} section"));
+        }
+    }
     let names = physical_names(bytes)?;
     let tags = node_tags(bytes, encoding, &msh)?;
     build(&msh, &names, &tags, volume)
@@ -75,6 +83,11 @@ fn check_header(bytes: &[u8]) -> Result<Encoding, String> {
             let one = bytes
                 .get(at..at + 4)
                 .ok_or_else(|| format!("{UNREADABLE}: truncated $MeshFormat header"))?;
+            if one != [1, 0, 0, 0] && one != [0, 0, 0, 1] {
+                return Err(format!(
+                    "{UNREADABLE}: the header says binary (file-type 1) but no binary integer 1 follows it (line 3)"
+                ));
+            }
             Ok(Encoding::Binary {
                 size_t: size.parse().unwrap_or(8),
                 big_endian: one == [0, 0, 0, 1],
@@ -132,6 +145,14 @@ fn describe(bytes: &[u8], encoding: Encoding, err: &MshParserError<&[u8]>) -> St
             Encoding::Binary { .. } => format!("byte {offset}"),
         }
     };
+    if let (None, true, Encoding::Ascii) = (&what, contexts.is_empty(), encoding) {
+        let offset = bytes.len().saturating_sub(rest.len());
+        if let Some(name) = open_section(&bytes[..offset]) {
+            return format!(
+                "{UNREADABLE}: expected $End{name} to close the ${name} section ({place})"
+            );
+        }
+    }
     let what = what.unwrap_or_else(|| {
         if rest.is_empty() {
             "unexpected end of file".to_string()
@@ -144,6 +165,22 @@ fn describe(bytes: &[u8], encoding: Encoding, err: &MshParserError<&[u8]>) -> St
     } else {
         format!("{UNREADABLE}: {what} in {} ({place})", contexts.join(" > "))
     }
+}
+
+/// The section still open at the end of `head` (a `$Name` line with no `$EndName` after it).
+fn open_section(head: &[u8]) -> Option<String> {
+    let mut open: Option<&[u8]> = None;
+    for line in head.split(|&b| b == b'\n') {
+        let Some(name) = line.trim_ascii().strip_prefix(b"$") else {
+            continue;
+        };
+        match name.strip_prefix(b"End") {
+            Some(end) if open == Some(end) => open = None,
+            Some(_) => {}
+            None => open = Some(name),
+        }
+    }
+    open.map(|n| String::from_utf8_lossy(n).into_owned())
 }
 
 /// Offset just past the line `$name` (a section start), if the file has that section.
@@ -437,7 +474,31 @@ fn build(
     if coords.len() != tags.len() {
         return Err(format!("{UNREADABLE}: malformed $Nodes section"));
     }
-    let index: HashMap<u64, usize> = tags.iter().enumerate().map(|(i, &t)| (t, i)).collect();
+    let mut index: HashMap<u64, usize> = HashMap::with_capacity(tags.len());
+    for (i, (&t, p)) in tags.iter().zip(&coords).enumerate() {
+        if index.insert(t, i).is_some() {
+            return Err(format!("node {t} is defined twice in $Nodes"));
+        }
+        if p.iter().any(|x| !x.is_finite()) {
+            return Err(format!(
+                "node {t} has a non-finite coordinate ({}, {}, {})",
+                p[0], p[1], p[2]
+            ));
+        }
+    }
+    // Quadrangles must not name nodes the file does not define (those of other volumes are
+    // fine: such quads are skipped below).
+    let blocks = msh.data.elements.iter().flat_map(|e| &e.element_blocks);
+    for block in blocks.filter(|b| b.entity_dim == 2 && b.element_type == ElementType::Qua4) {
+        for e in &block.elements {
+            if let Some(t) = e.nodes.iter().find(|t| !index.contains_key(t)) {
+                return Err(format!(
+                    "quadrangle {} refers to node {t}, which is not in $Nodes",
+                    e.element_tag
+                ));
+            }
+        }
+    }
     let mut file_hexes = Vec::with_capacity(hex_tags.len());
     let mut used = vec![false; coords.len()];
     for &(etag, nodes) in &hex_tags {
@@ -808,6 +869,35 @@ mod tests {
         }
         s += "\n$EndElements\n";
         s
+    }
+
+    #[test]
+    fn bad_nodes_unclosed_sections_and_missing_sections_are_named() {
+        let ids = [1, 2, 3, 4, 5, 6, 7, 8];
+        let text = one_hex(ids, ids, [5, 6, 7, 8]);
+        let err = |t: String| parse(t.as_bytes(), None).unwrap_err();
+        let msg = err(text.replacen("\n0 1 1\n", "\n0 nan 1\n", 1));
+        assert!(
+            msg.contains("node 8 has a non-finite coordinate (0, NaN, 1)"),
+            "{msg}"
+        );
+        let msg = err(one_hex([1, 2, 3, 4, 5, 6, 7, 7], ids, [5, 6, 7, 8]));
+        assert!(msg.contains("node 7 is defined twice"), "{msg}");
+        let msg = err(one_hex(ids, ids, [5, 6, 7, 9]));
+        assert!(msg.contains("quadrangle 1 refers to node 9"), "{msg}");
+        let msg = err(text.replacen("$EndNodes\n", "", 1));
+        assert!(
+            msg.starts_with(UNREADABLE)
+                && msg.contains("expected $EndNodes to close the $Nodes section"),
+            "{msg}"
+        );
+        let msg = err(text[..text.find("$Elements").unwrap()].to_string());
+        assert!(msg.contains("no $Elements section"), "{msg}");
+        let msg = err(text.replacen("4.1 0 8", "4.1 1 8", 1));
+        assert!(
+            msg.contains("binary") && msg.contains("line 3") && !msg.contains('\n'),
+            "{msg}"
+        );
     }
 
     #[test]
