@@ -123,7 +123,7 @@ enum Cmd {
         /// Errors in u the summary gives the time to.
         #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8")]
         targets: Vec<f64>,
-        /// A solve slower than this (seconds) ends its solver's sweep at that N.
+        /// A dual solve slower than this (seconds) ends its solver's sweep at that N.
         #[arg(long, default_value_t = 120.0)]
         max_seconds: f64,
         /// A-products a dual solve may use.

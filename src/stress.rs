@@ -4,7 +4,8 @@
 //! pipeline and sorts each run into one of three outcomes:
 //!
 //! - **converged**: the solver met ε, the KKT residuals (measured independently of the solver's
-//!   stopping test) are at most `kkt_factor·ε`, and every reported number is finite;
+//!   stopping test) and, under TFETI, the relative jump of u across the subdomain interfaces are
+//!   at most `kkt_factor·ε`, and every reported number is finite;
 //! - **stopped**: the pipeline refused with a stated reason (no convergence, breakdown, bad
 //!   input) — an honest outcome;
 //! - **wrong**: it returned a result that fails those checks — a silent wrong answer, the one
@@ -77,6 +78,12 @@ pub fn judge(r: &Value, kkt_factor: f64) -> Outcome {
     }
     if kkt > kkt_factor * eps {
         return Outcome::Wrong(format!("KKT residual {kkt:.1e} above {kkt_factor}·ε"));
+    }
+    // TFETI: the subdomains must be glued (the gluing rows are part of the dual gradient)
+    if let Some(jump) = r["tfeti"]["gluing_jump_relative"].as_f64() {
+        if !(jump <= kkt_factor * eps) {
+            return Outcome::Wrong(format!("relative gluing jump {jump:.1e} above {kkt_factor}·ε"));
+        }
     }
     Outcome::Converged
 }

@@ -1,0 +1,128 @@
+//! The evidence commands as a user runs them: `work-precision` (every row measured against the
+//! reference, errors falling with ε, Clarabel agreeing, the CSV the plot script reads, the plot)
+//! and `stress` (converged, stopped-with-a-reason and wrong runs told apart, exit codes).
+
+mod common;
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+
+use common::{root, tmpdir, BIN};
+
+fn csv(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines.map(|l| head.iter().cloned().zip(l.split(',').map(String::from)).collect()).collect()
+}
+
+fn num(r: &HashMap<String, String>, k: &str) -> f64 {
+    r[k].parse().unwrap_or_else(|_| panic!("{k} = {:?}", r[k]))
+}
+
+#[test]
+fn work_precision_measures_every_row_against_the_reference() {
+    let dir = tmpdir("wp");
+    let path = dir.join("wp.csv");
+    let o = Command::new(BIN)
+        .args(["work-precision", "--scene", root().join("run/seed.toml").to_str().unwrap(), "--sizes", "5", "--eps", "1e-3,1e-6,1e-9"])
+        .args(["--clarabel-eps", "1e-4,1e-9", "--solvers", "gimssn,ssn-bicgstab,mpgp,clarabel", "--csv", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("err(u) ≤ 1e-6") && out.contains("ssn-bicgstab (default)"), "{out}");
+    let rows = csv(&path);
+    assert_eq!(rows.len(), 3 * 3 + 2, "{rows:?}");
+    for solver in ["gimssn", "ssn-bicgstab", "mpgp"] {
+        let r: Vec<_> = rows.iter().filter(|r| r["solver"] == solver).collect();
+        assert!(r.iter().all(|r| r["status"] == "ok"), "{solver}: {r:?}");
+        let err: Vec<f64> = r.iter().map(|r| num(r, "err_u")).collect();
+        // the sweep runs loose → tight; the error follows ε (within two orders) and falls
+        for (r, e) in r.iter().zip(&err) {
+            let eps = num(r, "eps");
+            assert!(*e <= 100.0 * eps && num(r, "kkt") <= 10.0 * eps && num(r, "residual") <= eps, "{solver} at ε = {eps}: {r:?}");
+        }
+        assert!(err[2] < err[1] && err[1] < err[0], "{solver}: {err:?}");
+    }
+    // Clarabel solves the primal SOCP: at its tight tolerance it agrees with the dual reference
+    // (to its own accuracy: an interior-point solution is good to about 1e-6 in u here)
+    let c: Vec<_> = rows.iter().filter(|r| r["solver"] == "clarabel").collect();
+    assert_eq!(c.len(), 2);
+    assert!(c.iter().all(|r| r["status"] == "ok" && num(r, "nA") == 0.0), "{c:?}");
+    assert!(num(c[1], "err_u") < 1e-5 && num(c[1], "err_lambda") < 1e-5 && num(c[1], "kkt") < 1e-6, "{:?}", c[1]);
+    assert!(num(c[1], "err_u") < num(c[0], "err_u"));
+    // the plot script reads the CSV
+    if Command::new("gnuplot").arg("--version").output().is_ok() {
+        let p = Command::new(root().join("run/work-precision-plot")).args([path.to_str().unwrap(), dir.to_str().unwrap()]).output().unwrap();
+        assert!(p.status.success(), "{}", String::from_utf8_lossy(&p.stderr));
+        let png = std::fs::read(dir.join("work_precision_N5.png")).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+}
+
+#[test]
+fn work_precision_bad_arguments_give_one_line() {
+    for (args, key) in [
+        (&["--eps", "0"][..], "--eps"),
+        (&["--sizes", "1"], "--sizes"),
+        (&["--solvers", "newton"], "newton"),
+        (&["--max-seconds=-1"], "--max-seconds"),
+        (&["--csv", "/proc/no-such-dir/x.csv"], "/proc/no-such-dir"),
+    ] {
+        let o = Command::new(BIN).arg("work-precision").args(args).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.lines().count() == 1 && e.contains(key), "{args:?}: {e}");
+    }
+}
+
+/// A stress folder with two scenes: one that converges and one that cannot in its iterations.
+fn stress_dir(name: &str) -> std::path::PathBuf {
+    let dir = tmpdir(name);
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(&scenes).unwrap();
+    let seed = std::fs::read_to_string(root().join("run/seed.toml")).unwrap().replace("n = 16", "n = 5").replace("eps = 1e-6", "eps = 1e-8");
+    std::fs::write(scenes.join("a_fine.toml"), &seed).unwrap();
+    std::fs::write(scenes.join("b_short.toml"), seed.replace("eps = 1e-8", "eps = 1e-8\nmax_outer = 2")).unwrap();
+    dir
+}
+
+#[test]
+fn stress_tells_converged_stopped_and_wrong_apart() {
+    let dir = stress_dir("stress");
+    let run = |extra: &[&str]| {
+        Command::new(BIN)
+            .args(["stress", "--dir", dir.join("scenes").to_str().unwrap(), "--out", dir.join("out").to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(line_of(&out, "a_fine").ends_with("converged"), "{out}");
+    assert!(line_of(&out, "b_short").contains("stopped: SSN-BICGSTAB: no convergence in 2 outer iterations"), "{out}");
+    assert!(out.contains("2 scenes: 1 converged, 1 stopped with a reason, 0 wrong"), "{out}");
+    assert!(dir.join("out/a_fine.h5").exists() && !dir.join("out/b_short.h5").exists());
+    let rows = csv(&dir.join("out/stress.csv"));
+    assert_eq!(rows.len(), 2);
+    assert!(num(&rows[0], "kkt") <= 100.0 * 1e-8 && num(&rows[0], "residual") <= 1e-8, "{rows:?}");
+    // a KKT bound no run can meet turns a converged run into a wrong one: exit 1, one error line
+    let o = run(&["--kkt-factor", "1e-6"]);
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(line_of(&out, "a_fine").contains("WRONG: KKT residual"), "{out}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("1 scene(s) returned a result that fails its checks"), "{err}");
+    // an empty folder is a clear error
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let o = Command::new(BIN).args(["stress", "--dir", empty.to_str().unwrap(), "--out", dir.join("o2").to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("holds no *.toml scene") && err.lines().count() == 1, "{err}");
+}
+
+fn line_of(out: &str, name: &str) -> String {
+    out.lines().find(|l| l.starts_with(name)).unwrap_or_else(|| panic!("{out}")).to_string()
+}
