@@ -139,7 +139,7 @@ fn cells(row: &Row) -> Vec<String> {
 }
 
 const HEADER: [&str; 12] = ["scene", "n", "m", "dual", "outer", "nA", "time [s]", "‖r̃‖/‖b‖", "KKT", "open/stick/slip", "max |u| [m]", "status"];
-const WIDTH: [usize; 11] = [16, 7, 6, 12, 5, 6, 8, 8, 8, 16, 11];
+const WIDTH: [usize; 11] = [22, 7, 6, 12, 5, 6, 8, 8, 8, 16, 11];
 
 /// The printed table's header line.
 pub fn header() -> String {
