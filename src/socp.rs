@@ -1,7 +1,9 @@
 //! The independent reference: the primal second-order cone program of the same discrete contact
 //! problem, solved by the interior-point solver Clarabel,
 //!
-//!     min ½uᵀKu − fᵀu + Σᵢ ‖Gᵢ(Tᵢu − cτ,ᵢ)‖   s.t.  Nu ≤ cν,
+//! ```text
+//! min ½uᵀKu − fᵀu + Σᵢ ‖Gᵢ(Tᵢu − cτ,ᵢ)‖   s.t.  Nu ≤ cν,
+//! ```
 //!
 //! with u the free DOFs of all bodies (Dirichlet eliminated, as in the monolithic dual),
 //! Gᵢ = diag(a, b) the semi-axes of pair i's friction ellipse (a = b = gᵢ for a disc: the support
