@@ -65,7 +65,7 @@ impl PrimalSocp {
         let t0 = Instant::now();
         let layout = dual.layout;
         if layout.free != 0 {
-            return Err(Error::numerical("the primal SOCP", "has no free (gluing) multipliers: monolithic dual only"));
+            return Err(Error::numerical("the primal SOCP", "is built from the monolithic dual only (this one has gluing or Dirichlet multipliers)"));
         }
         let (m, nd) = (layout.m, layout.dim());
         let sizes: Vec<usize> = dual.blocks.iter().map(|blk| blk.local.dofs.nfree).collect();
