@@ -43,8 +43,8 @@ enum Cmd {
         /// Stopping tolerance ε (relative: ‖r̃_ρ‖ ≤ ε‖b‖); the paper's counts hold at about 2e-4.
         #[arg(long, default_value_t = 2e-4)]
         eps: f64,
-        /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp; `:paper`
-        /// takes the paper's settings.
+        /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp, tssn;
+        /// `:paper` takes the paper's settings.
         #[arg(long, value_delimiter = ',', value_parser = tresca_feti::table1::Column::parse,
               default_value = "imssn:paper,gimssn,ssn-bicgstab")]
         solvers: Vec<tresca_feti::table1::Column>,
@@ -113,9 +113,9 @@ enum Cmd {
         /// Clarabel's tolerances (its time hardly depends on ε; each solve is long).
         #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
         clarabel_eps: Vec<f64>,
-        /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), clarabel.
+        /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), tssn, clarabel.
         #[arg(long, value_delimiter = ',', value_parser = tresca_feti::workprecision::Solver::parse,
-              default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,clarabel")]
+              default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,tssn,clarabel")]
         solvers: Vec<tresca_feti::workprecision::Solver>,
         /// ε of the reference solve (SSN-BiCGSTAB).
         #[arg(long, default_value_t = 1e-12)]

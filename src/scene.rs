@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::dual::Preconditioner;
 
 /// A whole scene: bodies, materials, boundary conditions, contact, solver, decomposition, output.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -210,6 +211,13 @@ pub struct SolverSettings {
     pub rtol: f64,
     #[serde(default = "default_cfact")]
     pub cfact: f64,
+    /// TSSN's forcing exponent θ: inner tolerance rtol·(err_k/err_0)^θ.
+    #[serde(default = "default_forcing")]
+    pub forcing: f64,
+    /// TSSN's preconditioner on the TFETI gluing/Dirichlet block: "none", "lumped" or
+    /// "dirichlet" (built only when TSSN runs on the TFETI dual).
+    #[serde(default = "default_preconditioner")]
+    pub preconditioner: Preconditioner,
     #[serde(default = "default_max_outer")]
     pub max_outer: usize,
     #[serde(default = "default_max_inner")]
@@ -258,6 +266,12 @@ fn default_rtol() -> f64 {
 fn default_cfact() -> f64 {
     0.9
 }
+fn default_forcing() -> f64 {
+    1.0
+}
+fn default_preconditioner() -> Preconditioner {
+    Preconditioner::None
+}
 fn default_max_outer() -> usize {
     1000
 }
@@ -276,6 +290,8 @@ impl Default for SolverSettings {
             rho_factor: default_rho_factor(),
             rtol: default_rtol(),
             cfact: default_cfact(),
+            forcing: default_forcing(),
+            preconditioner: default_preconditioner(),
             max_outer: default_max_outer(),
             max_inner: default_max_inner(),
             power_iterations: default_power_iterations(),
@@ -669,6 +685,7 @@ impl Scene {
         pos("eps", s.eps)?;
         pos("rho_factor", s.rho_factor)?;
         pos("gamma", s.gamma)?;
+        pos("forcing", s.forcing)?;
         if !(s.inner_floor >= 0.0 && s.inner_floor.is_finite()) {
             return Err(Error::scene("solver.inner_floor", format!("must be finite and ≥ 0, got {}", s.inner_floor)));
         }

@@ -56,6 +56,9 @@ impl Column {
         };
         let known = Method::ALL.map(Method::name).join(", ");
         let method = Method::from_name(name).ok_or_else(|| format!("unknown solver \"{name}\" (known: {known})"))?;
+        if method == Method::Tssn && preset == Preset::Paper {
+            return Err("tssn has no paper preset (the paper does not have the method)".into());
+        }
         Ok(Column { method, preset })
     }
 

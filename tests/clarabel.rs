@@ -97,7 +97,7 @@ fn dual_solvers_match_clarabel_on_the_primal_socp() {
 #[test]
 fn orthotropic_friction_matches_clarabel_too() {
     let ortho = "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.02, direction=[1.0, 1.0, 0.0]}";
-    for method in [Method::SsnBicgstab, Method::Gimssn] {
+    for method in [Method::SsnBicgstab, Method::Gimssn, Method::Tssn] {
         let c = compare(6, method, &[ortho]);
         assert!(c.u_rel <= 1e-6, "{method:?}: u differs by {:.2e}", c.u_rel);
         assert!(c.force_rel <= 1e-6, "{method:?}: total contact force differs by {:.2e}", c.force_rel);

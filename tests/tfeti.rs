@@ -179,8 +179,8 @@ fn smalse_with_the_orthogonal_projector_matches_too() {
 }
 
 #[test]
-fn all_five_solvers_run_unchanged_on_the_tfeti_dual() {
-    for method in ["gimssn", "imssn", "mssn", "mpgp", "ssn-bicgstab"] {
+fn every_solver_runs_unchanged_on_the_tfeti_dual() {
+    for method in ["gimssn", "imssn", "mssn", "mpgp", "ssn-bicgstab", "tssn"] {
         let sets = vec!["mesh.n=6".to_string(), "solver.eps=1e-9".to_string(), format!("solver.method=\"{method}\"")];
         let worst = equivalence_within("run/seed.toml", &sets, &[4], 1e-6, 1e-7);
         eprintln!("{method}: max|Δu|/max|u| = {worst:.2e}");
@@ -193,7 +193,12 @@ fn all_five_solvers_run_unchanged_on_the_tfeti_dual() {
 /// p = λν/w; the same open/stick/slip status pair by pair (hence the same counts); gluing jumps
 /// and Dirichlet values within 100ε (relative to max|u|); ‖Gλ − e‖/‖e‖ ≤ 1e-10.
 fn subdomain_count_independence(method: &str, n: usize, eps: f64) {
-    let sets = vec![format!("mesh.n={n}"), format!("solver.eps={eps:e}"), format!("solver.method=\"{method}\"")];
+    subdomain_count_independence_with(method, n, eps, &[]);
+}
+
+fn subdomain_count_independence_with(method: &str, n: usize, eps: f64, extra: &[&str]) {
+    let mut sets = vec![format!("mesh.n={n}"), format!("solver.eps={eps:e}"), format!("solver.method=\"{method}\"")];
+    sets.extend(extra.iter().map(|s| s.to_string()));
     for a in agreement("run/seed.toml", &sets, &[1, 2, 4, 8]) {
         let s = a.subdomains;
         assert!(a.du <= 1e-7, "{method}, S = {s}: max|Δu|/max|u| = {:.2e} > 1e-7", a.du);
@@ -211,6 +216,15 @@ fn subdomain_count_independence(method: &str, n: usize, eps: f64) {
 #[test]
 fn ssn_bicgstab_is_independent_of_the_subdomain_count() {
     subdomain_count_independence("ssn-bicgstab", 8, 1e-10);
+}
+
+/// TSSN with the FETI preconditioners on the gluing block (the preconditioner changes the
+/// inner solves only, never the solution).
+#[test]
+fn tssn_with_each_preconditioner_is_independent_of_the_subdomain_count() {
+    for pc in ["none", "lumped", "dirichlet"] {
+        subdomain_count_independence_with("tssn", 8, 1e-10, &[&format!("solver.preconditioner=\"{pc}\"")]);
+    }
 }
 
 /// GIMSSN at N = 6 and ε = 1e-9: at N = 8 on the TFETI dual it stalls near ‖r̃‖/‖b‖ ≈ 1e-8

@@ -143,6 +143,15 @@ impl Coarse {
         self.sub_gt(dist, &a, z, Self::owned_rows(dist), false);
     }
 
+    /// z ← P_E z = z − [G_Eᵀ C⁻¹ G_E z_E]_E, the orthogonal projector of the E block onto
+    /// Ker G_E (C = G_E G_Eᵀ; contact components unchanged; z owned).
+    pub fn project_e<C: Comm>(&self, dist: &Distribution<'_, C>, z: &mut [f64]) {
+        let zl = dist.ghosted(z);
+        let mut a = self.g_mul(dist, &zl, true);
+        self.c_solve(dist, &mut a);
+        self.sub_gt(dist, &a, z, Self::owned_rows(dist), true);
+    }
+
     /// yl ← P̃ᵀ yl = yl − [G_E 0]ᵀ C⁻¹ G yl on the local rows (yl ghosted).
     pub fn project_t_local<C: Comm>(&self, dist: &Distribution<'_, C>, yl: &mut [f64]) {
         let mut a = self.g_mul(dist, yl, false);

@@ -12,7 +12,9 @@ use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
-use crate::dual::{DualOperator, Layout, ProductCounter};
+use crate::dual::{row_stiffness, scaled_entries, DualOperator, Layout, Preconditioner, ProductCounter};
+use crate::error::{Error, Result};
+use crate::linalg::schur::Schur;
 
 /// A subdomain of this rank with its B entries (position in its sorted rows, local DOF,
 /// coefficient).
@@ -37,6 +39,17 @@ pub struct TfetiDual<'c, C: Comm> {
     /// d̃ − Fλ̂ (before projection, owned): the right-hand side once λ = λ̂ + λ̃.
     pub d_hat: Vec<f64>,
     counter: ProductCounter,
+    /// First E (gluing, Dirichlet) row of the global numbering.
+    e_start: usize,
+    /// The preconditioner's pieces (one per local subdomain), once built.
+    precond: Option<Vec<PrecondPiece>>,
+}
+
+/// One subdomain's part of M_E: S_s (or K_s's block) and its scaled E entries D_s B_E,s
+/// (position in its sorted rows, local DOF, coefficient).
+struct PrecondPiece {
+    schur: Schur,
+    entries: Vec<(usize, usize, f64)>,
 }
 
 /// What [`TfetiDual::recover`] returns.
@@ -73,7 +86,8 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let c = dist.restrict(&cons.c);
         let lambda_hat = coarse.lambda_hat_local(&dist);
         let layout = dist.layout;
-        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default() };
+        let e_start = cons.layout.contact_dim();
+        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None };
         // d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c
         let mut b = vec![0.0; layout.dim()];
         let z = dual.pinv_of_rhs(&dual.lambda_hat);
@@ -82,6 +96,43 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         dual.d_hat = b.clone();
         dual.coarse.project(&dual.dist, &mut b);
         (dual, b)
+    }
+
+    /// Builds the FETI preconditioner M_E of [`DualOperator::precondition`] on the E rows
+    /// (`None`: drops it). Dirichlet factorizes each subdomain's K_ii (the DOFs its E rows do
+    /// not touch).
+    pub fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
+        if kind == Preconditioner::None {
+            self.precond = None;
+            return Ok(());
+        }
+        let e_start = self.e_start;
+        let dist = &self.dist;
+        let e_entries: Vec<Vec<(usize, usize, f64)>> = self
+            .subs
+            .iter()
+            .zip(&dist.subs)
+            .map(|(s, sr)| s.entries.iter().copied().filter(|&(p, _, _)| dist.local_rows[sr.rows[p]] >= e_start).collect())
+            .collect();
+        let stiff: Vec<(Vec<f64>, Vec<f64>)> = self.subs.iter().zip(&e_entries).map(|(s, e)| row_stiffness(e, &s.sys.k, s.nrows)).collect();
+        // totals over all subdomains touching each row, back on every subdomain's rows
+        let per_row = |pick: fn(&(Vec<f64>, Vec<f64>)) -> &Vec<f64>| -> Vec<Vec<f64>> {
+            let v: Vec<Vec<f64>> = stiff.iter().map(|x| pick(x).clone()).collect();
+            let mut owned = vec![0.0; self.layout.dim()];
+            dist.assemble(&v, &mut owned);
+            let local = dist.ghosted(&owned);
+            dist.subs.iter().map(|sr| sr.rows.iter().map(|&l| local[l]).collect()).collect()
+        };
+        let (total, count) = (per_row(|x| &x.0), per_row(|x| &x.1));
+        let mut pieces = Vec::with_capacity(self.subs.len());
+        for (i, (s, e)) in self.subs.iter().zip(&e_entries).enumerate() {
+            let touched: Vec<usize> = e.iter().map(|x| x.1).collect();
+            let schur = Schur::new(&s.sys.k, &touched, kind == Preconditioner::Dirichlet)
+                .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
+            pieces.push(PrecondPiece { schur, entries: scaled_entries(e, &stiff[i].0, &total[i], &count[i]) });
+        }
+        self.precond = Some(pieces);
+        Ok(())
     }
 
     /// Bᵀ_s x for each local subdomain, x on the local rows.
@@ -195,6 +246,44 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
 
     fn products(&self) -> usize {
         self.counter.get()
+    }
+
+    fn precondition(&self, x: &[f64], y: &mut [f64], scale: f64) {
+        let Some(pieces) = &self.precond else {
+            y.iter_mut().zip(x).for_each(|(a, b)| *a = scale * b);
+            return;
+        };
+        // y = P_E diag(M_E, scale·I) P_E x
+        let mut xp = x.to_vec();
+        self.coarse.project_e(&self.dist, &mut xp);
+        let wl = self.dist.ghosted(&xp);
+        let v: Vec<Vec<f64>> = pieces
+            .iter()
+            .zip(&self.subs)
+            .zip(&self.dist.subs)
+            .map(|((pc, s), sr)| {
+                let mut z = vec![0.0; s.sys.ndof()];
+                for &(p, j, c) in &pc.entries {
+                    z[j] += c * wl[sr.rows[p]];
+                }
+                pc.schur.apply_in_place(&mut z);
+                let mut vs = vec![0.0; s.nrows];
+                for &(p, j, c) in &pc.entries {
+                    vs[p] += c * z[j];
+                }
+                vs
+            })
+            .collect();
+        self.dist.assemble(&v, y);
+        let contact = self.layout.contact_dim();
+        for (k, yk) in y.iter_mut().enumerate().take(contact) {
+            *yk = scale * xp[k];
+        }
+        self.coarse.project_e(&self.dist, y);
+    }
+
+    fn preconditioned(&self) -> bool {
+        self.precond.is_some()
     }
 
     fn dot(&self, x: &[f64], y: &[f64]) -> f64 {

@@ -347,6 +347,7 @@ pub fn solver_params(s: &SolverSettings) -> qp::Params {
         rho_factor: s.rho_factor,
         rtol: s.rtol,
         cfact: s.cfact,
+        forcing: s.forcing,
         inner_tol: s.inner_tol,
         cg_stop: s.cg_stop,
         inner_floor: s.inner_floor,

@@ -7,7 +7,7 @@
 use super::{BodyStats, ContactOutcome, LocalFields, Solution, Timings};
 use crate::comm::Comm;
 use crate::decomposition::{decompose_each, Decomposition};
-use crate::dual::DualOperator;
+use crate::dual::{DualOperator, Preconditioner};
 use crate::error::{Error, Result};
 use crate::feti::coarse::Coarse;
 use crate::feti::constraints;
@@ -130,14 +130,18 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let orthogonal = dec.projector == Projector::Orthogonal;
     let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, orthogonal))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
-    let (dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
+    let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
+    let s = &ls.scene.solver;
+    // only TSSN's CG uses the preconditioner (the oblique projector's operator only)
+    if contact.is_some() && !orthogonal && s.method == qp::Method::Tssn && s.preconditioner != Preconditioner::None {
+        t.phase(comm, "preconditioner", || dual.set_preconditioner(s.preconditioner))?;
+    }
     // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
         Some(c) => Lambda::new(c).restrict(&dual.dist.pairs),
         None => Lambda { layout: crate::dual::Layout::contact(0, false), tangent: vec![] },
     }
     .with_free(dual.layout.free);
-    let s = &ls.scene.solver;
     let params = super::solver_params(s);
     let name = if contact.is_some() { s.method.name() } else { "cg" };
     let (sol, smalse) = t.phase(comm, "iterate", || {

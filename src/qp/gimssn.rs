@@ -41,8 +41,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
     let err0 = err.max(f64::MIN_POSITIVE);
     let mut tol = p.rtol / p.cfact;
     let mut info: Info = st.info();
-    let (mut x, mut g, mut gf, mut d, mut ad) =
-        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut x, mut g) = (vec![0.0; n], vec![0.0; n]);
     let mut y = vec![0.0; n];
     let feasible = variant == Method::Gimssn;
     // (z, rz): the point in Λ the error is measured at and its gradient; for GIMSSN z = λ
@@ -88,52 +87,18 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             }
         }
         residual(&x, &mut g);
-        // CG on the free set (CGMfeas for GIMSSN)
-        let masked = |g: &[f64], out: &mut [f64]| {
-            for i in 0..n {
-                out[i] = if sets.free[i] { g[i] } else { 0.0 };
-            }
-        };
-        masked(&g, &mut gf);
-        let gf0 = a.norm(&gf);
-        let scale = match p.cg_stop {
-            CgStop::Rhs => bnorm,
-            CgStop::InitialGradient => gf0,
-        };
         let threshold = match variant {
             Method::Mssn => 1e-13 * bnorm,
-            // never ask CG for much more than the outer tolerance (inner_floor·ε·‖b‖)
-            _ => (tol * scale).max(p.inner_floor * p.eps * bnorm),
+            _ => {
+                let scale = match p.cg_stop {
+                    CgStop::Rhs => bnorm,
+                    CgStop::InitialGradient => free_norm(a, &sets.free, &g),
+                };
+                // never ask CG for much more than the outer tolerance (inner_floor·ε·‖b‖)
+                (tol * scale).max(p.inner_floor * p.eps * bnorm)
+            }
         };
-        d.copy_from_slice(&gf);
-        let mut inner = 0;
-        let mut gg = gf0 * gf0;
-        while gg.sqrt() > threshold && inner < p.max_inner {
-            let dad = curvature(a, &d, &mut ad, k)?;
-            inner += 1;
-            let alpha = a.dot(&gf, &d) / dad;
-            if feasible {
-                let alpha_f = a.min(set.max_step(&x, &d));
-                if alpha > alpha_f {
-                    // the CG step would leave Λ: go to the boundary and stop
-                    for i in 0..n {
-                        x[i] -= alpha_f * d[i];
-                        g[i] -= alpha_f * ad[i];
-                    }
-                    break;
-                }
-            }
-            for i in 0..n {
-                x[i] -= alpha * d[i];
-                g[i] -= alpha * ad[i];
-            }
-            masked(&g, &mut gf);
-            let beta = a.dot(&gf, &ad) / dad;
-            for i in 0..n {
-                d[i] = gf[i] - beta * d[i];
-            }
-            gg = a.dot(&gf, &gf);
-        }
+        let inner = cg_free(a, set, &sets.free, &mut x, &mut g, threshold, p.max_inner, feasible, k)?;
         std::mem::swap(&mut lambda, &mut x);
         std::mem::swap(&mut r, &mut g);
         if feasible {
@@ -152,4 +117,78 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         info.history.push(Step::newton(a, err, tol, q_of(a, &z, &rz, b), &sets, inner, products()));
     }
     unreachable!("the outer loop returns")
+}
+
+/// ‖g‖ on the free components.
+fn free_norm<A: DualOperator>(a: &A, free: &[bool], g: &[f64]) -> f64 {
+    let gf: Vec<f64> = g.iter().zip(free).map(|(v, f)| if *f { *v } else { 0.0 }).collect();
+    a.norm(&gf)
+}
+
+/// CG on the components `free` from x with g = r(x), the others frozen, until the free gradient
+/// is at most `threshold`; `feasible` (CGMfeas): stop at the boundary of Λ, with the step taken
+/// up to it, when a CG step would leave Λ. x and g = r(x) (by the recurrence) are updated;
+/// returns the CG iterations (one A-product each).
+#[allow(clippy::too_many_arguments)]
+fn cg_free<A: DualOperator>(a: &A, set: &Lambda, free: &[bool], x: &mut [f64], g: &mut [f64], threshold: f64, max_inner: usize, feasible: bool, outer: usize) -> Result<usize, QpError> {
+    let n = x.len();
+    let masked = |g: &[f64], out: &mut [f64]| {
+        for i in 0..n {
+            out[i] = if free[i] { g[i] } else { 0.0 };
+        }
+    };
+    let (mut gf, mut ad) = (vec![0.0; n], vec![0.0; n]);
+    masked(g, &mut gf);
+    let mut d = gf.clone();
+    let mut gg = a.dot(&gf, &gf);
+    let mut inner = 0;
+    while gg.sqrt() > threshold && inner < max_inner {
+        let dad = curvature(a, &d, &mut ad, outer)?;
+        inner += 1;
+        let alpha = a.dot(&gf, &d) / dad;
+        if feasible {
+            let alpha_f = a.min(set.max_step(x, &d));
+            if alpha > alpha_f {
+                // the CG step would leave Λ: go to the boundary and stop
+                for i in 0..n {
+                    x[i] -= alpha_f * d[i];
+                    g[i] -= alpha_f * ad[i];
+                }
+                break;
+            }
+        }
+        for i in 0..n {
+            x[i] -= alpha * d[i];
+            g[i] -= alpha * ad[i];
+        }
+        masked(g, &mut gf);
+        let beta = a.dot(&gf, &ad) / dad;
+        for i in 0..n {
+            d[i] = gf[i] - beta * d[i];
+        }
+        gg = a.dot(&gf, &gf);
+    }
+    Ok(inner)
+}
+
+/// The result of one [`feasible_step`].
+pub(crate) struct FeasibleStep {
+    pub lambda: Vec<f64>,
+    pub gradient: Vec<f64>,
+    pub inner: usize,
+}
+
+/// One GIMSSN step from λ ∈ Λ with r = r(λ): the sets at λ, the projected-gradient step
+/// P_Λ(λ − ρr) (one product for its gradient), then CGMfeas to `threshold`. q does not increase
+/// for ρ < 2/σ_max. (TSSN's safeguard.)
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn feasible_step<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda: &[f64], r: &[f64], rho: f64, threshold: f64, max_inner: usize, outer: usize) -> Result<FeasibleStep, QpError> {
+    let sets = set.active_sets(lambda, r, rho);
+    let y: Vec<f64> = lambda.iter().zip(r).map(|(l, g)| l - rho * g).collect();
+    let mut x = vec![0.0; y.len()];
+    set.project(&y, &mut x);
+    let mut g = vec![0.0; y.len()];
+    residual(a, b, &x, &mut g);
+    let inner = cg_free(a, set, &sets.free, &mut x, &mut g, threshold, max_inner, true, outer)?;
+    Ok(FeasibleStep { lambda: x, gradient: g, inner })
 }

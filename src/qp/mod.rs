@@ -6,7 +6,7 @@
 //! Tresca) for the tangential pair `λ̄τ,ᵢ`. [`sets`] holds these blocks behind one trait,
 //! [`lambda`] their product Λ. The solvers see A only through [`DualOperator`]: the
 //! symmetrized semi-smooth Newton family ([`gimssn`]: GIMSSN, IMSSN, MSSN), the unsymmetrized
-//! SSN with BiCGSTAB ([`ssn`]) and MPGP ([`mpgp`]). All share [`Params`], report [`Info`], fail
+//! SSN with BiCGSTAB ([`ssn`]), its symmetric form TSSN with CG ([`tssn`]) and MPGP ([`mpgp`]). All share [`Params`], report [`Info`], fail
 //! with [`QpError`], stop on the same criterion `‖r̃_ρ(λ)‖ ≤ ε‖b‖` and never print. [`kkt`]
 //! measures how well a result satisfies the optimality conditions.
 
@@ -17,6 +17,7 @@ pub mod lambda;
 pub mod mpgp;
 pub mod sets;
 pub mod ssn;
+pub mod tssn;
 
 use serde::{Deserialize, Serialize};
 
@@ -37,10 +38,12 @@ pub enum Method {
     SsnBicgstab,
     /// Modified proportioning with gradient projections (Dostál–Kozubek).
     Mpgp,
+    /// Tangent-symmetric SSN: the exact SSN step as an SPD system, solved by CG (DESIGN §3b).
+    Tssn,
 }
 
 impl Method {
-    pub const ALL: [Method; 5] = [Method::Gimssn, Method::Imssn, Method::Mssn, Method::SsnBicgstab, Method::Mpgp];
+    pub const ALL: [Method; 6] = [Method::Gimssn, Method::Imssn, Method::Mssn, Method::SsnBicgstab, Method::Mpgp, Method::Tssn];
 
     /// The scene's (and the command line's) name.
     pub fn name(self) -> &'static str {
@@ -50,6 +53,7 @@ impl Method {
             Method::Mssn => "mssn",
             Method::SsnBicgstab => "ssn-bicgstab",
             Method::Mpgp => "mpgp",
+            Method::Tssn => "tssn",
         }
     }
 
@@ -79,6 +83,8 @@ pub struct Params {
     /// Adaptive inner tolerance `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`.
     pub rtol: f64,
     pub cfact: f64,
+    /// TSSN's forcing exponent θ: inner tolerance `rtol·(err_k/err_0)^θ` (θ > 1: superlinear).
+    pub forcing: f64,
     /// A fixed relative inner tolerance instead of the adaptive one (SSN-BiCGSTAB; the paper's
     /// baseline needs about 1e-6).
     pub inner_tol: Option<f64>,
@@ -108,6 +114,7 @@ impl Default for Params {
             rho_factor: 1.9,
             rtol: 0.5,
             cfact: 0.9,
+            forcing: 1.0,
             inner_tol: None,
             cg_stop: CgStop::Rhs,
             inner_floor: 0.1,
@@ -150,6 +157,8 @@ pub struct Info {
     /// A-products of the power iterations for σ_max.
     pub n_a_power: usize,
     pub inner_iterations: usize,
+    /// Applications of the preconditioner M (TSSN with a preconditioner; 0 otherwise).
+    pub preconditioner_applications: usize,
     pub sigma_est: f64,
     pub rho: f64,
     /// Final ‖r̃_ρ(λ)‖/‖b‖ from a fresh product.
@@ -187,6 +196,7 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         Method::Gimssn | Method::Imssn | Method::Mssn => gimssn::solve(a, b, set, lambda0, p),
         Method::SsnBicgstab => ssn::solve(a, b, set, lambda0, p),
         Method::Mpgp => mpgp::solve(a, b, set, lambda0, p),
+        Method::Tssn => tssn::solve(a, b, set, lambda0, p),
     }
 }
 

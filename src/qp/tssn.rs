@@ -1,0 +1,344 @@
+//! TSSN — the tangent-symmetric semi-smooth Newton method (DESIGN §3b): the exact Newton step of
+//! SSN-BiCGSTAB written as a symmetric positive definite system, so that CG (and a symmetric
+//! preconditioner) solve it.
+//!
+//! **Derivation.** SSN solves `F(λ) = λ − P_Λ(y) = 0`, `y = λ − ρ r(λ)`, `r = Aλ − b`, by
+//! `J δ = −F` with `J = I − D(I − ρA)`, D = ∂P_Λ(y). With `λ⁺ = λ + δ`, `y⁺ = λ⁺ − ρ r(λ⁺)` this
+//! is, block by block, `λ⁺ − D y⁺ = P_Λ(y) − D y`:
+//! * normal with `yᵢ < 0` (D = 0): `λ⁺ᵢ = 0` — fixed;
+//! * normal with `yᵢ ≥ 0`, a sticking pair, an E component (D = I): `r(λ⁺)ᵢ = 0` — free;
+//! * a sliding pair (y outside its disc or ellipse): D = μ t tᵀ with x = P(y) on the boundary,
+//!   n the outward normal, t the tangent there, μ = 1/(1 + κ·dist) (κ the curvature, dist =
+//!   ‖y − x‖; μ = g/‖y‖ on a disc). Since `tᵀ(y − x) = 0`, the n-row says `nᵀλ⁺ = nᵀx` — the
+//!   radial part stays on the tangent line at x — and the t-row, divided by μρ, says
+//!   `tᵀ r(λ⁺) + cᵢ σᵢ = 0` with `λ̄⁺τ,ᵢ = x + σᵢ t` and `cᵢ = (1/μ − 1)/ρ = κ·dist/ρ ≥ 0`
+//!   (on a disc `(‖y‖ − gᵢ)/(ρgᵢ)`, the slip rate at the solution). One scalar unknown σᵢ.
+//!
+//! Let W map the free unknowns (free components, one σ per sliding pair) into λ (identity on the
+//! free components, t on a sliding pair) and λ_fix hold the fixed values (0, x). The step is
+//! `λ⁺ = λ_fix + W z` with `(WᵀAW + C) z = −Wᵀ r(λ_fix)`, `C = diag(0, cᵢ)`: symmetric positive
+//! definite — CG. It is the exact SSN step (the SSN-BiCGSTAB iterate with exact inner solves)
+//! and the paper's symmetrized MSSN is its limit `cᵢ → ∞` (σ frozen at 0). A pair whose cᵢ is
+//! infinite (a segment's end, the point set) is fixed at x; one with `cᵢ = 0` (a segment's flat
+//! side) moves freely along it.
+//!
+//! **One outer step** from xᵏ with r(xᵏ): the sets and frames at yᵏ; the start
+//! `x⁰ = λ_fix` on the fixed components and `P_Λ(xᵏ)` on the free ones (the retraction onto Λ,
+//! folded into the start so it costs no product; x⁰ ∈ Λ up to the σ's); `r(x⁰)` by one fresh
+//! product (the only fixed overhead per step: it also resets the recurrences' drift); CG on the
+//! subspace (vectors v with v = Πv, Π the mask and t tᵀ on sliding pairs; operator
+//! `Π A v + C v`), each iteration one A-product, r(x) updated by the recurrence, stopped at
+//! `‖Π r + Cσ‖ ≤ max(min(rtol·(err_k/err_0)^θ·‖b‖, rtol·‖start‖), floor·ε·‖b‖)` (forcing
+//! exponent θ = `Params::forcing`: superlinear for θ > 1). The result x^{k+1} (its gradient from
+//! the recurrence) need not lie in Λ; the test `‖r̃_ρ‖ ≤ ε‖b‖` is made there and confirmed at
+//! P_Λ(x) with a fresh product, which is the result.
+//!
+//! **Safeguard.** q at the starts x⁰ (in Λ, exact gradient) should decrease. If q(x⁰_{k+1})
+//! exceeds the last accepted value, the step is undone and a GIMSSN step (projected gradient,
+//! then CGMfeas; monotone for ρ < 2/σ_max) is taken from the last accepted start instead
+//! (`Info`'s steps of kind 'g'). Newton steps are kind 't'.
+
+use super::gimssn;
+use super::lambda::Lambda;
+use super::sets::ConvexSet;
+use super::{err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
+use crate::dual::DualOperator;
+
+/// A sliding pair's part of the Newton system: its first component, the unit tangent t at
+/// x = P(y) and cᵢ.
+#[derive(Clone, Copy, Debug)]
+struct Slide {
+    k: usize,
+    t: [f64; 2],
+    c: f64,
+}
+
+/// The structure of one Newton system: which components move, and the sliding pairs.
+struct System {
+    sets: super::lambda::ActiveSets,
+    slides: Vec<Slide>,
+}
+
+impl System {
+    /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere).
+    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, x0: &mut [f64]) -> System {
+        let n = x.len();
+        let y: Vec<f64> = (0..n).map(|i| x[i] - rho * r[i]).collect();
+        let sets = set.active_sets(x, r, rho);
+        set.project(x, x0);
+        for i in 0..set.layout.m {
+            if !sets.free[i] {
+                x0[i] = 0.0;
+            }
+        }
+        let mut slides = Vec::new();
+        for (i, ts) in set.tangent.iter().enumerate() {
+            let k = set.layout.tangent(i, 0);
+            if sets.free[k] {
+                continue;
+            }
+            match ts.frame(&y[k..k + 2]) {
+                Some(f) => {
+                    x0[k] = f.point[0];
+                    x0[k + 1] = f.point[1];
+                    let c = f.curvature * f.distance / rho;
+                    if c.is_finite() {
+                        slides.push(Slide { k, t: f.tangent, c });
+                    }
+                }
+                // on the boundary to rounding: P(y) is y
+                None => ts.project(&y[k..k + 2], &mut x0[k..k + 2]),
+            }
+        }
+        System { sets, slides }
+    }
+
+    /// out = Π g + C v (v in the subspace): the operator on v when g = A v; the residual of the
+    /// Newton system at x⁰ (σ = 0) when g = r(x⁰) and v is None.
+    fn apply(&self, g: &[f64], v: Option<&[f64]>, out: &mut [f64]) {
+        for (o, (gi, f)) in out.iter_mut().zip(g.iter().zip(&self.sets.free)) {
+            *o = if *f { *gi } else { 0.0 };
+        }
+        for s in &self.slides {
+            let (k, t) = (s.k, s.t);
+            let mut a = t[0] * g[k] + t[1] * g[k + 1];
+            if let Some(v) = v {
+                a += s.c * (t[0] * v[k] + t[1] * v[k + 1]);
+            }
+            out[k] = a * t[0];
+            out[k + 1] = a * t[1];
+        }
+    }
+}
+
+/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) by TSSN.
+pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
+    let n = a.dim();
+    let st = Setup::new(a, b, p)?;
+    let (rho, bnorm) = (st.rho, st.bnorm);
+    let products = || st.products(a);
+    let mut x = vec![0.0; n];
+    set.project(lambda0, &mut x);
+    let mut r = vec![0.0; n];
+    if a.max(x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) == 0.0 {
+        // r(0) = −b: no product
+        r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = -bi);
+    } else {
+        residual(a, b, &x, &mut r);
+    }
+    let mut rt = vec![0.0; n];
+    let mut err = err_of(a, set, &x, &r, &st, &mut rt);
+    let err0 = err.max(f64::MIN_POSITIVE);
+    let mut info: Info = st.info();
+    let (mut x0, mut g0) = (vec![0.0; n], vec![0.0; n]);
+    let (mut h, mut d, mut ad, mut md, mut zv, mut pz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    // the last accepted start (in Λ, exact gradient) and its q
+    let (mut base, mut base_r, mut base_q) = (x.clone(), r.clone(), f64::INFINITY);
+    let (mut z, mut rz) = (vec![0.0; n], vec![0.0; n]);
+    for k in 0.. {
+        if !err.is_finite() {
+            return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
+        }
+        if err <= p.eps {
+            // confirm at P_Λ(x) with a fresh product
+            set.project(&x, &mut z);
+            residual(a, b, &z, &mut rz);
+            let ez = err_of(a, set, &z, &rz, &st, &mut rt);
+            if ez <= p.eps {
+                info.iterations = k;
+                info.err = ez;
+                info.q = q_of(a, &z, &rz, b);
+                info.n_a = products();
+                return Ok(QpSolution { lambda: z, gradient: rz, info });
+            }
+            std::mem::swap(&mut x, &mut z);
+            std::mem::swap(&mut r, &mut rz);
+            err = ez;
+        }
+        if k == p.max_outer || products() >= p.max_products {
+            info.iterations = k;
+            info.err = err;
+            info.n_a = products();
+            return Err(QpError::NoConvergence { info: Box::new(info), eps: p.eps });
+        }
+        let sys = System::new(set, &x, &r, rho, &mut x0);
+        residual(a, b, &x0, &mut g0);
+        let q0 = q_of(a, &x0, &g0, b);
+        if !q0.is_finite() {
+            return Err(QpError::NotFinite { what: "q at the Newton start", outer: k });
+        }
+        let tol = p.rtol * (err / err0).powf(p.forcing);
+        if q0 > base_q + 1e-12 * base_q.abs() {
+            // the safeguard: a GIMSSN step from the last accepted start
+            // GIMSSN's descent needs ρ < 2/σ_max
+            let rho_g = rho.min(1.9 / (1.1 * st.sigma));
+            let g = gimssn::feasible_step(a, b, set, &base, &base_r, rho_g, (tol * bnorm).max(p.inner_floor * p.eps * bnorm), p.max_inner, k)?;
+            x.copy_from_slice(&g.lambda);
+            r.copy_from_slice(&g.gradient);
+            base.copy_from_slice(&x);
+            base_r.copy_from_slice(&r);
+            base_q = q_of(a, &x, &r, b);
+            err = err_of(a, set, &x, &r, &st, &mut rt);
+            info.inner_iterations += g.inner;
+            let mut s = Step::newton(a, err, tol, base_q, &sys.sets, g.inner, products());
+            s.kind = 'g';
+            info.history.push(s);
+            continue;
+        }
+        base.copy_from_slice(&x0);
+        base_r.copy_from_slice(&g0);
+        base_q = q0;
+        // CG on the subspace from x⁰ (σ = 0 there)
+        x.copy_from_slice(&x0);
+        r.copy_from_slice(&g0);
+        sys.apply(&r, None, &mut h);
+        let h0 = a.norm(&h);
+        let threshold = (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * p.eps * bnorm);
+        // (P)CG: z = Π M h (z = h without a preconditioner)
+        let precond = a.preconditioned();
+        let mut precondition = |h: &[f64], z: &mut [f64]| {
+            if precond {
+                a.precondition(h, &mut pz, rho);
+                sys.apply(&pz, None, z);
+            } else {
+                z.copy_from_slice(h);
+            }
+        };
+        precondition(&h, &mut zv);
+        d.copy_from_slice(&zv);
+        let mut hz = a.dot(&h, &zv);
+        let mut hnorm = h0;
+        let mut inner = 0;
+        while hnorm > threshold && inner < p.max_inner {
+            a.apply(&d, &mut ad);
+            sys.apply(&ad, Some(&d), &mut md);
+            let dmd = a.dot(&d, &md);
+            inner += 1;
+            if !dmd.is_finite() {
+                return Err(QpError::NotFinite { what: "the curvature dᵀMd", outer: k });
+            }
+            if dmd <= 0.0 {
+                return Err(QpError::Breakdown { outer: k, p_ap: dmd });
+            }
+            let alpha = hz / dmd;
+            for i in 0..n {
+                x[i] -= alpha * d[i];
+                r[i] -= alpha * ad[i];
+                h[i] -= alpha * md[i];
+            }
+            precondition(&h, &mut zv);
+            let hz_new = a.dot(&h, &zv);
+            hnorm = if precond { a.norm(&h) } else { hz_new.sqrt() };
+            let beta = hz_new / hz;
+            hz = hz_new;
+            for i in 0..n {
+                d[i] = zv[i] + beta * d[i];
+            }
+        }
+        if precond {
+            info.preconditioner_applications += inner + 1;
+        }
+        err = err_of(a, set, &x, &r, &st, &mut rt);
+        info.inner_iterations += inner;
+        let mut s = Step::newton(a, err, tol, q0, &sys.sets, inner, products());
+        s.kind = 't';
+        info.history.push(s);
+    }
+    unreachable!("the outer loop returns")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dual::{Layout, ProductCounter};
+    use crate::qp::sets::{Disc, Ellipse, TangentSet};
+    use crate::qp::{kkt, Method};
+
+    /// A dense SPD A = QᵀQ + shift·I (Q random), counting its products.
+    struct Dense {
+        n: usize,
+        a: Vec<f64>,
+        counter: ProductCounter,
+    }
+
+    impl Dense {
+        fn random(n: usize, shift: f64, seed: &mut u64) -> Dense {
+            let q: Vec<f64> = (0..n * n).map(|_| lcg(seed)).collect();
+            let mut a = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    a[i * n + j] = (0..n).map(|k| q[k * n + i] * q[k * n + j]).sum::<f64>() + if i == j { shift } else { 0.0 };
+                }
+            }
+            Dense { n, a, counter: ProductCounter::default() }
+        }
+    }
+
+    impl DualOperator for Dense {
+        fn dim(&self) -> usize {
+            self.n
+        }
+        fn apply(&self, x: &[f64], y: &mut [f64]) {
+            self.counter.tick();
+            for (i, yi) in y.iter_mut().enumerate() {
+                *yi = self.a[i * self.n..(i + 1) * self.n].iter().zip(x).map(|(a, b)| a * b).sum();
+            }
+        }
+        fn products(&self) -> usize {
+            self.counter.get()
+        }
+    }
+
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    /// m pairs with friction, discs and ellipses alternating, b pushing into contact and sliding.
+    fn problem(m: usize, seed: &mut u64) -> (Dense, Vec<f64>, Lambda) {
+        let a = Dense::random(3 * m, 1.0, seed);
+        let b: Vec<f64> = (0..3 * m).map(|i| if i < m { 2.0 + lcg(seed) } else { 3.0 * lcg(seed) }).collect();
+        let tangent = (0..m)
+            .map(|i| if i % 2 == 0 { TangentSet::Disc(Disc::new(0.5 + 0.3 * lcg(seed).abs())) } else { TangentSet::Ellipse(Ellipse::new(0.8, 0.2)) })
+            .collect();
+        (a, b, Lambda { layout: Layout::contact(m, true), tangent })
+    }
+
+    #[test]
+    fn tssn_matches_ssn_on_discs_and_ellipses_with_kkt() {
+        let mut seed = 7;
+        for _ in 0..5 {
+            let (a, b, set) = problem(12, &mut seed);
+            let zero = vec![0.0; a.dim()];
+            let p = Params { eps: 1e-11, ..Params::default() };
+            let t = solve(&a, &b, &set, &zero, &Params { method: Method::Tssn, ..p.clone() }).expect("TSSN converges");
+            let s = super::super::ssn::solve(&a, &b, &set, &zero, &p).expect("SSN converges");
+            let d = t.lambda.iter().zip(&s.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            let scale = s.lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(d <= 1e-8 * scale, "TSSN and SSN differ by {d:e} of {scale:e}");
+            let k = kkt::residuals(&set, &t.lambda, &t.gradient, a.norm(&b));
+            assert!(k.worst() <= 1e-9, "KKT {k:?}");
+            assert!(set.contains(&t.lambda, 1e-12), "the result lies in Λ");
+            let slides = t.info.history.iter().map(|h| h.slip).max().unwrap_or(0);
+            assert!(slides > 0, "the problem has sliding pairs");
+            assert!(t.info.history.iter().all(|h| h.kind == 't'), "no safeguard step at ρ = 1.9/σ");
+        }
+    }
+
+    #[test]
+    fn the_safeguard_takes_over_when_rho_is_far_too_large_and_still_converges() {
+        // ρ far above 2/σ_max: the Newton sets cycle; GIMSSN steps ('g') restore descent
+        let mut seed = 11;
+        let mut fired = 0;
+        for _ in 0..5 {
+            let (a, b, set) = problem(12, &mut seed);
+            let zero = vec![0.0; a.dim()];
+            let p = Params { method: Method::Tssn, eps: 1e-9, rho_factor: 300.0, max_outer: 2000, ..Params::default() };
+            let t = solve(&a, &b, &set, &zero, &p).expect("converges with the safeguard");
+            fired += t.info.history.iter().filter(|h| h.kind == 'g').count();
+            let k = kkt::residuals(&set, &t.lambda, &t.gradient, a.norm(&b));
+            assert!(k.worst() <= 1e-7, "KKT {k:?}");
+        }
+        assert!(fired > 0, "the safeguard never fired at ρ = 300/σ");
+    }
+}
