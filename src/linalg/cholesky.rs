@@ -99,11 +99,11 @@ impl Cholesky {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// 1-D Laplacian + identity, n × n, lower triangle.
-    fn laplace(n: usize) -> SymCsc {
+    pub(crate) fn laplace(n: usize) -> SymCsc {
         let mut col_ptr = vec![0];
         let mut row_idx = vec![];
         let mut values = vec![];

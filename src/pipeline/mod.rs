@@ -484,6 +484,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 "nA": i.n_a,
                 "nA_power": i.n_a_power,
                 "inner_iterations": i.inner_iterations,
+                "preconditioner_applications": i.preconditioner_applications,
                 "final_relative_reduced_gradient": i.err,
                 "q": i.q,
                 "sigma_est": i.sigma_est,

@@ -287,6 +287,40 @@ pub(crate) fn q_of<A: DualOperator>(a: &A, lambda: &[f64], r: &[f64], b: &[f64])
     0.5 * a.dot(lambda, &rb)
 }
 
+/// The stop test of a solver whose iterate x need not lie in Λ (SSN, TSSN), once its own
+/// ‖r̃_ρ(x)‖ ≤ ε‖b‖: confirm at P_Λ(x) with a fresh product. Returns the solution when it holds
+/// there; otherwise x, r become P_Λ(x) and its gradient (the solver goes on from there) and the
+/// error there is returned. `z`, `rz` are workspace.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn confirm_projected<A: DualOperator>(
+    a: &A,
+    b: &[f64],
+    set: &Lambda,
+    st: &Setup,
+    eps: f64,
+    k: usize,
+    x: &mut Vec<f64>,
+    r: &mut Vec<f64>,
+    z: &mut Vec<f64>,
+    rz: &mut Vec<f64>,
+    rt: &mut [f64],
+    info: &mut Info,
+) -> Result<QpSolution, f64> {
+    set.project(x, z);
+    residual(a, b, z, rz);
+    let ez = err_of(a, set, z, rz, st, rt);
+    if ez <= eps {
+        info.iterations = k;
+        info.err = ez;
+        info.q = q_of(a, z, rz, b);
+        info.n_a = st.products(a);
+        return Ok(QpSolution { lambda: std::mem::take(z), gradient: std::mem::take(rz), info: std::mem::take(info) });
+    }
+    std::mem::swap(x, z);
+    std::mem::swap(r, rz);
+    Err(ez)
+}
+
 /// ‖r̃_ρ(λ)‖/‖b‖, with r̃ written to `rt`.
 pub(crate) fn err_of<A: DualOperator>(a: &A, set: &Lambda, lambda: &[f64], r: &[f64], s: &Setup, rt: &mut [f64]) -> f64 {
     set.reduced_gradient(lambda, r, s.rho, rt);

@@ -14,7 +14,7 @@
 //! locally superlinear, and a run that does not converge ends in `QpError::NoConvergence`.
 
 use super::lambda::Lambda;
-use super::{err_of, q_of, residual, CgStop, Info, Params, QpError, QpSolution, Setup, Step};
+use super::{confirm_projected, err_of, q_of, residual, CgStop, Info, Params, QpError, QpSolution, Setup, Step};
 use crate::dual::DualOperator;
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by SSN with BiCGSTAB inner solves.
@@ -38,21 +38,10 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
         }
         if err <= p.eps {
-            // confirm at P_Λ(λ) with a fresh product
-            set.project(&lambda, &mut z);
-            residual(a, b, &z, &mut rz);
-            let ez = err_of(a, set, &z, &rz, &st, &mut rt);
-            if ez <= p.eps {
-                info.iterations = k;
-                info.err = ez;
-                info.q = q_of(a, &z, &rz, b);
-                info.n_a = st.products(a);
-                return Ok(QpSolution { lambda: z, gradient: rz, info });
+            match confirm_projected(a, b, set, &st, p.eps, k, &mut lambda, &mut r, &mut z, &mut rz, &mut rt, &mut info) {
+                Ok(sol) => return Ok(sol),
+                Err(e) => err = e,
             }
-            // go on from the projected point
-            std::mem::swap(&mut lambda, &mut z);
-            std::mem::swap(&mut r, &mut rz);
-            err = ez;
         }
         if k == p.max_outer || st.products(a) >= p.max_products {
             info.iterations = k;

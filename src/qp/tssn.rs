@@ -41,7 +41,7 @@
 use super::gimssn;
 use super::lambda::Lambda;
 use super::sets::ConvexSet;
-use super::{err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
+use super::{confirm_projected, err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
 use crate::dual::DualOperator;
 
 /// A sliding pair's part of the Newton system: its first component, the unit tangent t at
@@ -140,20 +140,10 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
             return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
         }
         if err <= p.eps {
-            // confirm at P_Λ(x) with a fresh product
-            set.project(&x, &mut z);
-            residual(a, b, &z, &mut rz);
-            let ez = err_of(a, set, &z, &rz, &st, &mut rt);
-            if ez <= p.eps {
-                info.iterations = k;
-                info.err = ez;
-                info.q = q_of(a, &z, &rz, b);
-                info.n_a = products();
-                return Ok(QpSolution { lambda: z, gradient: rz, info });
+            match confirm_projected(a, b, set, &st, p.eps, k, &mut x, &mut r, &mut z, &mut rz, &mut rt, &mut info) {
+                Ok(sol) => return Ok(sol),
+                Err(e) => err = e,
             }
-            std::mem::swap(&mut x, &mut z);
-            std::mem::swap(&mut r, &mut rz);
-            err = ez;
         }
         if k == p.max_outer || products() >= p.max_products {
             info.iterations = k;
