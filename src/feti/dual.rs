@@ -254,9 +254,8 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
             return;
         };
         // y = P_E diag(M_E, scale·I) P_E x
-        let mut xp = x.to_vec();
-        self.coarse.project_e(&self.dist, &mut xp);
-        let wl = self.dist.ghosted(&xp);
+        let mut wl = self.dist.ghosted(x);
+        self.coarse.project_e_local(&self.dist, &mut wl);
         let v: Vec<Vec<f64>> = pieces
             .iter()
             .zip(&self.subs)
@@ -277,7 +276,8 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
         self.dist.assemble(&v, y);
         let contact = self.layout.contact_dim();
         for (k, yk) in y.iter_mut().enumerate().take(contact) {
-            *yk = scale * xp[k];
+            // P_E leaves the contact components as they are
+            *yk = scale * x[k];
         }
         self.coarse.project_e(&self.dist, y);
     }
