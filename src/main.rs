@@ -107,13 +107,18 @@ enum Cmd {
         set: Vec<String>,
         #[arg(long, value_delimiter = ',', default_value = "8,16,24")]
         sizes: Vec<usize>,
+        /// Duals the dual solvers run on: 0 the monolithic dual, S ≥ 1 TFETI with S subdomains
+        /// per body (oblique projector); e.g. 0,1,4,8.
+        #[arg(long, value_delimiter = ',', default_value = "0")]
+        subdomains: Vec<usize>,
         /// Tolerances ε (the dual solvers' ‖r̃_ρ‖ ≤ ε‖b‖; Clarabel's gap and feasibility tolerances).
         #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10")]
         eps: Vec<f64>,
         /// Clarabel's tolerances (its time hardly depends on ε; each solve is long).
         #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
         clarabel_eps: Vec<f64>,
-        /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), tssn, clarabel.
+        /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), tssn (TFETI also
+        /// `tssn:lumped`, `tssn:dirichlet`), clarabel.
         #[arg(long, value_delimiter = ',', value_parser = tresca_feti::workprecision::Solver::parse,
               default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,tssn,clarabel")]
         solvers: Vec<tresca_feti::workprecision::Solver>,
@@ -242,7 +247,8 @@ fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::workprecision::Args) ->
         args,
         |p| {
             if root {
-                println!("N = {}: n = {}, m = {}, assembly + factorization {:.2} s, reference {}/{} nA", p.n, p.dofs, p.pairs, p.factorize_s, p.reference.iterations, p.reference.n_a);
+                let setup = if p.subdomains == 0 { "assembly + factorization" } else { "TFETI set-up" };
+                println!("N = {}, {}: n = {}, m = {}, {setup} {:.2} s, reference {}/{} nA", p.n, wp::dual_label(p.subdomains), p.dofs, p.pairs, p.factorize_s, p.reference.iterations, p.reference.n_a);
             }
         },
         |pt| {
@@ -389,8 +395,8 @@ fn main() -> ExitCode {
             let args = tresca_feti::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
             table1(&comm, &args)
         }
-        Cmd::WorkPrecision { scene, set, sizes, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
-            let args = tresca_feti::workprecision::Args { scene, sets: set, sizes, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
+        Cmd::WorkPrecision { scene, set, sizes, subdomains, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
+            let args = tresca_feti::workprecision::Args { scene, sets: set, sizes, subdomains, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
             work_precision(&comm, &args)
         }
         Cmd::Stress { dir, set, out, kkt_factor } => stress(&comm, &tresca_feti::stress::Args { dir, sets: set, out, kkt_factor }),

@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::DualOperator;
+use crate::dual::{DualOperator, Preconditioner};
 use crate::error::{Error, Result};
 use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
 use crate::qp::lambda::Lambda;
@@ -36,6 +36,10 @@ pub const PAPER: [(usize, [usize; 2], [usize; 2]); 6] = [
 pub enum Preset {
     Default,
     Paper,
+    /// TSSN with the FETI lumped preconditioner (TFETI only).
+    Lumped,
+    /// TSSN with the FETI Dirichlet preconditioner (TFETI only).
+    Dirichlet,
 }
 
 /// One column of the table: a solver and its preset.
@@ -46,12 +50,15 @@ pub struct Column {
 }
 
 impl Column {
-    /// `name` or `name:paper`.
+    /// `name`, `name:paper`, or `tssn:lumped` / `tssn:dirichlet` (TSSN's CG preconditioned on
+    /// the TFETI gluing block).
     pub fn parse(s: &str) -> std::result::Result<Column, String> {
         let (name, preset) = match s.split_once(':') {
             Some((n, "paper")) => (n, Preset::Paper),
             Some((n, "default")) => (n, Preset::Default),
-            Some((_, p)) => return Err(format!("unknown preset \"{p}\" (use paper or default)")),
+            Some((n, "lumped")) => (n, Preset::Lumped),
+            Some((n, "dirichlet")) => (n, Preset::Dirichlet),
+            Some((_, p)) => return Err(format!("unknown preset \"{p}\" (use paper, default, lumped or dirichlet)")),
             None => (s, Preset::Default),
         };
         let known = Method::ALL.map(Method::name).join(", ");
@@ -59,13 +66,28 @@ impl Column {
         if method == Method::Tssn && preset == Preset::Paper {
             return Err("tssn has no paper preset (the paper does not have the method)".into());
         }
+        if method != Method::Tssn && matches!(preset, Preset::Lumped | Preset::Dirichlet) {
+            return Err(format!("{name} takes no preconditioner (only tssn: tssn:lumped, tssn:dirichlet)"));
+        }
         Ok(Column { method, preset })
     }
 
     pub fn label(&self) -> String {
+        let name = self.method.name();
         match self.preset {
-            Preset::Default => self.method.name().to_string(),
-            Preset::Paper => format!("{}:paper", self.method.name()),
+            Preset::Default => name.to_string(),
+            Preset::Paper => format!("{name}:paper"),
+            Preset::Lumped => format!("{name}:lumped"),
+            Preset::Dirichlet => format!("{name}:dirichlet"),
+        }
+    }
+
+    /// The preconditioner the column's dual operator must carry.
+    pub fn preconditioner(&self) -> Preconditioner {
+        match self.preset {
+            Preset::Lumped => Preconditioner::Lumped,
+            Preset::Dirichlet => Preconditioner::Dirichlet,
+            Preset::Default | Preset::Paper => Preconditioner::None,
         }
     }
 
@@ -137,6 +159,9 @@ pub fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64
 
 /// Runs the table; `progress` is called with each finished row (rank 0 prints it).
 pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Result<Vec<Row>> {
+    if let Some(c) = args.columns.iter().find(|c| c.preconditioner() != Preconditioner::None) {
+        return Err(Error::scene("--solvers", format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label())));
+    }
     let mut rows = Vec::new();
     for &n in &args.sizes {
         let mut sets = vec![format!("mesh.n={n}")];

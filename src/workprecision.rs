@@ -4,6 +4,8 @@
 //! record the wall time of the solve, the A-products, the error in u (max-norm, relative) and in
 //! λ (2-norm, relative) against a tight reference (SSN-BiCGSTAB at `reference_eps`), and the KKT
 //! residual measured the same way for every solver. A solver is one more [`Solver`] value.
+//! The dual solvers run on the monolithic dual and, for each S of `subdomains`, on the TFETI
+//! dual with S subdomains per body (u of every subdomain copy against the same reference).
 //!
 //! Time is that of the solve on one rank (σ_max's power iterations included); the set-up every
 //! dual solver shares (assembly, factorization) and Clarabel's (building the SOCP) are recorded
@@ -16,11 +18,13 @@ use std::time::Instant;
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::DualOperator;
+use crate::dual::{DualOperator, Preconditioner};
 use crate::error::{Error, Result};
+use crate::pipeline::tfeti::setup;
 use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
 use crate::qp::lambda::Lambda;
-use crate::qp::{self, kkt, Method, Params};
+use crate::qp::{self, kkt, Method, Params, QpSolution};
+use crate::scene::Projector;
 use crate::socp::PrimalSocp;
 use crate::table1::{u_error, Column};
 
@@ -54,6 +58,9 @@ pub struct Args {
     pub scene: PathBuf,
     pub sets: Vec<String>,
     pub sizes: Vec<usize>,
+    /// The duals to run the dual solvers on: 0 the monolithic dual, S ≥ 1 TFETI with S
+    /// subdomains per body (oblique projector; Clarabel runs with the monolithic one only).
+    pub subdomains: Vec<usize>,
     /// Tolerances, swept from the loosest to the tightest.
     pub eps: Vec<f64>,
     /// Clarabel's (its time hardly depends on ε: a few points suffice).
@@ -83,6 +90,8 @@ pub enum Status {
 #[derive(Clone, Debug)]
 pub struct Point {
     pub n: usize,
+    /// 0: the monolithic dual; S: TFETI with S subdomains per body.
+    pub subdomains: usize,
     pub solver: Solver,
     pub eps: f64,
     pub status: Status,
@@ -103,9 +112,12 @@ pub struct Point {
 #[derive(Clone, Debug)]
 pub struct Problem {
     pub n: usize,
+    /// 0: the monolithic dual; S: TFETI with S subdomains per body.
+    pub subdomains: usize,
     pub dofs: usize,
     pub pairs: usize,
-    /// Assembly and factorization (shared by the dual solvers).
+    /// The set-up the dual solvers share: assembly and factorization (monolithic), or
+    /// decomposition, factorization, coarse problem and b̃ (TFETI).
     pub factorize_s: f64,
     pub reference: qp::Info,
     /// The scene's solver: the default the summary compares with.
@@ -119,7 +131,61 @@ fn lambda_error(lambda: &[f64], reference: &[f64]) -> f64 {
     (d / r.max(f64::MIN_POSITIVE)).sqrt()
 }
 
-/// Runs the study; `progress` sees each problem when it is set up and each point when it is done.
+/// The error of one dual solution: (err(u), err(λ), KKT), all against the monolithic reference.
+type Measure<'m> = dyn Fn(&QpSolution) -> (f64, f64, f64) + 'm;
+
+/// A point not yet run.
+fn blank(n: usize, subdomains: usize, solver: Solver, eps: f64, setup_s: f64) -> Point {
+    Point {
+        n,
+        subdomains,
+        solver,
+        eps,
+        status: Status::Skipped,
+        iterations: 0,
+        n_a: 0,
+        n_a_power: 0,
+        inner: 0,
+        setup_s,
+        solve_s: f64::NAN,
+        err_u: f64::NAN,
+        err_lambda: f64::NAN,
+        kkt: f64::NAN,
+        residual: f64::NAN,
+    }
+}
+
+/// One dual solver's ε sweep (loose → tight) on the operator `a`; the sweep stops once a solve
+/// fails or takes longer than `max_seconds`.
+#[allow(clippy::too_many_arguments)]
+fn sweep<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
+    let zero = vec![0.0; a.dim()];
+    let mut stop = false;
+    for &e in eps {
+        let mut pt = Point { eps: e, ..template.clone() };
+        if !stop {
+            let p = Params { max_outer: usize::MAX, max_products: args.max_products, ..column.params(base, e) };
+            let t0 = Instant::now();
+            let r = qp::solve(a, b, set, &zero, &p);
+            pt.solve_s = t0.elapsed().as_secs_f64();
+            match r {
+                Ok(sol) => {
+                    pt.status = Status::Ok;
+                    let i = &sol.info;
+                    (pt.iterations, pt.n_a, pt.n_a_power, pt.inner, pt.residual) = (i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err);
+                    (pt.err_u, pt.err_lambda, pt.kkt) = measure(&sol);
+                }
+                Err(err) => pt.status = Status::Failed(err.to_string()),
+            }
+            stop = pt.status != Status::Ok || pt.solve_s > args.max_seconds;
+        }
+        on_point(&pt);
+        points.push(pt);
+    }
+}
+
+/// Runs the study; `on_problem` sees each problem when it is set up and `on_point` each point
+/// when it is done.
 pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem), mut on_point: impl FnMut(&Point)) -> Result<(Vec<Problem>, Vec<Point>)> {
     if comm.size() != 1 {
         return Err(Error::scene("work-precision", "runs on one rank (Clarabel needs every body on it): run it without mpirun"));
@@ -130,6 +196,12 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         v
     };
     let (eps_dual, eps_clarabel) = (sorted(&args.eps), sorted(&args.clarabel_eps));
+    // a scene the TFETI rows cannot use fails before any solve
+    if let (Some(&s), Some(&n)) = (args.subdomains.iter().find(|&&s| s > 0), args.sizes.first()) {
+        let mut sets = vec![format!("mesh.n={n}")];
+        sets.extend(args.sets.iter().cloned());
+        tfeti_scene(args, &sets, s)?;
+    }
     let (mut problems, mut points) = (Vec::new(), Vec::new());
     for &n in &args.sizes {
         let mut sets = vec![format!("mesh.n={n}")];
@@ -149,90 +221,146 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let what = format!("the reference solve (SSN-BiCGSTAB, ε = {:.0e}) at N = {n}", args.reference_eps);
         let reference = qp::solve(&dual, &b, &set, &zero, &p).map_err(|e| Error::numerical(&what, e.to_string()))?;
         let u_ref = dual.recover(&reference.lambda).0;
-        let problem = Problem { n, dofs: 3 * model.mesh.nodes.len(), pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: ls.scene.solver.method };
-        on_problem(&problem);
-        let socp = if args.solvers.contains(&Solver::Clarabel) { Some(PrimalSocp::new(&dual, &b, &set)?) } else { None };
-        for &solver in &args.solvers {
-            let mut stop = false;
-            let eps = if solver == Solver::Clarabel { &eps_clarabel } else { &eps_dual };
-            for &e in eps {
-                let mut pt = Point {
-                    n,
-                    solver,
-                    eps: e,
-                    status: Status::Skipped,
-                    iterations: 0,
-                    n_a: 0,
-                    n_a_power: 0,
-                    inner: 0,
-                    setup_s: factorize_s,
-                    solve_s: f64::NAN,
-                    err_u: f64::NAN,
-                    err_lambda: f64::NAN,
-                    kkt: f64::NAN,
-                    residual: f64::NAN,
+        // the reference per mesh node, for the subdomains' copies
+        let mut u_nodes = vec![[0.0; 3]; model.mesh.nodes.len()];
+        for (blk, u) in dual.blocks.iter().zip(&u_ref) {
+            let d = &blk.local.dofs;
+            u_nodes[d.nodes.clone()].copy_from_slice(&d.expand(u));
+        }
+        let u_max = u_nodes.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+        let dofs = 3 * model.mesh.nodes.len();
+        for &s in &args.subdomains {
+            if s == 0 {
+                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: ls.scene.solver.method };
+                on_problem(&problem);
+                let measure = |sol: &QpSolution| {
+                    let e_u = u_error(comm, &dual.recover(&sol.lambda).0, &u_ref);
+                    (e_u, lambda_error(&sol.lambda, &reference.lambda), kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst())
                 };
-                if !stop {
-                    let t0 = Instant::now();
+                for &solver in &args.solvers {
                     match solver {
-                        Solver::Dual(c) => {
-                            let p = Params { max_outer: usize::MAX, max_products: args.max_products, ..c.params(&base, e) };
-                            let r = qp::solve(&dual, &b, &set, &zero, &p);
-                            pt.solve_s = t0.elapsed().as_secs_f64();
-                            match r {
-                                Ok(sol) => {
-                                    pt.status = Status::Ok;
-                                    let i = &sol.info;
-                                    (pt.iterations, pt.n_a, pt.n_a_power, pt.inner, pt.residual) = (i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err);
-                                    pt.err_u = u_error(comm, &dual.recover(&sol.lambda).0, &u_ref);
-                                    pt.err_lambda = lambda_error(&sol.lambda, &reference.lambda);
-                                    pt.kkt = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
-                                }
-                                Err(err) => pt.status = Status::Failed(err.to_string()),
-                            }
-                        }
-                        Solver::Clarabel => {
-                            let socp = socp.as_ref().expect("built above");
-                            pt.setup_s = socp.build_s;
-                            match socp.solve(e) {
-                                Ok(sol) => {
-                                    pt.solve_s = sol.solve_s;
-                                    pt.status = Status::Ok;
-                                    pt.iterations = sol.iterations as usize;
-                                    pt.err_u = u_error(comm, &sol.u, &u_ref);
-                                    pt.err_lambda = lambda_error(&sol.lambda, &reference.lambda);
-                                    pt.kkt = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
-                                }
-                                Err(err) => {
-                                    pt.solve_s = t0.elapsed().as_secs_f64();
-                                    pt.status = Status::Failed(err.to_string());
-                                }
+                        // the monolithic dual has no preconditioner
+                        Solver::Dual(c) if c.preconditioner() != Preconditioner::None => {}
+                        Solver::Dual(c) => sweep(&dual, &b, &set, c, &base, args, &eps_dual, &blank(n, 0, solver, 0.0, factorize_s), &measure, &mut on_point, &mut points),
+                        Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, 0.0, factorize_s), &mut on_point, &mut points)?,
+                    }
+                }
+                problems.push(problem);
+                continue;
+            }
+            let tls = tfeti_scene(args, &sets, s)?;
+            let tmodel = crate::model::build(&tls)?;
+            let mut tt = Timings::default();
+            let mut prob = setup(comm, &tls, &tmodel, &mut tt)?;
+            let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
+            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: ls.scene.solver.method };
+            on_problem(&problem);
+            let ni = set.layout.dim();
+            for &solver in &args.solvers {
+                let Solver::Dual(c) = solver else { continue };
+                let t0 = Instant::now();
+                prob.dual.set_preconditioner(c.preconditioner())?;
+                let pc_s = t0.elapsed().as_secs_f64();
+                let (dual_t, d) = (&prob.dual, &prob.decomposition);
+                let measure = |sol: &QpSolution| {
+                    let rec = dual_t.recover(&sol.lambda);
+                    let mut e = 0.0f64;
+                    for (ls, us) in dual_t.subs.iter().zip(&rec.u) {
+                        for (l, &v) in d.subdomains[ls.sys.index].nodes.iter().enumerate() {
+                            for c in 0..3 {
+                                e = e.max((us[3 * l + c] - u_nodes[v][c]).abs());
                             }
                         }
                     }
-                    // Clarabel's time hardly depends on ε: only a failure ends its sweep
-                    stop = pt.status != Status::Ok || (solver != Solver::Clarabel && pt.solve_s > args.max_seconds);
-                }
-                on_point(&pt);
-                points.push(pt);
+                    let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
+                    (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&set, &li, &ri, bnorm).worst())
+                };
+                sweep(&prob.dual, &prob.b, &prob.set, c, &base, args, &eps_dual, &blank(n, s, solver, 0.0, setup_s + pc_s), &measure, &mut on_point, &mut points);
             }
+            problems.push(problem);
         }
-        problems.push(problem);
     }
     Ok((problems, points))
 }
 
-/// The fastest solve of `solver` at size `n` whose error in u is at most `target`.
-pub fn time_to<'a>(points: &'a [Point], n: usize, solver: Solver, target: f64) -> Option<&'a Point> {
+/// The scene with S subdomains per body on the TFETI path (oblique projector, no preconditioner:
+/// the rows set theirs).
+fn tfeti_scene(args: &Args, sets: &[String], s: usize) -> Result<crate::scene::LoadedScene> {
+    let mut sets = sets.to_vec();
+    sets.extend([format!("decomposition.subdomains={s}"), "decomposition.tfeti=true".into(), "solver.preconditioner=\"none\"".into()]);
+    let ls = crate::scene::load(&args.scene, &sets)?;
+    let d = &ls.scene.decomposition;
+    if d.target_dofs.is_some() || d.projector != Projector::Oblique {
+        return Err(Error::scene("--subdomains", "the TFETI rows need decomposition.projector = \"oblique\" and no decomposition.target_dofs (--subdomains sets the count)"));
+    }
+    Ok(ls)
+}
+
+/// Clarabel on the primal SOCP at each of its tolerances (its time hardly depends on ε: only a
+/// failure ends its sweep).
+#[allow(clippy::too_many_arguments)]
+fn clarabel<C: Comm>(
+    comm: &C,
+    dual: &MonolithicDual<'_, C>,
+    b: &[f64],
+    set: &Lambda,
+    lambda_ref: &[f64],
+    u_ref: &[Vec<f64>],
+    bnorm: f64,
+    eps: &[f64],
+    template: &Point,
+    on_point: &mut impl FnMut(&Point),
+    points: &mut Vec<Point>,
+) -> Result<()> {
+    let socp = PrimalSocp::new(dual, b, set)?;
+    let mut stop = false;
+    for &e in eps {
+        let mut pt = Point { eps: e, setup_s: socp.build_s, ..template.clone() };
+        if !stop {
+            let t0 = Instant::now();
+            match socp.solve(e) {
+                Ok(sol) => {
+                    pt.solve_s = sol.solve_s;
+                    pt.status = Status::Ok;
+                    pt.iterations = sol.iterations as usize;
+                    pt.err_u = u_error(comm, &sol.u, u_ref);
+                    pt.err_lambda = lambda_error(&sol.lambda, lambda_ref);
+                    pt.kkt = kkt::residuals(set, &sol.lambda, &sol.gradient, bnorm).worst();
+                }
+                Err(err) => {
+                    pt.solve_s = t0.elapsed().as_secs_f64();
+                    pt.status = Status::Failed(err.to_string());
+                }
+            }
+            stop = pt.status != Status::Ok;
+        }
+        on_point(&pt);
+        points.push(pt);
+    }
+    Ok(())
+}
+
+/// "monolithic" or "TFETI S = s".
+pub fn dual_label(subdomains: usize) -> String {
+    if subdomains == 0 {
+        "monolithic".into()
+    } else {
+        format!("TFETI S = {subdomains}")
+    }
+}
+
+/// The fastest solve of `solver` at size `n` on dual `subdomains` whose error in u is at most
+/// `target`.
+pub fn time_to(points: &[Point], n: usize, subdomains: usize, solver: Solver, target: f64) -> Option<&Point> {
     points
         .iter()
-        .filter(|p| p.n == n && p.solver == solver && p.status == Status::Ok && p.err_u <= target)
+        .filter(|p| p.n == n && p.subdomains == subdomains && p.solver == solver && p.status == Status::Ok && p.err_u <= target)
         .min_by(|a, b| a.solve_s.total_cmp(&b.solve_s))
 }
 
 /// One printed line per point.
 pub fn format_point(p: &Point) -> String {
-    let head = format!("N = {:>2}  {:<18} ε = {:.0e}", p.n, p.solver.label(), p.eps);
+    let head = format!("N = {:>2} {:<14} {:<18} ε = {:.0e}", p.n, dual_label(p.subdomains), p.solver.label(), p.eps);
     match &p.status {
         Status::Ok => format!(
             "{head}: {:>5} it {:>6} nA {:>9.3} s  err(u) {:.1e}  err(λ) {:.1e}  KKT {:.1e}",
@@ -249,19 +377,28 @@ pub fn summary(problems: &[Problem], points: &[Point], solvers: &[Solver], targe
     let mut s = String::new();
     for pr in problems {
         let default = Solver::Dual(Column { method: pr.default, preset: crate::table1::Preset::Default });
+        let setup = if pr.subdomains == 0 { "assembly + factorization" } else { "TFETI set-up" };
         s += &format!(
-            "N = {} (n = {}, m = {}; assembly + factorization {:.2} s; reference {}/{} nA, ‖r̃‖/‖b‖ = {:.1e})\n",
-            pr.n, pr.dofs, pr.pairs, pr.factorize_s, pr.reference.iterations, pr.reference.n_a, pr.reference.err
+            "N = {}, {} (n = {}, m = {}; {setup} {:.2} s; reference {}/{} nA, ‖r̃‖/‖b‖ = {:.1e})\n",
+            pr.n,
+            dual_label(pr.subdomains),
+            pr.dofs,
+            pr.pairs,
+            pr.factorize_s,
+            pr.reference.iterations,
+            pr.reference.n_a,
+            pr.reference.err
         );
         s += &format!("  {:<18}", "solver");
         for t in targets {
             s += &format!(" | {:<36}", format!("err(u) ≤ {t:.0e}: time (ε, nA) ×default"));
         }
         s += "\n";
-        for &solver in solvers {
+        let run_here = |solver: &Solver| points.iter().any(|p| p.n == pr.n && p.subdomains == pr.subdomains && p.solver == *solver);
+        for &solver in solvers.iter().filter(|s| run_here(s)) {
             s += &format!("  {:<18}", solver.label() + if solver == default { " (default)" } else { "" });
             for &t in targets {
-                let cell = match (time_to(points, pr.n, solver, t), time_to(points, pr.n, default, t)) {
+                let cell = match (time_to(points, pr.n, pr.subdomains, solver, t), time_to(points, pr.n, pr.subdomains, default, t)) {
                     (Some(p), d) => {
                         let ratio = d.map(|d| format!(" {:.1}×", p.solve_s / d.solve_s)).unwrap_or_default();
                         let na = if matches!(solver, Solver::Clarabel) { format!("{} it", p.iterations) } else { format!("{} nA", p.n_a) };
@@ -281,9 +418,9 @@ pub fn summary(problems: &[Problem], points: &[Point], solvers: &[Solver], targe
 pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<()> {
     let mut f = Vec::new();
     let io = |e| Error::io(path.display().to_string(), e);
-    writeln!(f, "N,n,m,solver,default,eps,status,iter,nA,nA_power,inner,setup_s,solve_s,err_u,err_lambda,kkt,residual").map_err(io)?;
+    writeln!(f, "N,S,n,m,solver,default,eps,status,iter,nA,nA_power,inner,setup_s,solve_s,err_u,err_lambda,kkt,residual").map_err(io)?;
     for p in points {
-        let pr = problems.iter().find(|pr| pr.n == p.n).expect("a point's problem");
+        let pr = problems.iter().find(|pr| pr.n == p.n && pr.subdomains == p.subdomains).expect("a point's problem");
         let is_default = matches!(p.solver, Solver::Dual(c) if c.method == pr.default && c.preset == crate::table1::Preset::Default);
         let status = match &p.status {
             Status::Ok => "ok".to_string(),
@@ -293,8 +430,8 @@ pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<
         };
         writeln!(
             f,
-            "{},{},{},{},{},{:e},{status},{},{},{},{},{:.4},{:.5},{:e},{:e},{:e},{:e}",
-            p.n, pr.dofs, pr.pairs, p.solver.label(), is_default as u8, p.eps, p.iterations, p.n_a, p.n_a_power, p.inner, p.setup_s, p.solve_s, p.err_u, p.err_lambda, p.kkt, p.residual
+            "{},{},{},{},{},{},{:e},{status},{},{},{},{},{:.4},{:.5},{:e},{:e},{:e},{:e}",
+            p.n, p.subdomains, pr.dofs, pr.pairs, p.solver.label(), is_default as u8, p.eps, p.iterations, p.n_a, p.n_a_power, p.inner, p.setup_s, p.solve_s, p.err_u, p.err_lambda, p.kkt, p.residual
         )
         .map_err(io)?;
     }

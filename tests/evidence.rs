@@ -62,12 +62,51 @@ fn work_precision_measures_every_row_against_the_reference() {
     }
 }
 
+/// The dual solvers on the TFETI dual beside the monolithic one: every row against the same
+/// monolithic reference (u of every subdomain copy), the preconditioned TSSN rows on TFETI only,
+/// one plot per dual.
+#[test]
+fn work_precision_runs_the_dual_solvers_on_tfeti_too() {
+    let dir = tmpdir("wp_tfeti");
+    let path = dir.join("wp.csv");
+    let o = Command::new(BIN)
+        .args(["work-precision", "--scene", root().join("run/seed.toml").to_str().unwrap(), "--sizes", "5", "--subdomains", "0,2", "--eps", "1e-4,1e-8"])
+        .args(["--solvers", "ssn-bicgstab,tssn,tssn:dirichlet", "--csv", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("N = 5, TFETI S = 2 (") && out.contains("N = 5, monolithic ("), "{out}");
+    let rows = csv(&path);
+    let on = |s: &str| rows.iter().filter(|r| r["S"] == s).count();
+    // tssn:dirichlet has no monolithic row
+    assert_eq!((on("0"), on("2")), (4, 6), "{rows:?}");
+    assert!(!rows.iter().any(|r| r["S"] == "0" && r["solver"] == "tssn:dirichlet"));
+    for r in &rows {
+        let eps = num(r, "eps");
+        assert!(r["status"] == "ok" && num(r, "err_u") <= 100.0 * eps && num(r, "kkt") <= 10.0 * eps, "{r:?}");
+        assert!(num(r, "nA") > 0.0, "{r:?}");
+    }
+    // the preconditioned TSSN takes fewer products than plain TSSN on the same TFETI dual
+    let na = |solver: &str| rows.iter().filter(|r| r["S"] == "2" && r["solver"] == solver && r["eps"] == "1e-8").map(|r| num(r, "nA")).sum::<f64>();
+    assert!(na("tssn:dirichlet") < na("tssn"), "{rows:?}");
+    if Command::new("gnuplot").arg("--version").output().is_ok() {
+        let p = Command::new(root().join("run/work-precision-plot")).args([path.to_str().unwrap(), dir.to_str().unwrap()]).output().unwrap();
+        assert!(p.status.success(), "{}", String::from_utf8_lossy(&p.stderr));
+        for png in ["work_precision_N5.png", "work_precision_N5_S2.png"] {
+            assert_eq!(&std::fs::read(dir.join(png)).unwrap()[1..4], b"PNG", "{png}");
+        }
+    }
+}
+
 #[test]
 fn work_precision_bad_arguments_give_one_line() {
     for (args, key) in [
         (&["--eps", "0"][..], "--eps"),
         (&["--sizes", "1"], "--sizes"),
         (&["--solvers", "newton"], "newton"),
+        (&["--solvers", "gimssn:dirichlet"], "gimssn takes no preconditioner"),
+        (&["--subdomains", "2", "--set", "decomposition.projector=\"orthogonal\""], "--subdomains"),
         (&["--max-seconds=-1"], "--max-seconds"),
         (&["--csv", "/proc/no-such-dir/x.csv"], "/proc/no-such-dir"),
     ] {

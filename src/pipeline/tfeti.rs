@@ -104,8 +104,23 @@ impl DistributionStats {
     }
 }
 
-/// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
-pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
+/// The TFETI dual problem of a scene, ready to iterate: the decomposition, the constraint rows,
+/// the operator F (with the preconditioner TSSN asks for) and b̃, this rank's part of Λ.
+pub struct TfetiProblem<'c, C: Comm> {
+    pub decomposition: Decomposition,
+    pub constraints: constraints::Constraints,
+    /// Rank of every subdomain.
+    pub owner: Vec<usize>,
+    pub dual: TfetiDual<'c, C>,
+    pub b: Vec<f64>,
+    pub set: Lambda,
+    pub coarse_dim: usize,
+    pub nnz_c: usize,
+}
+
+/// Phases `decompose`, `factorize`, `coarse`, `dual` (and `preconditioner` when TSSN runs with
+/// one on a contact scene): everything before the iterations.
+pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<TfetiProblem<'c, C>> {
     let mesh = &model.mesh;
     let dec = &ls.scene.decomposition;
     let contact = model.pairs.as_ref();
@@ -142,6 +157,17 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         None => Lambda { layout: crate::dual::Layout::contact(0, false), tangent: vec![] },
     }
     .with_free(dual.layout.free);
+    Ok(TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c })
+}
+
+/// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
+pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
+    let mesh = &model.mesh;
+    let dec = &ls.scene.decomposition;
+    let contact = model.pairs.as_ref();
+    let orthogonal = dec.projector == Projector::Orthogonal;
+    let s = &ls.scene.solver;
+    let TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
     let params = super::solver_params(s);
     let name = if contact.is_some() { s.method.name() } else { "cg" };
     let (sol, smalse) = t.phase(comm, "iterate", || {
