@@ -169,6 +169,7 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
         return Err(tresca_feti::Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
     }
+    table1::check_columns(&args.columns)?;
     // a CSV that cannot be written fails now, not after the whole run
     let csv_dir = comm.agree(match args.csv.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
         Some(d) if comm.is_root() => std::fs::create_dir_all(d).map_err(|e| tresca_feti::Error::io(d.display().to_string(), e)),

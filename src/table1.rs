@@ -157,11 +157,17 @@ pub fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64
     v[0] / v[1].max(f64::MIN_POSITIVE)
 }
 
+/// The columns table1 can run: none with a preconditioner (the monolithic dual has none).
+pub fn check_columns(columns: &[Column]) -> Result<()> {
+    match columns.iter().find(|c| c.preconditioner() != Preconditioner::None) {
+        Some(c) => Err(Error::scene("--solvers", format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label()))),
+        None => Ok(()),
+    }
+}
+
 /// Runs the table; `progress` is called with each finished row (rank 0 prints it).
 pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Result<Vec<Row>> {
-    if let Some(c) = args.columns.iter().find(|c| c.preconditioner() != Preconditioner::None) {
-        return Err(Error::scene("--solvers", format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label())));
-    }
+    check_columns(&args.columns)?;
     let mut rows = Vec::new();
     for &n in &args.sizes {
         let mut sets = vec![format!("mesh.n={n}")];

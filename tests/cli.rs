@@ -489,6 +489,7 @@ fn table1_prints_the_table_and_writes_the_csv() {
     let o = run(&["table1", "--sizes", "4", "--solvers", "tssn:dirichlet"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && stderr.lines().count() == 1 && stderr.contains("tssn:dirichlet needs TFETI"), "{stderr}");
+    assert!(o.stdout.is_empty(), "nothing printed before the refusal");
     // a CSV that cannot be written fails before the run, with nothing left behind
     let o = run(&["table1", "--sizes", "4", "--csv", "/proc/no-such-dir/t.csv"]);
     assert_eq!(o.status.code(), Some(1));
