@@ -135,12 +135,12 @@ fn lambda_error(lambda: &[f64], reference: &[f64]) -> f64 {
 type Measure<'m> = dyn Fn(&QpSolution) -> (f64, f64, f64) + 'm;
 
 /// A point not yet run.
-fn blank(n: usize, subdomains: usize, solver: Solver, eps: f64, setup_s: f64) -> Point {
+fn blank(n: usize, subdomains: usize, solver: Solver, setup_s: f64) -> Point {
     Point {
         n,
         subdomains,
         solver,
-        eps,
+        eps: f64::NAN,
         status: Status::Skipped,
         iterations: 0,
         n_a: 0,
@@ -196,16 +196,14 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         v
     };
     let (eps_dual, eps_clarabel) = (sorted(&args.eps), sorted(&args.clarabel_eps));
+    let sets_at = |n: usize| std::iter::once(format!("mesh.n={n}")).chain(args.sets.iter().cloned()).collect::<Vec<_>>();
     // a scene the TFETI rows cannot use fails before any solve
     if let (Some(&s), Some(&n)) = (args.subdomains.iter().find(|&&s| s > 0), args.sizes.first()) {
-        let mut sets = vec![format!("mesh.n={n}")];
-        sets.extend(args.sets.iter().cloned());
-        tfeti_scene(args, &sets, s)?;
+        tfeti_scene(args, &sets_at(n), s)?;
     }
     let (mut problems, mut points) = (Vec::new(), Vec::new());
     for &n in &args.sizes {
-        let mut sets = vec![format!("mesh.n={n}")];
-        sets.extend(args.sets.iter().cloned());
+        let sets = sets_at(n);
         let ls = crate::scene::load(&args.scene, &sets)?;
         let model = crate::model::build(&ls)?;
         let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "work-precision needs a scene with contact"))?;
@@ -241,8 +239,8 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                     match solver {
                         // the monolithic dual has no preconditioner
                         Solver::Dual(c) if c.preconditioner() != Preconditioner::None => {}
-                        Solver::Dual(c) => sweep(&dual, &b, &set, c, &base, args, &eps_dual, &blank(n, 0, solver, 0.0, factorize_s), &measure, &mut on_point, &mut points),
-                        Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, 0.0, factorize_s), &mut on_point, &mut points)?,
+                        Solver::Dual(c) => sweep(&dual, &b, &set, c, &base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
+                        Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, factorize_s), &mut on_point, &mut points)?,
                     }
                 }
                 problems.push(problem);
@@ -275,7 +273,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                     let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
                     (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&set, &li, &ri, bnorm).worst())
                 };
-                sweep(&prob.dual, &prob.b, &prob.set, c, &base, args, &eps_dual, &blank(n, s, solver, 0.0, setup_s + pc_s), &measure, &mut on_point, &mut points);
+                sweep(&prob.dual, &prob.b, &prob.set, c, &base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
             }
             problems.push(problem);
         }
