@@ -139,7 +139,10 @@ impl Comm for MpiComm {
         let mut len = [buf.len() as u64];
         root.broadcast_into(&mut len[..]);
         buf.resize(len[0] as usize, 0);
-        root.broadcast_into(&mut buf[..]);
+        // an empty buffer is a null pointer to MPI (MPI_ERR_ARG): nothing to send then
+        if !buf.is_empty() {
+            root.broadcast_into(&mut buf[..]);
+        }
     }
     fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
         let r = self.world.process_at_rank(root as i32);

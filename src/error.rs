@@ -22,6 +22,14 @@ pub enum Error {
     /// Numerical failure (factorization breakdown, NaN, no convergence), with the reason.
     #[error("{what}: {reason}")]
     Numerical { what: String, reason: String },
+    /// A dual solver that failed; its typed error (`qp::QpError`, with the counters of an
+    /// unconverged run) is the source.
+    #[error("{what}: {source}")]
+    Solver {
+        what: String,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     #[error("output {path}: {msg}")]
     Output { path: String, msg: String },
     /// An error raised on another MPI rank, forwarded so that every rank stops with it.
@@ -43,6 +51,9 @@ impl Error {
     }
     pub fn numerical(what: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::Numerical { what: what.into(), reason: reason.into() }
+    }
+    pub fn solver(what: impl Into<String>, source: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Error::Solver { what: what.into(), source: Box::new(source) }
     }
     pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Output { path: path.into(), msg: msg.into() }

@@ -1,14 +1,18 @@
 //! tresca-feti: a TFETI solver for 3D linear-elastic contact with Tresca friction.
 //!
-//! Data flows one way, one module per stage:
-//! [`scene`] (TOML) → [`model`] ([`mesh`]: boxes, Gmsh) → [`fem`] (hex8 kernels, assembly) →
-//! [`linalg`] (METIS ordering, sparse Cholesky) → [`pipeline`] (named, timed phases) →
-//! [`output`] (HDF5 + XDMF + JSON). All collective communication goes through [`comm`].
+//! Data flows one way (DESIGN §5): [`scene`] (TOML, every settings enum) → [`model`] ([`mesh`]:
+//! boxes, Gmsh; [`contact`]: pairs and slip bounds) → [`fem`] (hex8 kernels, assembly) →
+//! [`linalg`] → the dual problem ([`dual`]: monolithic; [`feti`]: TFETI) → [`qp`] (the solvers,
+//! the floor of the crate: it imports nothing of the rest) → back to the primal solution, the
+//! contact state and [`output`] (HDF5 + XDMF + JSON), all run by [`pipeline`] (named, timed
+//! phases, one post-solve path, the typed report, the live monitor). All collective
+//! communication goes through [`comm`]. The studies that run the solver (Table 1,
+//! work–precision, the numerical-stability suite, the TFETI benchmark, the primal SOCP
+//! reference) live apart, in [`studies`]; `tests/layout.rs` checks that the module graph has no
+//! cycle.
 
-pub mod bench;
 pub mod comm;
 pub mod contact;
-pub mod decomposition;
 pub mod dual;
 pub mod error;
 pub mod feti;
@@ -19,12 +23,8 @@ pub mod model;
 pub mod output;
 pub mod pipeline;
 pub mod qp;
-pub mod recovery;
 pub mod scene;
-pub mod socp;
-pub mod stress;
-pub mod table1;
-pub mod workprecision;
+pub mod studies;
 
 pub use error::{Error, Result};
 

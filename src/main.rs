@@ -28,6 +28,9 @@ enum Cmd {
         /// HDF5 output path (the .xdmf and .json go beside it).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// No live progress (phases as they start, one line per outer iteration): the summary only.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// The paper's Table 1: iter/nA of the dual solvers on the seed scene for growing N, with
     /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
@@ -45,9 +48,9 @@ enum Cmd {
         eps: f64,
         /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp, tssn;
         /// `:paper` takes the paper's settings.
-        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::table1::Column::parse,
+        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::studies::table1::Column::parse,
               default_value = "imssn:paper,gimssn,ssn-bicgstab")]
-        solvers: Vec<tresca_feti::table1::Column>,
+        solvers: Vec<tresca_feti::studies::table1::Column>,
         /// CSV output (one line per N and solver).
         #[arg(long, default_value = "out/table1.csv")]
         csv: PathBuf,
@@ -119,9 +122,9 @@ enum Cmd {
         clarabel_eps: Vec<f64>,
         /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), tssn (TFETI also
         /// `tssn:lumped`, `tssn:dirichlet`), clarabel.
-        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::workprecision::Solver::parse,
+        #[arg(long, value_delimiter = ',', value_parser = tresca_feti::studies::work_precision::Solver::parse,
               default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,tssn,clarabel")]
-        solvers: Vec<tresca_feti::workprecision::Solver>,
+        solvers: Vec<tresca_feti::studies::work_precision::Solver>,
         /// ε of the reference solve (SSN-BiCGSTAB).
         #[arg(long, default_value_t = 1e-12)]
         reference_eps: f64,
@@ -140,15 +143,16 @@ enum Cmd {
     /// The numerical-stability suite: solve every scene of a folder (run/stress/*.toml) and
     /// print a table (iterations, nA, time, residuals, KKT, status). Exit code 1 if a run
     /// returns a result that fails its checks (non-finite, above ε, KKT above KKT_FACTOR·ε);
-    /// a run that stops with a stated reason is listed as stopped.
-    Stress {
+    /// a run that stops with a stated reason is listed as stopped. `stress` is an alias.
+    #[command(alias = "stress")]
+    Stability {
         #[arg(long, default_value = "run/stress")]
         dir: PathBuf,
         /// Override a value in every scene, e.g. `--set solver.method="gimssn"`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
-        /// Folder for the results (<scene>.h5/.xdmf/.json) and stress.csv.
-        #[arg(long, default_value = "out/stress")]
+        /// Folder for the results (<scene>.h5/.xdmf/.json) and stability.csv.
+        #[arg(long, default_value = "out/stability")]
         out: PathBuf,
         #[arg(long, default_value_t = 100.0)]
         kkt_factor: f64,
@@ -161,8 +165,8 @@ enum Cmd {
     },
 }
 
-fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::Result<()> {
-    use tresca_feti::table1;
+fn table1<C: Comm>(comm: &C, args: &tresca_feti::studies::table1::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::studies::table1;
     if !(args.eps > 0.0 && args.eps.is_finite()) {
         return Err(tresca_feti::Error::scene("--eps", format!("must be finite and > 0, got {}", args.eps)));
     }
@@ -179,11 +183,21 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     if comm.is_root() {
         println!("{}", table1::header(args, comm.size()));
     }
-    let rows = table1::run(comm, args, |row| {
-        if comm.is_root() {
-            println!("{}", table1::format_row(row));
-        }
-    })?;
+    // each solve on stderr as it finishes (progress), the table's rows on stdout
+    let rows = table1::run(
+        comm,
+        args,
+        |cell| {
+            if comm.is_root() {
+                eprintln!("  {}", table1::format_cell(cell));
+            }
+        },
+        |row| {
+            if comm.is_root() {
+                println!("{}", table1::format_row(row));
+            }
+        },
+    )?;
     if let (true, Some(path)) = (comm.is_root(), &args.csv) {
         table1::write_csv(path, args, &rows)?;
         println!("wrote {}", path.display());
@@ -191,36 +205,36 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::table1::Args) -> tresca_feti::R
     Ok(())
 }
 
-fn stress<C: Comm>(comm: &C, args: &tresca_feti::stress::Args) -> tresca_feti::Result<()> {
-    use tresca_feti::stress::{self, Outcome};
+fn stability<C: Comm>(comm: &C, args: &tresca_feti::studies::stability::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::studies::stability::{self, Outcome};
     if !(args.kkt_factor > 0.0 && args.kkt_factor.is_finite()) {
         return Err(tresca_feti::Error::scene("--kkt-factor", format!("must be finite and > 0, got {}", args.kkt_factor)));
     }
     let root = comm.is_root();
     if root {
-        println!("stress suite: {} ({} rank(s)); converged = ε met and KKT ≤ {}·ε", args.dir.display(), comm.size(), args.kkt_factor);
-        println!("{}", stress::header());
+        println!("stability suite: {} ({} rank(s)); converged = ε met and KKT ≤ {}·ε", args.dir.display(), comm.size(), args.kkt_factor);
+        println!("{}", stability::header());
     }
-    let rows = stress::run(comm, args, |r| {
+    let rows = stability::run(comm, args, |r| {
         if root {
-            println!("{}", stress::format_row(r));
+            println!("{}", stability::format_row(r));
         }
     })?;
     let count = |f: fn(&Outcome) -> bool| rows.iter().filter(|r| f(&r.outcome)).count();
     let (ok, stopped, wrong) = (count(|o| *o == Outcome::Converged), count(|o| matches!(o, Outcome::Stopped(_))), count(|o| matches!(o, Outcome::Wrong(_))));
     if root {
-        let csv = args.out.join("stress.csv");
-        stress::write_csv(&csv, &rows)?;
+        let csv = args.out.join("stability.csv");
+        stability::write_csv(&csv, &rows)?;
         println!("{} scenes: {ok} converged, {stopped} stopped with a reason, {wrong} wrong; wrote {}", rows.len(), csv.display());
     }
     if wrong > 0 {
-        return Err(tresca_feti::Error::numerical("the stress suite", format!("{wrong} scene(s) returned a result that fails its checks (see the table)")));
+        return Err(tresca_feti::Error::numerical("the stability suite", format!("{wrong} scene(s) returned a result that fails its checks (see the table)")));
     }
     Ok(())
 }
 
-fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::workprecision::Args) -> tresca_feti::Result<()> {
-    use tresca_feti::workprecision as wp;
+fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::studies::work_precision::Args) -> tresca_feti::Result<()> {
+    use tresca_feti::studies::work_precision as wp;
     use tresca_feti::Error;
     let positive = |key: &str, v: f64| if v > 0.0 && v.is_finite() { Ok(()) } else { Err(Error::scene(key, format!("must be finite and > 0, got {v}"))) };
     for &e in &args.eps {
@@ -326,7 +340,7 @@ fn bench_tfeti(
     let exe = std::env::current_exe().map_err(|e| Error::io("current executable", e))?;
     let mpirun_args = mpirun_args.split_whitespace().map(String::from).collect();
     let list = ranks.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(",");
-    let args = tresca_feti::bench::Args {
+    let args = tresca_feti::studies::bench::Args {
         exe,
         scene,
         sets,
@@ -345,8 +359,8 @@ fn bench_tfeti(
     let mode = if weak { "weak scaling (N·P^{1/3}, S·P), " } else { "" };
     let best = if repeat > 1 { format!(", best of {repeat} runs") } else { String::new() };
     println!("TFETI benchmark: {mode}ranks {list} ({}){best}, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.mpirun);
-    println!("{}", tresca_feti::bench::table_header());
-    tresca_feti::bench::run(&args, |r| println!("{}", r.table()))?;
+    println!("{}", tresca_feti::studies::bench::table_header());
+    tresca_feti::studies::bench::run(&args, |r| println!("{}", r.table()))?;
     println!("wrote {}", csv.display());
     Ok(())
 }
@@ -387,20 +401,20 @@ fn main() -> ExitCode {
         faer::set_global_parallelism(faer::Par::Seq);
     }
     let result = match cli.cmd {
-        Cmd::Solve { scene, set, out } => pipeline::run_solve(&comm, &scene, &set, out).map(|s| {
+        Cmd::Solve { scene, set, out, quiet } => pipeline::run_solve(&comm, &scene, &set, out, quiet).map(|s| {
             if comm.is_root() {
                 print_summary(&s);
             }
         }),
         Cmd::Table1 { scene, set, sizes, eps, solvers, csv, no_error } => {
-            let args = tresca_feti::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
+            let args = tresca_feti::studies::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
             table1(&comm, &args)
         }
         Cmd::WorkPrecision { scene, set, sizes, subdomains, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
-            let args = tresca_feti::workprecision::Args { scene, sets: set, sizes, subdomains, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
+            let args = tresca_feti::studies::work_precision::Args { scene, sets: set, sizes, subdomains, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
             work_precision(&comm, &args)
         }
-        Cmd::Stress { dir, set, out, kkt_factor } => stress(&comm, &tresca_feti::stress::Args { dir, sets: set, out, kkt_factor }),
+        Cmd::Stability { dir, set, out, kkt_factor } => stability(&comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
         Cmd::Check { scene, set } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
@@ -425,75 +439,55 @@ fn main() -> ExitCode {
 
 fn print_summary(s: &pipeline::Summary) {
     let r = &s.report;
-    println!("tresca-feti {} — {} ({}), {} rank(s)", env!("CARGO_PKG_VERSION"), r["title"].as_str().unwrap_or(""), r["scene"].as_str().unwrap_or(""), r["ranks"]);
-    println!("problem: {}", r["problem"].as_str().unwrap_or(""));
-    let m = &r["mesh"];
-    println!("mesh: {} nodes, {} hexahedra, n = {} DOFs ({} free)", m["nodes"], m["elements"], m["dofs"], m["free_dofs"]);
-    if let Some(tf) = r["tfeti"].as_object() {
-        let subs = tf["subdomains"].as_array().map_or(0, |v| v.len());
-        let nnz_l: f64 = tf["subdomains"].as_array().into_iter().flatten().map(|x| x["nnz_l"].as_f64().unwrap_or(0.0)).sum();
+    println!("tresca-feti {} — {} ({}), {} rank(s)", env!("CARGO_PKG_VERSION"), r.title, r.scene, r.ranks);
+    println!("problem: {}", r.problem);
+    let m = &r.mesh;
+    println!("mesh: {} nodes, {} hexahedra, n = {} DOFs ({} free)", m.nodes, m.elements, m.dofs, m.free_dofs);
+    if let Some(tf) = &r.tfeti {
+        let nnz_l: f64 = tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum();
+        let mul = &tf.multipliers;
         println!(
-            "TFETI: {subs} subdomains {}, multipliers {} contact + {} gluing + {} Dirichlet, coarse {} × {}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
-            tf["subdomains_per_body"],
-            tf["multipliers"]["contact"],
-            tf["multipliers"]["gluing"],
-            tf["multipliers"]["dirichlet"],
-            tf["coarse_dim"],
-            tf["coarse_dim"],
-            tf["gluing_jump_relative"].as_f64().unwrap_or(f64::NAN),
-            tf["coarse_feasibility"].as_f64().unwrap_or(f64::NAN),
-            tf["projector"].as_str().unwrap_or("")
+            "TFETI: {} subdomains {:?}, multipliers {} contact + {} gluing + {} Dirichlet, coarse {} × {}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
+            tf.subdomains.len(),
+            tf.subdomains_per_body,
+            mul.contact,
+            mul.gluing,
+            mul.dirichlet,
+            tf.coarse_dim,
+            tf.coarse_dim,
+            tf.gluing_jump,
+            tf.feasibility,
+            format!("{:?}", tf.projector).to_lowercase()
         );
+    } else {
+        for b in &r.bodies {
+            println!("  {:<10} {:>8} free DOFs  nnz(L) {:>11}  ‖Ku−f‖/‖f‖ {:.1e}  rank {}", b.name, b.free_dofs, b.nnz_l, b.residual, b.rank);
+        }
     }
-    for b in r["bodies"].as_array().into_iter().flatten().filter(|_| r["tfeti"].is_null()) {
-        println!(
-            "  {:<10} {:>8} free DOFs  nnz(L) {:>11}  ‖Ku−f‖/‖f‖ {:.1e}  rank {}",
-            b["name"].as_str().unwrap_or(""),
-            b["free_dofs"],
-            b["nnz_L"],
-            b["relative_residual"].as_f64().unwrap_or(f64::NAN),
-            b["rank"]
-        );
-    }
-    if let Some(sv) = r["solver"].as_object() {
+    if let (Some(sv), Some(c)) = (&r.solver, &r.contact) {
+        let i = &sv.info;
         println!(
             "solver {}: {} outer iterations, nA = {} (+{} power iterations), {} inner iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e}), KKT residual {:.1e}",
-            sv["method"].as_str().unwrap_or(""),
-            sv["outer_iterations"],
-            sv["nA"],
-            sv["nA_power"],
-            sv["inner_iterations"],
-            sv["final_relative_reduced_gradient"].as_f64().unwrap_or(f64::NAN),
-            sv["eps"].as_f64().unwrap_or(f64::NAN),
-            sv["kkt_worst"].as_f64().unwrap_or(f64::NAN)
+            sv.method, i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err, sv.eps, sv.kkt_worst
         );
-        let c = &r["contact"];
+        let f = c.total_force_on_slave;
         println!(
             "contact: {} pairs — {} open, {} stick, {} slip; {} on the slip bound; contact force on the slave body ({:.4e}, {:.4e}, {:.4e})",
-            c["pairs"], c["open"], c["stick"], c["slip"], c["on_slip_bound"],
-            c["total_force_on_slave"][0].as_f64().unwrap_or(0.0),
-            c["total_force_on_slave"][1].as_f64().unwrap_or(0.0),
-            c["total_force_on_slave"][2].as_f64().unwrap_or(0.0)
+            c.pairs, c.open, c.stick, c.slip, c.on_slip_bound, f[0], f[1], f[2]
         );
     }
-    let res = &r["results"];
+    let res = &r.results;
     println!(
         "max |u| = {:.4e} m (body {}), max von Mises = {:.4e} MPa",
-        res["max_displacement"].as_f64().unwrap_or(0.0),
-        res["max_displacement_body"].as_str().unwrap_or("?"),
-        res["max_von_mises"].as_f64().unwrap_or(0.0)
+        res.max_displacement,
+        res.max_displacement_body.as_deref().unwrap_or("?"),
+        res.max_von_mises
     );
-    let phases: Vec<String> = r["timings"]
-        .as_object()
-        .into_iter()
-        .flatten()
-        .filter(|(k, _)| k.as_str() != "total")
-        .map(|(k, v)| format!("{k} {:.3}", v.as_f64().unwrap_or(0.0)))
-        .collect();
-    println!("time [s]: {} | total {:.3}", phases.join(", "), r["timings"]["total"].as_f64().unwrap_or(0.0));
+    let phases: Vec<String> = r.timings.0.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+    println!("time [s]: {} | total {:.3}", phases.join(", "), r.timings.total());
     let files: Vec<String> = s.files.iter().map(|p| p.display().to_string()).collect();
     println!("wrote {}", files.join(", "));
-    if let Some(n) = r["output_verified_values"].as_u64() {
-        println!("read back: {n} values on {} ranks match the fields in memory", r["ranks"]);
+    if let Some(n) = r.output_verified_values {
+        println!("read back: {n} values on {} ranks match the fields in memory", r.ranks);
     }
 }

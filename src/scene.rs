@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::dual::Preconditioner;
+use crate::qp;
 
 /// A whole scene: bodies, materials, boundary conditions, contact, solver, decomposition, output.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -31,10 +31,11 @@ pub struct Scene {
     pub traction: Vec<Traction>,
     #[serde(default)]
     pub contact: ContactSettings,
-    #[serde(default)]
+    /// Read by [`SolverSettings::from_table`] (each key checked against the method).
+    #[serde(default, skip_deserializing)]
     pub solver: SolverSettings,
     #[serde(default)]
-    pub decomposition: Decomposition,
+    pub decomposition: DecompositionSettings,
     #[serde(default)]
     pub factorization: Factorization,
     #[serde(default)]
@@ -196,119 +197,107 @@ pub enum Friction {
 
 pub use crate::qp::{CgStop, Method};
 
-#[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SolverSettings {
-    #[serde(default = "default_method")]
-    pub method: Method,
-    /// Relative stopping tolerance ε: ‖r̃_ρ(λ)‖ ≤ ε‖b‖.
-    #[serde(default = "default_eps")]
-    pub eps: f64,
-    /// ρ = rho_factor / σ_max(A).
-    #[serde(default = "default_rho_factor")]
-    pub rho_factor: f64,
-    #[serde(default = "default_rtol")]
-    pub rtol: f64,
-    #[serde(default = "default_cfact")]
-    pub cfact: f64,
-    /// TSSN's forcing exponent θ: inner tolerance rtol·(err_k/err_0)^θ.
-    #[serde(default = "default_forcing")]
-    pub forcing: f64,
-    /// TSSN's preconditioner on the TFETI gluing/Dirichlet block: "none", "lumped" or
-    /// "dirichlet" (built only when TSSN runs on the TFETI dual).
-    #[serde(default = "default_preconditioner")]
-    pub preconditioner: Preconditioner,
-    #[serde(default = "default_max_outer")]
-    pub max_outer: usize,
-    #[serde(default = "default_max_inner")]
-    pub max_inner: usize,
-    /// Power iterations for the estimate of σ_max(A).
-    #[serde(default = "default_power_iterations")]
-    pub power_iterations: usize,
-    /// What inner tolerances are relative to: "rhs" (‖b‖) or "initial-gradient" (the paper's).
-    #[serde(default = "default_cg_stop")]
-    pub cg_stop: CgStop,
-    /// No inner solve is asked for less than inner_floor·ε·‖b‖ (0: none, as in the paper).
-    #[serde(default = "default_inner_floor")]
-    pub inner_floor: f64,
-    /// A fixed relative inner tolerance for SSN-BiCGSTAB instead of the adaptive one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub inner_tol: Option<f64>,
-    /// MPGP's proportioning constant Γ.
-    #[serde(default = "default_gamma")]
-    pub gamma: f64,
+/// The FETI preconditioner of the TFETI gluing and Dirichlet block (`solver.preconditioner`;
+/// where it applies is decided by `pipeline::preconditioner`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preconditioner {
+    #[default]
+    None,
+    /// K_s's block on the DOFs the rows touch.
+    Lumped,
+    /// The Schur complement of K_s onto those DOFs.
+    Dirichlet,
 }
 
-fn default_cg_stop() -> CgStop {
-    CgStop::Rhs
-}
-fn default_inner_floor() -> f64 {
-    0.1
-}
-fn default_gamma() -> f64 {
-    1.0
-}
-
-/// The fastest to ε = 1e-6 on the seed scene at every N = 16…41 (README, Table 1 at ε = 1e-6),
-/// and to every error in u from 1e-4 to 1e-8 at N = 8, 16, 24 (README, work–precision).
-fn default_method() -> Method {
-    Method::SsnBicgstab
-}
-fn default_eps() -> f64 {
-    1e-6
-}
-fn default_rho_factor() -> f64 {
-    1.9
-}
-fn default_rtol() -> f64 {
-    0.5
-}
-fn default_cfact() -> f64 {
-    0.9
-}
-fn default_forcing() -> f64 {
-    1.0
-}
-fn default_preconditioner() -> Preconditioner {
-    Preconditioner::None
-}
-fn default_max_outer() -> usize {
-    1000
-}
-fn default_max_inner() -> usize {
-    10_000
-}
-fn default_power_iterations() -> usize {
-    30
-}
-
-impl Default for SolverSettings {
-    fn default() -> Self {
-        SolverSettings {
-            method: default_method(),
-            eps: default_eps(),
-            rho_factor: default_rho_factor(),
-            rtol: default_rtol(),
-            cfact: default_cfact(),
-            forcing: default_forcing(),
-            preconditioner: default_preconditioner(),
-            max_outer: default_max_outer(),
-            max_inner: default_max_inner(),
-            power_iterations: default_power_iterations(),
-            cg_stop: default_cg_stop(),
-            inner_floor: default_inner_floor(),
-            inner_tol: None,
-            gamma: default_gamma(),
+impl Preconditioner {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preconditioner::None => "none",
+            Preconditioner::Lumped => "lumped",
+            Preconditioner::Dirichlet => "dirichlet",
         }
     }
 }
 
-/// How each body is split (TFETI, DESIGN §2).
+/// The `[solver]` table: `method`, the settings every method reads ([`qp::Common`]), the
+/// method's own ([`qp::MethodParams`]: a key the method does not read is an error) and the
+/// FETI preconditioner. Defaults live with the solvers' parameter structs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SolverSettings {
+    pub params: qp::Params,
+    pub preconditioner: Preconditioner,
+}
+
+impl SolverSettings {
+    /// Reads the `[solver]` table; errors name the key (`solver.<key>`).
+    pub fn from_table(mut t: toml::Table) -> Result<Self> {
+        fn value<T: serde::de::DeserializeOwned>(key: &str, v: toml::Value) -> Result<T> {
+            serde_path_to_error::deserialize(v).map_err(|e| {
+                let sub = e.path().to_string();
+                let key = if sub == "." { format!("solver.{key}") } else { format!("solver.{sub}") };
+                Error::scene(key, e.inner().message().replace('\n', " "))
+            })
+        }
+        let method: Method = t.remove("method").map_or(Ok(Method::default()), |v| value("method", v))?;
+        let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::None), |v| value("preconditioner", v))?;
+        let common_keys = Self::common_keys();
+        let (common, own): (toml::Table, toml::Table) = t.into_iter().partition(|(k, _)| common_keys.contains(k));
+        let common: qp::Common = serde_path_to_error::deserialize(toml::Value::Table(common)).map_err(|e| {
+            Error::scene(format!("solver.{}", e.path()), e.inner().message().replace('\n', " "))
+        })?;
+        let mut track = serde_path_to_error::Track::new();
+        let own = qp::MethodParams::deserialize(method, serde_path_to_error::Deserializer::new(toml::Value::Table(own), &mut track)).map_err(|e| {
+            let msg = e.message().replace('\n', " ");
+            match msg.strip_prefix("unknown field `").and_then(|r| r.split_once('`')) {
+                Some((key, rest)) => {
+                    let its = rest.trim_start_matches(", ").replace("expected one of ", "").replace("expected ", "");
+                    let its = if its.contains("no fields") { "none".to_string() } else { its };
+                    Error::scene(
+                        format!("solver.{key}"),
+                        format!("not a setting of method \"{}\" (its own: {its}; every method's: {})", method.name(), common_keys.join(", ")),
+                    )
+                }
+                None => Error::scene(format!("solver.{}", track.path()), msg),
+            }
+        })?;
+        let params = qp::Params { common, method: own };
+        params.validate().map_err(|e| Error::scene(format!("solver.{}", e.key), e.msg))?;
+        Ok(SolverSettings { params, preconditioner })
+    }
+
+    /// The keys of [`qp::Common`].
+    fn common_keys() -> Vec<String> {
+        toml::Table::try_from(qp::Common::default()).map(|t| t.keys().cloned().collect()).unwrap_or_default()
+    }
+
+    /// The table as [`SolverSettings::from_table`] reads it.
+    pub fn to_table(&self) -> toml::Table {
+        let mut t = toml::Table::new();
+        t.insert("method".into(), self.params.method().name().into());
+        for part in [toml::Table::try_from(&self.params.common), toml::Table::try_from(&self.params.method)] {
+            t.extend(part.unwrap_or_default());
+        }
+        if self.preconditioner != Preconditioner::None {
+            t.insert("preconditioner".into(), self.preconditioner.name().into());
+        }
+        t
+    }
+}
+
+impl Serialize for SolverSettings {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.to_table().serialize(s)
+    }
+}
+
+/// How each body is split (TFETI, DESIGN §2): the `[decomposition]` table.
 #[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct Decomposition {
+// `rename`: the messages for a malformed table keep saying "expected struct Decomposition"
+#[serde(deny_unknown_fields, rename = "Decomposition")]
+pub struct DecompositionSettings {
     /// METIS subdomains per body. 1 is the monolithic dual (Dirichlet eliminated, no gluing,
-    /// no coarse problem) unless `tfeti = true`. Absent: automatic ([`Decomposition::parts`]).
+    /// no coarse problem) unless `tfeti = true`. Absent: automatic ([`DecompositionSettings::parts`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub subdomains: Option<usize>,
     /// Instead of `subdomains`: as many subdomains per body as give about this many DOFs each.
@@ -319,7 +308,7 @@ pub struct Decomposition {
     pub tfeti: bool,
     /// Gluing rows of the interface DOFs.
     #[serde(default)]
-    pub gluing: crate::feti::constraints::Gluing,
+    pub gluing: Gluing,
     /// How Gλ = e is kept: the oblique projector P̃ (one QP solve) or the orthogonal one with
     /// SMALSE-M's augmented-Lagrangian loop around the QP solver.
     #[serde(default)]
@@ -343,13 +332,13 @@ pub const AUTO_MIN_SUBDOMAINS: usize = 32;
 /// … and no more than about this many DOFs per subdomain.
 pub const AUTO_TARGET_DOFS: usize = 6_500;
 
-impl Default for Decomposition {
+impl Default for DecompositionSettings {
     fn default() -> Self {
-        Decomposition { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
+        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
     }
 }
 
-impl Decomposition {
+impl DecompositionSettings {
     /// Subdomains for a body with `dofs` DOFs.
     pub fn parts(&self, dofs: usize) -> usize {
         match (self.target_dofs, self.subdomains) {
@@ -366,7 +355,16 @@ impl Decomposition {
     }
 }
 
-/// See [`Decomposition::projector`].
+/// How the copies of an interface DOF are glued.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Gluing {
+    #[default]
+    Orthonormal,
+    Chain,
+}
+
+/// See [`DecompositionSettings::projector`].
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Projector {
@@ -467,11 +465,17 @@ pub fn parse(text: &str, file: &str, overrides: &[String]) -> Result<Scene> {
     for o in overrides {
         apply_override(&mut table, o)?;
     }
+    let solver = match table.remove("solver") {
+        None => SolverSettings::default(),
+        Some(toml::Value::Table(t)) => SolverSettings::from_table(t)?,
+        Some(_) => return Err(Error::scene("solver", "must be a table")),
+    };
     let mut scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
         let path = e.path().to_string();
         let msg = e.inner().message().replace('\n', " ");
         Error::Scene { key: if path == "." { file.into() } else { path }, msg }
     })?;
+    scene.solver = solver;
     scene.resolve();
     scene.validate()?;
     Ok(scene)
@@ -672,36 +676,6 @@ impl Scene {
                         return Err(Error::scene(k("friction.direction"), "must be a non-zero vector"));
                     }
                 }
-            }
-        }
-        let s = &self.solver;
-        let pos = |key: &str, v: f64| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::scene(format!("solver.{key}"), format!("must be finite and > 0, got {v}")))
-            }
-        };
-        pos("eps", s.eps)?;
-        pos("rho_factor", s.rho_factor)?;
-        pos("gamma", s.gamma)?;
-        pos("forcing", s.forcing)?;
-        if !(s.inner_floor >= 0.0 && s.inner_floor.is_finite()) {
-            return Err(Error::scene("solver.inner_floor", format!("must be finite and ≥ 0, got {}", s.inner_floor)));
-        }
-        if let Some(t) = s.inner_tol {
-            if !(t > 0.0 && t < 1.0) {
-                return Err(Error::scene("solver.inner_tol", format!("must lie in (0, 1), got {t}")));
-            }
-        }
-        for (key, v) in [("rtol", s.rtol), ("cfact", s.cfact)] {
-            if !(v > 0.0 && v < 1.0) {
-                return Err(Error::scene(format!("solver.{key}"), format!("must lie in (0, 1), got {v}")));
-            }
-        }
-        for (key, v) in [("max_outer", s.max_outer), ("max_inner", s.max_inner), ("power_iterations", s.power_iterations)] {
-            if v == 0 {
-                return Err(Error::scene(format!("solver.{key}"), "must be at least 1"));
             }
         }
         if self.decomposition.subdomains == Some(0) {

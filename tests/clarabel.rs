@@ -1,20 +1,19 @@
 //! The dual solvers against an independent one: the primal SOCP of the same discrete problem
-//! (`tresca_feti::socp`: ½uᵀKu − fᵀu + Σᵢ‖Gᵢ(Tᵢu − cτ,ᵢ)‖ s.t. Nu ≤ cν, second-order cones for
-//! the friction terms) solved by the interior-point solver Clarabel: u, the total contact force
-//! and the open/stick/slip counts must agree, for isotropic and orthotropic friction.
+//! (`tresca_feti::studies::socp`: ½uᵀKu − fᵀu + Σᵢ‖Gᵢ(Tᵢu − cτ,ᵢ)‖ s.t. Nu ≤ cν, second-order
+//! cones for the friction terms) solved by the interior-point solver Clarabel: u, the total
+//! contact force and the open/stick/slip counts must agree, for isotropic and orthotropic friction.
 
 use std::path::Path;
 
-use tresca_feti::dual::DualOperator;
+use tresca_feti::dual::DualProblem;
 use tresca_feti::comm::SerialComm;
 use tresca_feti::dual::monolithic::MonolithicDual;
 use tresca_feti::model;
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
-use tresca_feti::qp::lambda::Lambda;
-use tresca_feti::qp::{self, Method, Params};
-use tresca_feti::recovery::{contact_state, OPEN, SLIP, STICK};
+use tresca_feti::qp::{self, Method, Operator, Params, Qp, Silent, Space};
+use tresca_feti::contact::state::{contact_state, OPEN, SLIP, STICK};
 use tresca_feti::scene::{self, OrderingKind};
-use tresca_feti::socp::PrimalSocp;
+use tresca_feti::studies::socp::PrimalSocp;
 
 struct Compared {
     u_rel: f64,
@@ -30,15 +29,15 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
-    let set = Lambda::new(contact);
+    let set = contact.constraint_set();
     let layout = dual.layout;
     let (m, nd) = (layout.m, layout.dim());
 
     // ours, at a tight tolerance (the symmetrized methods converge only linearly there: room)
-    let sol = qp::solve(&dual, &b, &set, &vec![0.0; nd], &Params { eps: 1e-11, method, max_outer: 5000, ..Params::default() }).unwrap();
-    let (u_ours, _) = dual.recover(&sol.lambda);
+    let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; nd], &{ let mut p = Params::new(method).with_eps(1e-11); p.common.max_outer = 5000; p }, &mut Silent).unwrap();
+    let u_ours = dual.recover(&sol.lambda).u;
 
-    // the independent solution (src/socp.rs)
+    // the independent solution (src/studies/socp.rs)
     let socp = PrimalSocp::new(&dual, &b, &set).unwrap();
     let clar = socp.solve(1e-12).unwrap_or_else(|e| panic!("{e}"));
 
@@ -67,10 +66,10 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
     let fnorm = fr.iter().map(|v| v * v).sum::<f64>().sqrt();
     let force_rel = (0..3).map(|k| (fo[k] - fr[k]).powi(2)).sum::<f64>().sqrt() / fnorm;
     // the same classifier on both
-    let bnorm = dual.norm(&b);
+    let bnorm = dual.space().norm(&b);
     let ours = contact_state(contact, &set, &sol.lambda, &sol.gradient, 1e-6, bnorm);
     let reference = contact_state(contact, &set, lam_ref, &clar.gradient, 1e-6, bnorm);
-    let counts = |s: &tresca_feti::recovery::ContactState| [s.count(OPEN), s.count(STICK), s.count(SLIP)];
+    let counts = |s: &tresca_feti::contact::state::ContactState| [s.count(OPEN), s.count(STICK), s.count(SLIP)];
     eprintln!(
         "N = {n}, {method:?}: Clarabel {} in {} iterations; max|Δu|/max|u| = {:.2e}, |ΔF|/|F| = {force_rel:.2e}, open/stick/slip {:?} vs {:?}",
         clar.status,

@@ -87,6 +87,12 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"cg\""], &["solver.method", "cg"]);
     assert_clean_failure("inner-tol", SEED, &["--set", "mesh.n=3", "--set", "solver.inner_tol=2.0"], &["solver.inner_tol"]);
     assert_clean_failure("cg-stop", SEED, &["--set", "mesh.n=3", "--set", "solver.cg_stop=\"never\""], &["solver.cg_stop"]);
+    // a key the method does not read, and a preconditioner where none applies (one place decides)
+    assert_clean_failure("key-of-another-method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"gimssn\"", "--set", "solver.forcing=2"], &["solver.forcing", "not a setting of method \"gimssn\""]);
+    assert_clean_failure("mssn-reads-no-rtol", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"mssn\"", "--set", "solver.rtol=0.3"], &["solver.rtol", "mssn"]);
+    assert_clean_failure("preconditioner-monolithic", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"dirichlet\""], &["solver.preconditioner", "monolithic"]);
+    assert_clean_failure("preconditioner-gimssn", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"gimssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2"], &["solver.preconditioner", "TSSN"]);
+    assert_clean_failure("preconditioner-orthogonal", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projector=\"orthogonal\""], &["solver.preconditioner", "oblique"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["SSN-BICGSTAB", "no convergence"]);
 }
@@ -322,6 +328,28 @@ fn degenerate_but_valid_friction_still_solves() {
         assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
         assert!(out.exists(), "{name}");
     }
+}
+
+/// The live monitor: each phase as it starts and one line per outer iteration on stdout, in
+/// the order they happen, the summary after; `--quiet` leaves the summary only.
+#[test]
+fn solve_shows_phases_and_iterations_live_unless_quiet() {
+    let dir = tmpdir("monitor");
+    let out = dir.join("r.h5");
+    let scene = root().join("run/seed.toml");
+    let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=5", "--out", out.to_str().unwrap()];
+    let o = run(&args);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    let at = |needle: &str| text.find(needle).unwrap_or_else(|| panic!("no `{needle}` in {text}"));
+    assert!(at("] iterate") < at("‖r̃‖/‖b‖") && at("‖r̃‖/‖b‖") < at("] recover") && at("] recover") < at("solver ssn-bicgstab:"), "{text}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    let outer = report["solver"]["outer_iterations"].as_u64().unwrap() as usize;
+    let lines = text.lines().filter(|l| l.split_whitespace().count() == 8 && l.split_whitespace().all(|w| w.parse::<f64>().is_ok())).count();
+    assert_eq!(lines, outer, "one line per outer iteration: {text}");
+    let q = run(&[&args[..], &["--quiet"]].concat());
+    let quiet = String::from_utf8_lossy(&q.stdout);
+    assert!(!quiet.contains("] iterate") && !quiet.contains("‖r̃‖/‖b‖ ") && quiet.starts_with("tresca-feti "), "{quiet}");
 }
 
 #[test]

@@ -5,11 +5,10 @@ use std::path::Path;
 
 use tresca_feti::comm::SerialComm;
 use tresca_feti::dual::monolithic::MonolithicDual;
-use tresca_feti::dual::DualOperator;
+use tresca_feti::dual::DualProblem;
 use tresca_feti::model::{self, Model};
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
-use tresca_feti::qp::{self, kkt, Method, Params};
-use tresca_feti::qp::lambda::Lambda;
+use tresca_feti::qp::{self, kkt, Method, Operator, Params, Qp, Silent, Space};
 use tresca_feti::qp::sets::ConvexSet;
 use tresca_feti::scene::{self, OrderingKind};
 
@@ -27,9 +26,9 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
-    let set = Lambda::new(contact);
-    let params = Params { eps: 1e-10, method: Method::Gimssn, ..Params::default() };
-    let sol = qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).unwrap();
+    let set = contact.constraint_set();
+    let params = Params::new(Method::Gimssn).with_eps(1e-10);
+    let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &params, &mut Silent).unwrap();
     let (lam, info) = (sol.lambda, sol.info);
     eprintln!("GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}", info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err);
     assert!(info.err <= 1e-10);
@@ -44,9 +43,9 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     dual.apply(&lam, &mut r);
     r.iter_mut().zip(&b).for_each(|(ri, bi)| *ri -= bi);
     assert_eq!(r, sol.gradient, "the returned gradient is a fresh Aλ − b");
-    let k = kkt::residuals(&set, &lam, &r, dual.norm(&b));
+    let k = kkt::residuals(&set, &lam, &r, dual.space().norm(&b));
     assert!(k.worst() <= 1e-9, "KKT residuals {k:?}");
-    let bn = dual.norm(&b);
+    let bn = dual.space().norm(&b);
     let lmax = lam.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let (mut carrying, mut sliding) = (0, 0);
     for i in 0..m {
@@ -77,7 +76,7 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     }
     // DESIGN §4 sanity figures for N = 8
     assert_eq!((carrying, sliding), (32, 48));
-    let (u, _) = dual.recover(&lam);
+    let u = dual.recover(&lam).u;
     let umax = dual
         .blocks
         .iter()
@@ -100,8 +99,8 @@ fn solve_u_with(n: usize, sets: &[&str], eps: f64, method: Method) -> (Vec<[f64;
     let contact = model.pairs.as_ref().unwrap();
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
-    let set = Lambda::new(contact);
-    let sol = qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &Params { eps, method, ..Params::default() }).unwrap();
+    let set = contact.constraint_set();
+    let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &Params::new(method).with_eps(eps), &mut Silent).unwrap();
     assert!(set.contains(&sol.lambda, 1e-14), "{method:?} returned λ ∉ Λ");
     if matches!(method, Method::Gimssn | Method::Mpgp) {
         // the monotone methods: q never increases
@@ -109,8 +108,8 @@ fn solve_u_with(n: usize, sets: &[&str], eps: f64, method: Method) -> (Vec<[f64;
             assert!(w[1].q <= w[0].q + 1e-13 * w[0].q.abs(), "{method:?} {sets:?}: q increased {} → {}", w[0].q, w[1].q);
         }
     }
-    let k = kkt::residuals(&set, &sol.lambda, &sol.gradient, dual.norm(&b));
-    let (u, _) = dual.recover(&sol.lambda);
+    let k = kkt::residuals(&set, &sol.lambda, &sol.gradient, dual.space().norm(&b));
+    let u = dual.recover(&sol.lambda).u;
     (dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).collect(), k)
 }
 
@@ -137,8 +136,8 @@ fn orthotropic_with_equal_bounds_is_isotropic() {
 
 /// A block pressed onto a fixed block and dragged along x by a prescribed displacement of its
 /// top face, in plane strain (two nodes across y, u_y = 0 on both y faces) so that every slip is
-/// exactly along x. Returns (pairs, report["contact"]).
-fn dragged_block(drag: f64) -> (usize, serde_json::Value) {
+/// exactly along x. Returns (pairs, the contact report).
+fn dragged_block(drag: f64) -> (usize, tresca_feti::pipeline::report::ContactReport) {
     let dir = std::env::temp_dir().join(format!("tresca-feti-drag-{}-{drag:e}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("drag.toml");
@@ -185,8 +184,9 @@ eps = 1e-10
         ),
     )
     .unwrap();
-    let s = tresca_feti::pipeline::run_solve(&SerialComm, &scene, &[], Some(dir.join("drag.h5"))).unwrap();
-    (s.report["contact"]["pairs"].as_u64().unwrap() as usize, s.report["contact"].clone())
+    let s = tresca_feti::pipeline::run_solve(&SerialComm, &scene, &[], Some(dir.join("drag.h5")), true).unwrap();
+    let c = s.report.contact.expect("a contact report");
+    (c.pairs, c)
 }
 
 #[test]
@@ -194,13 +194,13 @@ fn dragged_block_slides_above_the_slip_bound_and_sticks_below() {
     // area 2 m², g = 0.09 MPa: the friction force cannot exceed g·A = 0.18 MN
     let (m, c) = dragged_block(1e-3);
     assert_eq!(m, 18);
-    assert_eq!(c["slip"].as_u64().unwrap() as usize, m, "{c}");
-    let fx = c["total_force_on_slave"][0].as_f64().unwrap();
+    assert_eq!(c.slip, m, "{c:?}");
+    let fx = c.total_force_on_slave[0];
     assert!((fx.abs() - 0.09 * 2.0).abs() <= 1e-8, "friction force {fx} ≠ g·A");
     assert!(fx < 0.0, "friction must oppose the drag: {fx}");
     let (_, c) = dragged_block(1e-7);
-    assert_eq!(c["stick"].as_u64().unwrap() as usize, m, "{c}");
-    let fx = c["total_force_on_slave"][0].as_f64().unwrap();
+    assert_eq!(c.stick, m, "{c:?}");
+    let fx = c.total_force_on_slave[0];
     assert!(fx.abs() < 0.5 * 0.18, "sticking friction force {fx} should be well below g·A");
 }
 

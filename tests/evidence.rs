@@ -1,6 +1,7 @@
 //! The evidence commands as a user runs them: `work-precision` (every row measured against the
 //! reference, errors falling with ε, Clarabel agreeing, the CSV the plot script reads, the plot)
-//! and `stress` (converged, stopped-with-a-reason and wrong runs told apart, exit codes).
+//! and `stability` (converged, stopped-with-a-reason and wrong runs told apart, exit codes; also
+//! through its alias `stress`).
 
 mod common;
 
@@ -116,8 +117,8 @@ fn work_precision_bad_arguments_give_one_line() {
     }
 }
 
-/// A stress folder with two scenes: one that converges and one that cannot in its iterations.
-fn stress_dir(name: &str) -> std::path::PathBuf {
+/// A stability-suite folder: one scene that converges and one that cannot in its iterations.
+fn stability_dir(name: &str) -> std::path::PathBuf {
     let dir = tmpdir(name);
     let scenes = dir.join("scenes");
     std::fs::create_dir_all(&scenes).unwrap();
@@ -128,11 +129,11 @@ fn stress_dir(name: &str) -> std::path::PathBuf {
 }
 
 #[test]
-fn stress_tells_converged_stopped_and_wrong_apart() {
-    let dir = stress_dir("stress");
+fn stability_tells_converged_stopped_and_wrong_apart() {
+    let dir = stability_dir("stability");
     let run = |extra: &[&str]| {
         Command::new(BIN)
-            .args(["stress", "--dir", dir.join("scenes").to_str().unwrap(), "--out", dir.join("out").to_str().unwrap()])
+            .args(["stability", "--dir", dir.join("scenes").to_str().unwrap(), "--out", dir.join("out").to_str().unwrap()])
             .args(extra)
             .output()
             .unwrap()
@@ -140,11 +141,12 @@ fn stress_tells_converged_stopped_and_wrong_apart() {
     let o = run(&[]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.starts_with("stability suite: "), "{out}");
     assert!(line_of(&out, "a_fine").ends_with("converged"), "{out}");
     assert!(line_of(&out, "b_short").contains("stopped: SSN-BICGSTAB: no convergence in 2 outer iterations"), "{out}");
     assert!(out.contains("2 scenes: 1 converged, 1 stopped with a reason, 0 wrong"), "{out}");
     assert!(dir.join("out/a_fine.h5").exists() && !dir.join("out/b_short.h5").exists());
-    let rows = csv(&dir.join("out/stress.csv"));
+    let rows = csv(&dir.join("out/stability.csv"));
     assert_eq!(rows.len(), 2);
     assert!(num(&rows[0], "kkt") <= 100.0 * 1e-8 && num(&rows[0], "residual") <= 1e-8, "{rows:?}");
     // a KKT bound no run can meet turns a converged run into a wrong one: exit 1, one error line
@@ -153,8 +155,8 @@ fn stress_tells_converged_stopped_and_wrong_apart() {
     assert_eq!(o.status.code(), Some(1), "{out}");
     assert!(line_of(&out, "a_fine").contains("WRONG: KKT residual"), "{out}");
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.contains("1 scene(s) returned a result that fails its checks"), "{err}");
-    // an empty folder is a clear error
+    assert!(err.contains("the stability suite: 1 scene(s) returned a result that fails its checks"), "{err}");
+    // an empty folder is a clear error (through the alias `stress`)
     let empty = dir.join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     let o = Command::new(BIN).args(["stress", "--dir", empty.to_str().unwrap(), "--out", dir.join("o2").to_str().unwrap()]).output().unwrap();

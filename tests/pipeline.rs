@@ -22,7 +22,7 @@ fn tmpdir(name: &str) -> PathBuf {
 
 fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf())).unwrap()
+    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap()
 }
 
 #[test]
@@ -167,4 +167,33 @@ fn written_file_reads_back_as_computed() {
     let back = output::hdf5::read(&h5b).unwrap();
     assert_eq!(back.fields.iter().map(|f| f.name.as_str()).collect::<Vec<_>>(), ["displacement"]);
     assert!(!dir.join("only_u.xdmf").exists() && !dir.join("only_u.json").exists());
+}
+
+/// The typed report: the JSON file and the HDF5 `report` attribute read back into
+/// `pipeline::report::Report`, with the solver history (one step per outer iteration, A-products
+/// non-decreasing up to the final count) in both.
+#[test]
+fn the_report_and_the_solver_history_read_back_typed() {
+    use tresca_feti::pipeline::report::Report;
+    let dir = tmpdir("report");
+    let h5 = dir.join("seed.h5");
+    let s = solve(&root().join("run/seed.toml"), &["mesh.n=5", "solver.method=\"gimssn\""], &h5);
+    let file: Report = serde_json::from_str(&std::fs::read_to_string(dir.join("seed.json")).unwrap()).unwrap();
+    let back = output::hdf5::read(&h5).unwrap();
+    let attr = |name: &str| back.attributes.iter().find(|a| a.0 == name).map(|a| a.1.clone()).unwrap_or_else(|| panic!("no attribute {name}"));
+    let stored: Report = serde_json::from_str(&attr("report")).unwrap();
+    let history: Vec<tresca_feti::qp::Step> = serde_json::from_str(&attr("solver_history")).unwrap();
+    let sv = s.report.solver.as_ref().expect("a contact solve reports its solver");
+    for r in [&file, &stored] {
+        let rs = r.solver.as_ref().unwrap();
+        assert_eq!((rs.method.as_str(), rs.info.iterations, rs.info.n_a, rs.info.inner_iterations), ("gimssn", sv.info.iterations, sv.info.n_a, sv.info.inner_iterations));
+        assert_eq!(rs.info.history, sv.info.history);
+        assert_eq!(r.contact.as_ref().unwrap().pairs, 25);
+    }
+    assert_eq!(history, sv.info.history);
+    assert_eq!(history.len(), sv.info.iterations);
+    assert!(history.windows(2).all(|w| w[0].n_a <= w[1].n_a && w[0].time <= w[1].time));
+    assert!(history.last().unwrap().n_a <= sv.info.n_a);
+    assert_eq!(history.iter().map(|h| h.inner).sum::<usize>(), sv.info.inner_iterations);
+    assert!(history.last().unwrap().err <= 1e-6);
 }

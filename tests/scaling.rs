@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use tresca_feti::bench::PHASES;
+use tresca_feti::studies::bench::PHASES;
 
 const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
 

@@ -1,4 +1,7 @@
 //! Contact: node-to-node pairing of slave and master faces, with the local frames, nodal areas,
-//! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ.
+//! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ
+//! ([`pairing`]), and the contact state recovered from the dual solution ([`state`]: open /
+//! stick / slip, tractions, gaps, slip).
 
 pub mod pairing;
+pub mod state;

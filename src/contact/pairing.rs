@@ -23,6 +23,8 @@ use std::collections::HashMap;
 use crate::error::{Error, Result};
 use crate::fem::element::quad4_nodal_areas;
 use crate::mesh::{Face, Mesh};
+use crate::qp::sets::{Disc, Ellipse, TangentSet};
+use crate::qp::Lambda;
 use crate::scene::{ContactPair, Friction};
 
 /// Slip bound of one pair, as a nodal force.
@@ -66,6 +68,23 @@ impl Contact {
     /// Whether any pair carries friction (i.e. tangential multipliers exist).
     pub fn has_friction(&self) -> bool {
         self.bound.iter().any(|b| *b != SlipBound::None)
+    }
+
+    /// Λ of these pairs: a half-line per normal multiplier and, with friction, the slip bound's
+    /// disc or ellipse per tangential pair (a frictionless pair among frictional ones: the
+    /// point {0}).
+    pub fn constraint_set(&self) -> Lambda {
+        let tangent = self.has_friction().then(|| {
+            self.bound
+                .iter()
+                .map(|b| match *b {
+                    SlipBound::None => TangentSet::Disc(Disc::new(0.0)),
+                    SlipBound::Disc(g) => TangentSet::Disc(Disc::new(g)),
+                    SlipBound::Ellipse(a, b) => TangentSet::Ellipse(Ellipse::new(a, b)),
+                })
+                .collect()
+        });
+        Lambda::new(self.len(), tangent)
     }
 }
 

@@ -1,76 +1,39 @@
-//! The dual problem: multipliers λ of the contact rows, the operator A = B K⁻¹ Bᵀ applied
-//! matrix-free behind [`DualOperator`], the right-hand side b = B K⁻¹ f − c, and the recovery
-//! u = K⁻¹(f − Bᵀλ). [`monolithic`] is the paper's setting (one piece per body, Dirichlet
-//! eliminated, dual vectors replicated on every rank); the TFETI operator
-//! (`feti::dual`) implements the same trait on distributed dual vectors, each rank holding its
-//! own components: the solvers reach the other ranks only through the trait's reductions
-//! (dot, norm, max, min, count), so every rank takes the same branches.
+//! The dual problem as a transform of the primal one (DESIGN §5): the multipliers λ of the
+//! constraint rows B, the operator A = B K⁻¹ Bᵀ applied matrix-free (a [`crate::qp::Operator`]),
+//! the right-hand side b, and the map back to the primal solution u = K⁻¹(f − Bᵀλ)
+//! ([`DualProblem::recover`], PERMON's post-solve). [`monolithic`] is the paper's setting (one
+//! piece per body, Dirichlet eliminated, dual vectors replicated); the TFETI dual
+//! (`feti::dual`) implements the same traits on distributed dual vectors. Also the B-row
+//! helpers both use.
 
 pub mod monolithic;
 
-use std::cell::Cell;
+use crate::qp::Operator;
 
-/// "Apply A": a symmetric positive (semi)definite operator on the dual vectors. Every call
-/// counts as one A-product (nA).
-pub trait DualOperator {
-    /// Length of a dual vector.
-    fn dim(&self) -> usize;
-    /// y = A x.
-    fn apply(&self, x: &[f64], y: &mut [f64]);
-    /// A-products so far.
-    fn products(&self) -> usize;
-    /// Inner product of two dual vectors (replicated vectors: local; distributed ones reduce
-    /// over the ranks), so that every rank sees the same value.
-    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
-        x.iter().zip(y).map(|(a, b)| a * b).sum()
-    }
-    fn norm(&self, x: &[f64]) -> f64 {
-        self.dot(x, x).sqrt()
-    }
-    /// The maximum over the ranks of a value each rank computed from its own components.
-    fn max(&self, v: f64) -> f64 {
-        v
-    }
-    /// The minimum over the ranks (see [`DualOperator::max`]).
-    fn min(&self, v: f64) -> f64 {
-        -self.max(-v)
-    }
-    /// The sum over the ranks of a count each rank made on its own components.
-    fn count(&self, n: usize) -> usize {
-        n
-    }
-    /// The global index of component `i` of this rank's vectors.
-    fn global_index(&self, i: usize) -> usize {
-        i
-    }
-    /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components a preconditioner
-    /// covers (see [`Preconditioner`]), `scale·x` on the others (all of them when none was
-    /// built). Not an A-product.
-    fn precondition(&self, x: &[f64], y: &mut [f64], scale: f64) {
-        y.iter_mut().zip(x).for_each(|(a, b)| *a = scale * b);
-    }
-    /// Whether [`DualOperator::precondition`] is more than the identity.
-    fn preconditioned(&self) -> bool {
-        false
-    }
+/// A dual problem whose solution maps back to the primal one on this rank's pieces (bodies or
+/// subdomains).
+pub trait DualProblem: Operator {
+    /// The primal solution from the solvers' y.
+    fn recover(&self, y: &[f64]) -> Recovered;
 }
 
-/// The FETI preconditioner of the symmetric inner solves (TSSN's CG) on the TFETI gluing and
-/// Dirichlet block: `M_E = Σ_s B_E,s D_s S_s D_s B_E,sᵀ` over the subdomains s, S_s the Schur
-/// complement of K_s onto the DOFs its E rows touch (Dirichlet) or just K_s's block there
-/// (lumped), D_s the stiffness scaling of the rows (a row shared by subdomains s and o gets
-/// k_o/(k_s + k_o), k the diagonal stiffness B sees; a row of one subdomain 1); applied as
-/// `P̃ diag(M_E, scale·I) P̃ᵀ`. The E components are free in every inner solve, so M_E acts on
-/// them unrestricted. (The contact block is left to the scaled identity: the same Dirichlet
-/// operator on the contact rows of the monolithic dual cut unconstrained CG from 43 to 12
-/// iterations at N = 16, but restricted to TSSN's free sets it made the solve dearer, 111 vs
-/// 96 A-products.)
-#[derive(Clone, Copy, Debug, serde::Deserialize, serde::Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Preconditioner {
-    None,
-    Lumped,
-    Dirichlet,
+/// The primal side of a dual solution, on this rank's pieces.
+#[derive(Clone, Debug, Default)]
+pub struct Recovered {
+    /// u of each local piece, on the DOFs its K acts on (free DOFs of a body, all DOFs of a
+    /// subdomain).
+    pub u: Vec<Vec<f64>>,
+    /// f − Bᵀλ of each local piece (K u must equal it).
+    pub rhs: Vec<Vec<f64>>,
+    /// The multipliers λ this rank owns.
+    pub lambda: Vec<f64>,
+    /// c − Bu on the rows this rank owns: the contact rows' current gap (the contact part of the
+    /// gradient); what the other rows leave unsatisfied.
+    pub gap: Vec<f64>,
+    /// TFETI: α, six per subdomain (all subdomains); empty otherwise.
+    pub alpha: Vec<f64>,
+    /// TFETI: ‖Gλ − e‖/‖e‖; 0 otherwise.
+    pub feasibility: f64,
 }
 
 /// Per row of B (as indexed by `entries`, `nrows` of them): the diagonal stiffness
@@ -119,50 +82,3 @@ pub fn gather_rows<'a, C: crate::comm::Comm>(comm: &C, pieces: impl Iterator<Ite
     comm.sum_f64(y);
 }
 
-/// A counter of A-products shared by the implementations.
-#[derive(Debug, Default)]
-pub struct ProductCounter(Cell<usize>);
-
-impl ProductCounter {
-    pub fn tick(&self) {
-        self.0.set(self.0.get() + 1);
-    }
-    pub fn get(&self) -> usize {
-        self.0.get()
-    }
-}
-
-/// Layout of the multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ, λ_E ∈ R^free), λτ absent when
-/// frictionless; pair i owns λν[i] and λτ[2i], λτ[2i+1]. λ_E are the unconstrained
-/// multipliers (TFETI's gluing and Dirichlet rows; none in the monolithic dual).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Layout {
-    pub m: usize,
-    pub friction: bool,
-    pub free: usize,
-}
-
-impl Layout {
-    /// The contact multipliers only.
-    pub fn contact(m: usize, friction: bool) -> Self {
-        Layout { m, friction, free: 0 }
-    }
-
-    /// Number of contact multipliers (λν and λτ): the free ones start here.
-    pub fn contact_dim(&self) -> usize {
-        if self.friction { 3 * self.m } else { self.m }
-    }
-
-    pub fn dim(&self) -> usize {
-        self.contact_dim() + self.free
-    }
-    /// Index of λν,ᵢ.
-    pub fn normal(&self, i: usize) -> usize {
-        i
-    }
-    /// Index of the k-th tangential component of pair i (k = 0, 1).
-    pub fn tangent(&self, i: usize, k: usize) -> usize {
-        debug_assert!(self.friction);
-        self.m + 2 * i + k
-    }
-}

@@ -4,11 +4,20 @@
 //! (gather), and one sum over the ranks: bodies may live on different ranks, the (short) dual
 //! vector is replicated.
 
-use super::{gather_rows, scatter_rows, DualOperator, Layout, ProductCounter};
+use super::{gather_rows, scatter_rows, DualProblem, Recovered};
 use crate::comm::Comm;
 use crate::contact::pairing::Contact;
-use crate::fem::assembly::{DofMap, FIXED};
-use crate::pipeline::LocalBody;
+use crate::fem::assembly::{BodySystem, DofMap, FIXED};
+use crate::linalg::cholesky::Cholesky;
+use crate::qp::{Layout, Operator, ProductCounter, Replicated};
+
+/// One body owned by this rank: assembled and factorized.
+pub struct LocalBody {
+    pub body: usize,
+    pub dofs: DofMap,
+    pub sys: BodySystem,
+    pub chol: Cholesky,
+}
 
 /// One body on this rank with the entries (row of B, free DOF, coefficient) of B acting on it.
 pub struct BodyBlock {
@@ -21,6 +30,8 @@ pub struct MonolithicDual<'c, C: Comm> {
     comm: &'c C,
     pub layout: Layout,
     pub blocks: Vec<BodyBlock>,
+    /// c = [d; 0] − B_c u_c (the prescribed values moved to the right).
+    c: Vec<f64>,
     counter: ProductCounter,
 }
 
@@ -73,7 +84,14 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
             })
             .collect();
         comm.sum_f64(&mut shift);
-        let dual = MonolithicDual { comm, layout, blocks, counter: ProductCounter::default() };
+        let mut c = vec![0.0; layout.dim()];
+        for (i, g) in contact.gap.iter().enumerate() {
+            c[layout.normal(i)] = *g;
+        }
+        for (ci, s) in c.iter_mut().zip(&shift) {
+            *ci -= s;
+        }
+        let dual = MonolithicDual { comm, layout, blocks, c, counter: ProductCounter::default() };
         let rhs = dual.rhs(&contact.gap, &shift);
         (dual, rhs)
     }
@@ -112,7 +130,7 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
 
     /// u_b = K_b⁻¹(f_b − B_bᵀλ) for each local body, as free DOF vectors, with the right-hand
     /// sides f_b − B_bᵀλ.
-    pub fn recover(&self, lambda: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    fn solve_bodies(&self, lambda: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let mut rhs = self.scatter(lambda);
         for (blk, zb) in self.blocks.iter().zip(&mut rhs) {
             for (v, f) in zb.iter_mut().zip(&blk.local.sys.f) {
@@ -133,7 +151,24 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
     }
 }
 
-impl<C: Comm> DualOperator for MonolithicDual<'_, C> {
+impl<C: Comm> DualProblem for MonolithicDual<'_, C> {
+    /// u = K⁻¹(f − Bᵀλ) per body and the gap c − Bu (replicated).
+    fn recover(&self, lambda: &[f64]) -> Recovered {
+        let (u, rhs) = self.solve_bodies(lambda);
+        let mut gap = vec![0.0; self.layout.dim()];
+        self.gather(&u, &mut gap);
+        gap.iter_mut().zip(&self.c).for_each(|(g, c)| *g = c - *g);
+        Recovered { u, rhs, lambda: lambda.to_vec(), gap, alpha: vec![], feasibility: 0.0 }
+    }
+}
+
+impl<C: Comm> Operator for MonolithicDual<'_, C> {
+    /// The (short) dual vector is replicated on every rank.
+    type Space = Replicated;
+    fn space(&self) -> &Replicated {
+        &Replicated
+    }
+
     fn dim(&self) -> usize {
         self.layout.dim()
     }
@@ -198,7 +233,12 @@ mod tests {
             assert!(dot(&x, &ax) > 0.0);
             assert_eq!(dual.products(), 2);
             // r(λ) = Aλ − b = −(Bu − c) with u = K⁻¹(f − Bᵀλ): evaluate Bu − c on the primal side
-            let (u, _) = dual.recover(&x);
+            let rec = dual.recover(&x);
+            let u = rec.u;
+            for (g, (axi, bi)) in rec.gap.iter().zip(ax.iter().zip(&b)) {
+                // c − Bu = Aλ − b
+                assert!((g - (axi - bi)).abs() <= 1e-9 * b.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+            }
             let mut full = vec![[0.0; 3]; model.mesh.nodes.len()];
             for (blk, ub) in dual.blocks.iter().zip(&u) {
                 let r = blk.local.dofs.nodes.clone();

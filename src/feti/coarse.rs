@@ -21,7 +21,7 @@ use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use crate::comm::Comm;
 use super::subdomain::{rigid_modes, NR};
-use crate::decomposition::Decomposition;
+use crate::feti::decomposition::Decomposition;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::sparse::SymCsc;
@@ -253,7 +253,7 @@ fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::decomposition::decompose;
+    use crate::feti::decomposition::decompose;
     use crate::feti::{constraints, subdomain_loads};
 
     fn lcg(seed: &mut u64) -> f64 {
@@ -270,7 +270,7 @@ mod tests {
         let ls = crate::scene::load(&path, &["mesh.n=5".to_string()]).unwrap();
         let model = crate::model::build(&ls).unwrap();
         let d = decompose(&model.mesh, 3).unwrap();
-        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), constraints::Gluing::Orthonormal);
+        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
         let loads = subdomain_loads(&d, &model.loads);
         let c = Coarse::new(&model.mesh, &d, &cons, &loads, true).unwrap();
         let comm = crate::comm::SerialComm;

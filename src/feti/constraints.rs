@@ -17,20 +17,10 @@
 //!   kept for comparison. Redundant gluing (all pairs of copies) is not offered: B_E would be
 //!   rank-deficient and F singular on Ker B_Eᵀ.
 
-use serde::{Deserialize, Serialize};
-
 use crate::contact::pairing::Contact;
-use crate::decomposition::Decomposition;
-use crate::dual::Layout;
-
-/// How the copies of an interface DOF are glued.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Gluing {
-    #[default]
-    Orthonormal,
-    Chain,
-}
+use crate::feti::decomposition::Decomposition;
+use crate::qp::Layout;
+use crate::scene::Gluing;
 
 /// B and c: one entry list per subdomain.
 #[derive(Clone, Debug)]
@@ -128,7 +118,7 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::decomposition::decompose;
+    use crate::feti::decomposition::decompose;
     use crate::mesh::{boxgen, Mesh};
 
     #[test]

@@ -20,7 +20,7 @@ use std::cell::Cell;
 use std::time::Instant;
 
 use crate::comm::Comm;
-use crate::dual::Layout;
+use crate::qp::{Layout, Space};
 
 use super::constraints::Constraints;
 
@@ -332,5 +332,28 @@ impl<'c, C: Comm> Distribution<'c, C> {
         }
         self.comm.sum_f64(&mut g);
         g
+    }
+}
+
+/// The solvers' reductions over TFETI's distributed dual vectors.
+impl<C: Comm> Space for Distribution<'_, C> {
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
+        Distribution::dot(self, x, y)
+    }
+
+    fn max(&self, v: f64) -> f64 {
+        let mut a = [v];
+        self.comm.max_f64(&mut a);
+        a[0]
+    }
+
+    fn count(&self, n: usize) -> usize {
+        let mut a = [n as u64];
+        self.comm.sum_u64(&mut a);
+        a[0] as usize
+    }
+
+    fn global_index(&self, i: usize) -> usize {
+        self.owned[i]
     }
 }

@@ -1,20 +1,23 @@
-//! The TFETI dual operator behind [`DualOperator`]: A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
+//! The TFETI dual operator (a [`crate::qp::Operator`] and [`DualProblem`]): A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
 //! matrix-free (one K_s⁺ solve per subdomain of this rank, the neighbour exchanges of
 //! [`Distribution`]) on distributed dual vectors, and the
 //! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (DESIGN §2). The solvers minimize
-//! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`TfetiDual::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
+//! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`DualProblem::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
 //! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s, ũ = K⁺(f − Bᵀλ).
 //! The gradient the solvers see is P̃(Fλ − d̃); its contact part is −(Bu − c)_I, as in the
-//! monolithic dual, so the contact status and KKT residuals read the same.
+//! monolithic dual, so the contact status and KKT residuals read the same. The FETI
+//! preconditioner of the gluing and Dirichlet block ([`FetiPreconditioner`]) is built here too.
 
 use super::coarse::Coarse;
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
-use crate::dual::{row_stiffness, scaled_entries, DualOperator, Layout, Preconditioner, ProductCounter};
+use crate::dual::{row_stiffness, scaled_entries, DualProblem, Recovered};
 use crate::error::{Error, Result};
 use crate::linalg::schur::Schur;
+use crate::qp::{Layout, Operator, Preconditioner, ProductCounter};
+use crate::scene::Preconditioner as PreconditionerKind;
 
 /// A subdomain of this rank with its B entries (position in its sorted rows, local DOF,
 /// coefficient).
@@ -52,23 +55,6 @@ struct PrecondPiece {
     entries: Vec<(usize, usize, f64)>,
 }
 
-/// What [`TfetiDual::recover`] returns.
-pub struct Recovered {
-    /// λ = λ̂ + P̃ᵀy on the owned rows.
-    pub lambda: Vec<f64>,
-    /// α, six per subdomain (all subdomains).
-    pub alpha: Vec<f64>,
-    /// u_s for each local subdomain (3·n_s values).
-    pub u: Vec<Vec<f64>>,
-    /// f_s − B_sᵀλ for each local subdomain.
-    pub rhs: Vec<Vec<f64>>,
-    /// c − Bu on the owned rows: the contact rows' gap (the contact part of the gradient), and
-    /// what the E rows leave unsatisfied.
-    pub gap: Vec<f64>,
-    /// ‖Gλ − e‖/‖e‖.
-    pub feasibility: f64,
-}
-
 impl<'c, C: Comm> TfetiDual<'c, C> {
     /// The operator over this rank's factorized subdomains `subs` (ascending global index
     /// `sys.index`, as in `dist`), and b̃ on the owned rows.
@@ -98,11 +84,10 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         (dual, b)
     }
 
-    /// Builds the FETI preconditioner M_E of [`DualOperator::precondition`] on the E rows
-    /// (`None`: drops it). Dirichlet factorizes each subdomain's K_ii (the DOFs its E rows do
-    /// not touch).
-    pub fn set_preconditioner(&mut self, kind: Preconditioner) -> Result<()> {
-        if kind == Preconditioner::None {
+    /// Builds the FETI preconditioner M_E of [`FetiPreconditioner`] on the E rows (`None`:
+    /// drops it). Dirichlet factorizes each subdomain's K_ii (the DOFs its E rows do not touch).
+    pub fn set_preconditioner(&mut self, kind: PreconditionerKind) -> Result<()> {
+        if kind == PreconditionerKind::None {
             self.precond = None;
             return Ok(());
         }
@@ -127,7 +112,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let mut pieces = Vec::with_capacity(self.subs.len());
         for (i, (s, e)) in self.subs.iter().zip(&e_entries).enumerate() {
             let touched: Vec<usize> = e.iter().map(|x| x.1).collect();
-            let schur = Schur::new(&s.sys.k, &touched, kind == Preconditioner::Dirichlet)
+            let schur = Schur::new(&s.sys.k, &touched, kind == PreconditionerKind::Dirichlet)
                 .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
             pieces.push(PrecondPiece { schur, entries: scaled_entries(e, &stiff[i].0, &total[i], &count[i]) });
         }
@@ -204,8 +189,15 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         self.apply_f_local(&self.dist.ghosted(x), y);
     }
 
+    /// The preconditioner, when one was built.
+    pub fn preconditioner(&self) -> Option<FetiPreconditioner<'_, 'c, C>> {
+        self.precond.as_ref().map(|pieces| FetiPreconditioner { dual: self, pieces })
+    }
+}
+
+impl<C: Comm> DualProblem for TfetiDual<'_, C> {
     /// λ, α and u from the solvers' y: λ = λ̂ + P̃ᵀy, u = K⁺(f − Bᵀλ) + Rα.
-    pub fn recover(&self, y: &[f64]) -> Recovered {
+    fn recover(&self, y: &[f64]) -> Recovered {
         let mut lambda = self.dist.ghosted(y);
         self.coarse.project_t_local(&self.dist, &mut lambda);
         lambda.iter_mut().zip(&self.lambda_hat).for_each(|(a, b)| *a += b);
@@ -229,7 +221,12 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 }
 
-impl<C: Comm> DualOperator for TfetiDual<'_, C> {
+impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
+    type Space = Distribution<'c, C>;
+    fn space(&self) -> &Distribution<'c, C> {
+        &self.dist
+    }
+
     fn dim(&self) -> usize {
         self.layout.dim()
     }
@@ -247,19 +244,35 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
     fn products(&self) -> usize {
         self.counter.get()
     }
+}
 
-    fn precondition(&self, x: &[f64], y: &mut [f64], scale: f64) {
-        let Some(pieces) = &self.precond else {
-            y.iter_mut().zip(x).for_each(|(a, b)| *a = scale * b);
-            return;
-        };
-        // y = P_E diag(M_E, scale·I) P_E x
-        let mut wl = self.dist.ghosted(x);
-        self.coarse.project_e_local(&self.dist, &mut wl);
-        let v: Vec<Vec<f64>> = pieces
+/// The FETI preconditioner of the symmetric inner solves (TSSN's CG) on the TFETI gluing and
+/// Dirichlet block: `M_E = Σ_s B_E,s D_s S_s D_s B_E,sᵀ` over the subdomains s, S_s the Schur
+/// complement of K_s onto the DOFs its E rows touch (Dirichlet) or just K_s's block there
+/// (lumped), D_s the stiffness scaling of the rows (a row shared by subdomains s and o gets
+/// k_o/(k_s + k_o), k the diagonal stiffness B sees; a row of one subdomain 1); applied as
+/// `P_E M_E P_E` on the E rows, P_E the orthogonal projector onto Ker G_E. The E components
+/// are free in every inner solve, so M_E acts on them unrestricted; the contact block is left to
+/// the solver.
+pub struct FetiPreconditioner<'a, 'c, C: Comm> {
+    dual: &'a TfetiDual<'c, C>,
+    pieces: &'a [PrecondPiece],
+}
+
+impl<C: Comm> Preconditioner for FetiPreconditioner<'_, '_, C> {
+    fn block(&self) -> std::ops::Range<usize> {
+        self.dual.layout.contact_dim()..self.dual.layout.dim()
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        let d = self.dual;
+        let mut wl = d.dist.ghosted(x);
+        d.coarse.project_e_local(&d.dist, &mut wl);
+        let v: Vec<Vec<f64>> = self
+            .pieces
             .iter()
-            .zip(&self.subs)
-            .zip(&self.dist.subs)
+            .zip(&d.subs)
+            .zip(&d.dist.subs)
             .map(|((pc, s), sr)| {
                 let mut z = vec![0.0; s.sys.ndof()];
                 for &(p, j, c) in &pc.entries {
@@ -273,36 +286,8 @@ impl<C: Comm> DualOperator for TfetiDual<'_, C> {
                 vs
             })
             .collect();
-        self.dist.assemble(&v, y);
-        let contact = self.layout.contact_dim();
-        for (k, yk) in y.iter_mut().enumerate().take(contact) {
-            // P_E leaves the contact components as they are
-            *yk = scale * x[k];
-        }
-        self.coarse.project_e(&self.dist, y);
-    }
-
-    fn preconditioned(&self) -> bool {
-        self.precond.is_some()
-    }
-
-    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
-        self.dist.dot(x, y)
-    }
-
-    fn max(&self, v: f64) -> f64 {
-        let mut a = [v];
-        self.dist.comm().max_f64(&mut a);
-        a[0]
-    }
-
-    fn count(&self, n: usize) -> usize {
-        let mut a = [n as u64];
-        self.dist.comm().sum_u64(&mut a);
-        a[0] as usize
-    }
-
-    fn global_index(&self, i: usize) -> usize {
-        self.dist.owned[i]
+        d.dist.assemble(&v, y);
+        // P_E reads and writes the E rows only
+        d.coarse.project_e(&d.dist, y);
     }
 }

@@ -1,18 +1,19 @@
-//! Total FETI (DESIGN §2): every body split into floating subdomains ([`subdomain`]: K_s, R_s,
-//! K_s⁺), the constraint rows B = [B_I; B_E] and c ([`constraints`]), the natural coarse space
-//! G = RᵀBᵀ, e = Rᵀf and the projectors ([`coarse`]), and the dual operator on which the QP
-//! solvers run unchanged ([`dual`]). It is a transform of the QP: λ = λ̂ + P̃ᵀy maps the
-//! solvers' variable y ∈ Ker G_E × Λ onto the feasible multipliers, and [`dual::TfetiDual::recover`]
-//! maps the solution back to λ, α and u.
+//! Total FETI (DESIGN §2): every body split into floating subdomains (the METIS partition,
+//! [`decomposition`]; [`subdomain`]: K_s, R_s, K_s⁺), the constraint rows B = [B_I; B_E] and c
+//! ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors
+//! ([`coarse`]), and the dual operator on which the QP solvers run unchanged ([`dual`]). It is a
+//! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
+//! feasible multipliers, and [`dual::TfetiDual::recover`] maps the solution back to λ, α and u.
 
 pub mod coarse;
 pub mod constraints;
+pub mod decomposition;
 pub mod distribution;
 pub mod dual;
 pub mod smalse;
 pub mod subdomain;
 
-use crate::decomposition::Decomposition;
+use crate::feti::decomposition::Decomposition;
 
 /// f_s for every subdomain (per local DOF 3·l + c): each node's load goes to its first copy.
 pub fn subdomain_loads(d: &Decomposition, loads: &[f64]) -> Vec<Vec<f64>> {

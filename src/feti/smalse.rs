@@ -15,22 +15,22 @@
 //! 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ̃‖ (the infeasibility in the gradient's units) are below
 //! ε‖Pd̂‖.
 
+use super::distribution::Distribution;
 use super::dual::TfetiDual;
 use crate::comm::Comm;
-use crate::dual::{DualOperator, ProductCounter};
-use crate::qp::lambda::Lambda;
-use crate::qp::{self, Info, Params, QpError, QpSolution};
+use crate::qp::{self, Info, Lambda, Monitor, Operator, Params, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
 
 /// A_ϱ = PFP + ϱQ.
 pub struct Penalized<'a, 'c, C: Comm> {
     dual: &'a TfetiDual<'c, C>,
-    pub rho: f64,
+    /// The penalty ϱ.
+    pub penalty: f64,
     counter: ProductCounter,
 }
 
 impl<'a, 'c, C: Comm> Penalized<'a, 'c, C> {
-    pub fn new(dual: &'a TfetiDual<'c, C>, rho: f64) -> Self {
-        Penalized { dual, rho, counter: ProductCounter::default() }
+    pub fn new(dual: &'a TfetiDual<'c, C>, penalty: f64) -> Self {
+        Penalized { dual, penalty, counter: ProductCounter::default() }
     }
 
     /// Q x = x − P x.
@@ -41,7 +41,13 @@ impl<'a, 'c, C: Comm> Penalized<'a, 'c, C> {
     }
 }
 
-impl<C: Comm> DualOperator for Penalized<'_, '_, C> {
+impl<'c, C: Comm> Operator for Penalized<'_, 'c, C> {
+    /// The TFETI dual's distributed vectors.
+    type Space = Distribution<'c, C>;
+    fn space(&self) -> &Distribution<'c, C> {
+        self.dual.space()
+    }
+
     fn dim(&self) -> usize {
         self.dual.dim()
     }
@@ -54,33 +60,17 @@ impl<C: Comm> DualOperator for Penalized<'_, '_, C> {
         self.dual.coarse.project_orthogonal(&self.dual.dist, y);
         // + ϱ Q x = ϱ (x − P x)
         for ((yi, xi), wi) in y.iter_mut().zip(x).zip(&w) {
-            *yi += self.rho * (xi - wi);
+            *yi += self.penalty * (xi - wi);
         }
     }
 
     fn products(&self) -> usize {
         self.counter.get()
     }
-
-    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
-        self.dual.dot(x, y)
-    }
-
-    fn max(&self, v: f64) -> f64 {
-        self.dual.max(v)
-    }
-
-    fn count(&self, n: usize) -> usize {
-        self.dual.count(n)
-    }
-
-    fn global_index(&self, i: usize) -> usize {
-        self.dual.global_index(i)
-    }
 }
 
 /// Counters of the outer loop beside the summed inner [`Info`].
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SmalseInfo {
     pub outer: usize,
     pub penalty: f64,
@@ -90,29 +80,34 @@ pub struct SmalseInfo {
 
 /// Solves the TFETI dual by SMALSE-M with `p.method` inside and ϱ = `penalty`·σ_max(PFP); returns λ̃ (λ = λ̂ + λ̃) with the
 /// inner solvers' counters summed (A-products of A_ϱ = F-products).
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty: f64) -> Result<(QpSolution, SmalseInfo), QpError> {
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
     let n = dual.dim();
+    let sp = dual.space();
     let mut b0 = dual.d_hat.clone();
     dual.coarse.project_orthogonal(&dual.dist, &mut b0);
-    let bnorm = dual.norm(&b0).max(f64::MIN_POSITIVE);
+    let bnorm = sp.norm(&b0).max(f64::MIN_POSITIVE);
     let mut op = Penalized::new(dual, 0.0);
-    let n_power = p.power_iterations;
+    let n_power = p.common.power_iterations;
     let sigma = qp::power_sigma(&op, n_power);
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
     }
-    op.rho = penalty * sigma;
-    let sigma = sigma.max(op.rho);
+    op.penalty = penalty * sigma;
+    let sigma = sigma.max(op.penalty);
     let mut lambda = vec![0.0; n];
     let mut nu = vec![0.0; n];
-    let mut eps_k = p.eps.max(1e-2);
+    let eps = p.common.eps;
+    let mut eps_k = eps.max(1e-2);
     let mut total = Info { sigma_est: sigma, n_a_power: n_power, ..Default::default() };
-    let mut sm = SmalseInfo { penalty: op.rho, ..Default::default() };
-    for k in 0..p.max_outer {
+    let mut sm = SmalseInfo { penalty: op.penalty, ..Default::default() };
+    for k in 0..p.common.max_outer {
         let b: Vec<f64> = b0.iter().zip(&nu).map(|(a, v)| a - v).collect();
-        let bk = dual.norm(&b).max(f64::MIN_POSITIVE);
-        let inner = Params { eps: eps_k * bnorm / bk, sigma: Some(1.1 * sigma), power_iterations: 0, ..p.clone() };
-        let sol = qp::solve(&op, &b, set, &lambda, &inner)?;
+        let bk = sp.norm(&b).max(f64::MIN_POSITIVE);
+        let mut inner = p.clone();
+        inner.common.eps = eps_k * bnorm / bk;
+        inner.common.sigma = Some(SIGMA_SAFETY * sigma);
+        inner.common.power_iterations = 0;
+        let sol = qp::solve(&Qp::new(&op, &b, set), &lambda, &inner, monitor)?;
         lambda = sol.lambda;
         let err = sol.info.err * bk / bnorm;
         total.iterations += sol.info.iterations;
@@ -122,15 +117,15 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty
         total.q = sol.info.q;
         total.history.extend(sol.info.history);
         let ql = op.q(&lambda);
-        let feas = op.rho * dual.norm(&ql) / bnorm;
+        let feas = op.penalty * sp.norm(&ql) / bnorm;
         sm.outer = k + 1;
         sm.feasibility = feas;
         total.err = err.max(feas);
-        if err <= p.eps && feas <= p.eps {
+        if err <= eps && feas <= eps {
             return Ok((QpSolution { lambda, gradient: sol.gradient, info: total }, sm));
         }
-        nu.iter_mut().zip(&ql).for_each(|(v, q)| *v += op.rho * q);
-        eps_k = p.eps.max(eps_k.min(feas));
+        nu.iter_mut().zip(&ql).for_each(|(v, q)| *v += op.penalty * q);
+        eps_k = eps.max(eps_k.min(feas));
     }
-    Err(QpError::NoConvergence { info: Box::new(total), eps: p.eps })
+    Err(QpError::NoConvergence { info: Box::new(total), eps })
 }

@@ -26,7 +26,7 @@ use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::linalg::sparse::SymCsc;
 use crate::mesh::Mesh;
-use crate::decomposition::Subdomain;
+use crate::feti::decomposition::Subdomain;
 use crate::scene::OrderingKind;
 
 /// Rigid-body modes per subdomain.
@@ -210,7 +210,7 @@ impl SubdomainSystem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::decomposition::decompose;
+    use crate::feti::decomposition::decompose;
     use crate::mesh::boxgen;
 
     fn lcg(seed: &mut u64) -> f64 {

@@ -7,41 +7,56 @@
 //!
 //! Two paths share the phases: the monolithic dual (one piece per body, Dirichlet eliminated,
 //! the paper's setting) and TFETI ([`tfeti`]: METIS subdomains, gluing and Dirichlet
-//! multipliers, coarse problem), chosen by the scene's `[decomposition]`.
+//! multipliers, coarse problem), chosen by the scene's `[decomposition]`; both end in the one
+//! post-solve path ([`finish`]) and the typed [`report`]. Where the FETI preconditioner applies
+//! is decided here, once ([`preconditioner`]). Rank 0 shows progress live ([`monitor`]).
 
+pub mod finish;
+pub mod monitor;
+pub mod report;
 pub mod tfeti;
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use serde_json::json;
-
 use crate::comm::Comm;
 use crate::error::{Error, Result};
-use crate::fem::assembly::{assemble_body, BodySystem, DofMap};
-use crate::fem::element::hex8_center_stress;
-use crate::fem::material::von_mises;
+use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::DualOperator;
-use crate::qp;
-use crate::qp::lambda::Lambda;
-use crate::recovery::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
-use crate::scene::{LoadedScene, OrderingKind, SolverSettings};
+use crate::dual::DualProblem;
+use crate::qp::{self, Method, Operator, Qp, Space};
+use crate::contact::state::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
+use crate::scene::{LoadedScene, OrderingKind, Preconditioner};
 
-/// Wall time of each phase, the maximum over the ranks.
+pub use crate::dual::monolithic::LocalBody;
+
+/// Wall time of each phase, the maximum over the ranks, and the live monitor.
 #[derive(Clone, Debug, Default)]
 pub struct Timings {
     pub phases: Vec<(String, f64)>,
+    pub live: monitor::Live,
 }
 
 impl Timings {
+    /// Timings that print each phase as it starts (and hand out a monitor that prints each
+    /// outer iteration) when `live`: rank 0 of a run without `--quiet`.
+    pub fn live(live: bool) -> Self {
+        Timings { phases: vec![], live: monitor::Live::new(live) }
+    }
+
+    /// The solvers' monitor: prints each outer iteration when live.
+    pub fn monitor(&self) -> monitor::Live {
+        self.live
+    }
+
     /// Runs one phase on every rank, records its time (max over ranks) and makes its result
     /// collective.
     pub fn phase<C: Comm, T>(&mut self, comm: &C, name: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        self.live.phase(name);
         let t0 = Instant::now();
         let r = f().and_then(|v| injected_fault(comm, name).map_or(Ok(v), Err));
         let mut t = [t0.elapsed().as_secs_f64()];
@@ -55,13 +70,9 @@ impl Timings {
         self.phases.iter().map(|p| p.1).sum()
     }
 
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut m = serde_json::Map::new();
-        for (k, v) in &self.phases {
-            m.insert(k.clone(), json!(v));
-        }
-        m.insert("total".into(), json!(self.total()));
-        serde_json::Value::Object(m)
+    /// The phase times for the report.
+    pub fn times(&self) -> report::PhaseTimes {
+        report::PhaseTimes(self.phases.clone())
     }
 }
 
@@ -75,17 +86,21 @@ fn injected_fault<C: Comm>(comm: &C, phase: &str) -> Option<Error> {
         .then(|| Error::numerical("injected fault", format!("phase {phase} on rank {}", comm.rank())))
 }
 
-/// Figures of one body's linear solve.
-#[derive(Clone, Debug, Default)]
+/// Figures of one body's linear solve (TFETI: summed over its subdomains).
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BodyStats {
     pub name: String,
     pub nodes: usize,
     pub elements: usize,
     pub free_dofs: usize,
+    #[serde(rename = "nnz_K_lower")]
     pub nnz_k: usize,
+    #[serde(rename = "nnz_L")]
     pub nnz_l: usize,
-    /// ‖K u − f‖ / ‖f‖ of the free DOFs.
+    /// ‖K u − f‖ / ‖f‖ of the free DOFs (TFETI: the largest over the subdomains).
+    #[serde(rename = "relative_residual")]
     pub residual: f64,
+    /// Rank of the body (TFETI: the lowest rank of its subdomains).
     pub rank: usize,
 }
 
@@ -116,7 +131,7 @@ pub struct LocalFields {
 /// What `solve` reports back to the command line.
 #[derive(Clone, Debug)]
 pub struct Summary {
-    pub report: serde_json::Value,
+    pub report: report::Report,
     pub files: Vec<PathBuf>,
     /// The computed fields (on rank 0).
     pub solution: Solution,
@@ -125,20 +140,6 @@ pub struct Summary {
 /// Rank that owns body `b`.
 pub fn owner(b: usize, size: usize) -> usize {
     b % size
-}
-
-struct BodyResult {
-    u: Vec<[f64; 3]>,
-    vm: Vec<f64>,
-    stats: BodyStats,
-}
-
-/// One body owned by this rank: assembled and factorized.
-pub struct LocalBody {
-    pub body: usize,
-    pub dofs: DofMap,
-    pub sys: BodySystem,
-    pub chol: Cholesky,
 }
 
 /// Assembles and factorizes the bodies this rank owns (phases `assemble`, `factorize`).
@@ -195,60 +196,35 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
     finish_bodies(comm, model, &refs, &u, &rhs, t)
 }
 
-/// Checks K u = rhs on each local body, expands u, computes the element stresses (phase
-/// `stress`) and gathers all bodies on rank 0 (phase `gather`).
+/// The post-solve path of the bodies ([`finish::finish`], one piece per body): checks K u = rhs,
+/// stresses, gather on rank 0.
 fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[Vec<f64>], rhs: &[&[f64]], t: &mut Timings) -> Result<Solution> {
     let mesh = &model.mesh;
-    let results = t.phase(comm, "stress", || {
-        bodies
-            .iter()
-            .zip(u)
-            .zip(rhs)
-            .map(|((lb, x), f)| {
-                let b = lb.body;
-                let body = &mesh.bodies[b];
-                let kx = lb.sys.k.mul(x);
-                let fnorm = norm(f);
-                let rnorm = norm(&kx.iter().zip(*f).map(|(a, b)| a - b).collect::<Vec<_>>());
-                let residual = if fnorm > 0.0 { rnorm / fnorm } else { rnorm };
-                if !residual.is_finite() || residual > 1e-6 {
-                    return Err(Error::numerical(
-                        format!("body \"{}\"", body.name),
-                        format!("linear solve is inaccurate (relative residual {residual:.1e}): the stiffness is singular or ill-conditioned; is the body held against rigid motion?"),
-                    ));
-                }
-                let stats = BodyStats {
-                    name: body.name.clone(),
-                    nodes: body.nodes.len(),
-                    elements: body.elems.len(),
-                    free_dofs: lb.dofs.nfree,
-                    nnz_k: lb.sys.k.nnz(),
-                    nnz_l: lb.chol.nnz_l(),
-                    residual,
-                    rank: comm.rank(),
-                };
-                let u = lb.dofs.expand(x);
-                let vm = body
-                    .elems
-                    .clone()
-                    .map(|e| {
-                        let ue = mesh.hexes[e].map(|v| u[v - body.nodes.start]);
-                        von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[b]))
-                    })
-                    .collect();
-                Ok(BodyResult { u, vm, stats })
-            })
-            .collect::<Result<Vec<_>>>()
-    })?;
-    let mut sol = t.phase(comm, "gather", || Ok(gather(comm, model, &results)))?;
-    for (lb, r) in bodies.iter().zip(&results) {
-        let body = &mesh.bodies[lb.body];
-        sol.local.nodes.extend(body.nodes.clone());
-        sol.local.displacement.extend(&r.u);
-        sol.local.cells.extend(body.elems.clone());
-        sol.local.von_mises.extend(&r.vm);
-    }
-    sol.element_rank = mesh.elem_body().into_iter().map(|b| owner(b, comm.size())).collect();
+    let layout: Vec<finish::PieceLayout> = mesh
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(b, body)| finish::PieceLayout {
+            rank: owner(b, comm.size()),
+            body: b,
+            nodes: body.nodes.clone().collect(),
+            elems: body.elems.clone().collect(),
+            name: format!("body \"{}\"", body.name),
+        })
+        .collect();
+    let mine: Vec<finish::PieceSolution<'_>> = bodies
+        .iter()
+        .zip(u)
+        .zip(rhs)
+        .map(|((lb, x), f)| finish::PieceSolution { piece: lb.body, k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, nodal: lb.dofs.expand(x) })
+        .collect();
+    let hint = "the stiffness is singular or ill-conditioned; is the body held against rigid motion?";
+    let (mut sol, stats, _) = finish::finish(comm, model, &layout, &mine, hint, t)?;
+    sol.bodies = stats
+        .iter()
+        .zip(&mesh.bodies)
+        .map(|(s, body)| BodyStats { name: body.name.clone(), nodes: s.nodes, elements: s.elements, free_dofs: s.dofs, nnz_k: s.nnz_k, nnz_l: s.nnz_l, residual: s.residual, rank: s.rank })
+        .collect();
     Ok(sol)
 }
 
@@ -258,22 +234,62 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let contact = model.pairs.as_ref().expect("contact is active");
     let s = &ls.scene.solver;
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
+    preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
     let (dual, b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
-    let set = Lambda::new(contact);
-    let params = solver_params(s);
-    let name = s.method.name();
-    let qp = t.phase(comm, "iterate", || {
-        qp::solve(&dual, &b, &set, &vec![0.0; dual.dim()], &params).map_err(|e| Error::numerical(name.to_uppercase(), e.to_string()))
+    let set = contact.constraint_set();
+    let name = s.params.method().name();
+    let mut monitor = t.monitor();
+    let sol = t.phase(comm, "iterate", || {
+        qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &s.params, &mut monitor).map_err(|e| Error::solver(name.to_uppercase(), e))
     })?;
-    let (u, rhs) = t.phase(comm, "recover", || Ok(dual.recover(&qp.lambda)))?;
+    let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
     let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
-    let rhs_refs: Vec<&[f64]> = rhs.iter().map(Vec::as_slice).collect();
-    let sol = finish_bodies(comm, model, &refs, &u, &rhs_refs, t)?;
+    let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
+    let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
     // the status cannot be sharper than the solution: classify at the solver's tolerance
-    let bnorm = dual.norm(&b);
-    let state = contact_state(contact, &set, &qp.lambda, &qp.gradient, s.eps.max(1e-9), bnorm);
-    let kkt = qp::kkt::residuals(&set, &qp.lambda, &qp.gradient, bnorm);
-    Ok((sol, ContactOutcome { dim: dual.dim(), state, info: qp.info, bnorm, kkt }))
+    let bnorm = dual.space().norm(&b);
+    let state = contact_state(contact, &set, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
+    let kkt = qp::kkt::residuals(&set, &rec.lambda, &rec.gap, bnorm);
+    Ok((solution, ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt }))
+}
+
+/// Which dual problem a scene is solved on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DualKind {
+    Monolithic,
+    /// TFETI with the oblique projector P̃ (`orthogonal`: SMALSE-M's penalized operator);
+    /// `contact`: with contact rows (else plain CG on the gluing and Dirichlet rows).
+    Tfeti { orthogonal: bool, contact: bool },
+}
+
+impl DualKind {
+    /// The dual the scene is solved on.
+    pub fn of(ls: &LoadedScene, model: &Model) -> DualKind {
+        let dec = &ls.scene.decomposition;
+        if dec.is_tfeti(&body_dofs(model)) {
+            DualKind::Tfeti { orthogonal: dec.projector == crate::scene::Projector::Orthogonal, contact: model.pairs.is_some() }
+        } else {
+            DualKind::Monolithic
+        }
+    }
+}
+
+/// The one place that decides whether the scene's `solver.preconditioner` applies: the FETI
+/// preconditioners act on TFETI's gluing and Dirichlet rows (the oblique projector's operator),
+/// inside a symmetric inner solve (TSSN's CG, [`Method::takes_preconditioner`], or the plain CG
+/// of a scene without contact). Anything else is refused with the key named.
+pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> Result<Option<Preconditioner>> {
+    if kind == Preconditioner::None {
+        return Ok(None);
+    }
+    let refuse = |why: String| Err(Error::scene("solver.preconditioner", format!("\"{}\" {why}", kind.name())));
+    match dual {
+        DualKind::Monolithic => refuse("acts on TFETI's gluing and Dirichlet rows; this scene is solved on the monolithic dual (set decomposition.subdomains or decomposition.tfeti = true)".into()),
+        DualKind::Tfeti { orthogonal: true, .. } => refuse("needs the oblique projector (decomposition.projector = \"oblique\")".into()),
+        DualKind::Tfeti { contact: false, .. } => Ok(Some(kind)),
+        DualKind::Tfeti { contact: true, .. } if method.takes_preconditioner() => Ok(Some(kind)),
+        DualKind::Tfeti { .. } => refuse(format!("acts in TSSN's CG only (solver.method = \"tssn\"); \"{}\" takes none", method.name())),
+    }
 }
 
 /// What the contact solve adds to the elastic fields.
@@ -287,82 +303,9 @@ pub struct ContactOutcome {
     pub kkt: qp::kkt::Kkt,
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-const STATS_LEN: usize = 5;
-
-/// Packs each rank's bodies into one f64 message and unpacks all of them on rank 0.
-fn gather<C: Comm>(comm: &C, model: &Model, mine: &[BodyResult]) -> Solution {
-    let mut buf = Vec::new();
-    for r in mine {
-        buf.extend(r.u.iter().flatten());
-        buf.extend(&r.vm);
-        let s = &r.stats;
-        buf.extend([s.free_dofs as f64, s.nnz_k as f64, s.nnz_l as f64, s.residual, s.rank as f64]);
-    }
-    let Some(all) = comm.gather_f64(0, &buf) else {
-        return Solution::default();
-    };
-    let mesh = &model.mesh;
-    let mut sol = Solution {
-        displacement: vec![[0.0; 3]; mesh.nodes.len()],
-        von_mises: vec![0.0; mesh.hexes.len()],
-        bodies: vec![BodyStats::default(); mesh.bodies.len()],
-        ..Default::default()
-    };
-    let mut cursor = vec![0usize; comm.size()];
-    for (b, body) in mesh.bodies.iter().enumerate() {
-        let r = owner(b, comm.size());
-        let data = &all[r];
-        let mut p = cursor[r];
-        for v in body.nodes.clone() {
-            sol.displacement[v] = [data[p], data[p + 1], data[p + 2]];
-            p += 3;
-        }
-        sol.von_mises[body.elems.clone()].copy_from_slice(&data[p..p + body.elems.len()]);
-        p += body.elems.len();
-        let s = &data[p..p + STATS_LEN];
-        sol.bodies[b] = BodyStats {
-            name: body.name.clone(),
-            nodes: body.nodes.len(),
-            elements: body.elems.len(),
-            free_dofs: s[0] as usize,
-            nnz_k: s[1] as usize,
-            nnz_l: s[2] as usize,
-            residual: s[3],
-            rank: s[4] as usize,
-        };
-        cursor[r] = p + STATS_LEN;
-    }
-    sol
-}
-
-/// The solver parameters of the scene's `[solver]` table.
-pub fn solver_params(s: &SolverSettings) -> qp::Params {
-    qp::Params {
-        method: s.method,
-        eps: s.eps,
-        rho_factor: s.rho_factor,
-        rtol: s.rtol,
-        cfact: s.cfact,
-        forcing: s.forcing,
-        inner_tol: s.inner_tol,
-        cg_stop: s.cg_stop,
-        inner_floor: s.inner_floor,
-        max_outer: s.max_outer,
-        max_inner: s.max_inner,
-        max_products: usize::MAX,
-        power_iterations: s.power_iterations,
-        sigma: None,
-        gamma: s.gamma,
-    }
-}
-
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
-pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>) -> Result<Summary> {
-    let mut t = Timings::default();
+pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
+    let mut t = Timings::live(comm.is_root() && !quiet);
     let ls = t.phase(comm, "scene", || {
         let mut ls = crate::scene::load(scene_path, overrides)?;
         if let Some(o) = out {
@@ -371,8 +314,10 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         Ok(ls)
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
+    let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
+    preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
     let (sol, outcome) = match &model.pairs {
-        _ if ls.scene.decomposition.is_tfeti(&body_dofs(&model)) => tfeti::solve(comm, &ls, &model, &mut t)?,
+        _ if tfeti => tfeti::solve(comm, &ls, &model, &mut t)?,
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
         None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
     };
@@ -381,21 +326,26 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let (mut peak_sum, mut peak_max) = ([peak_rss_bytes()], [peak_rss_bytes()]);
     comm.sum_f64(&mut peak_sum);
     comm.max_f64(&mut peak_max);
-    report["memory"] = json!({"peak_rss_bytes_sum_over_ranks": peak_sum[0], "peak_rss_bytes_max_rank": peak_max[0]});
+    report.memory = Some(report::Memory { peak_rss_bytes_sum_over_ranks: peak_sum[0], peak_rss_bytes_max_rank: peak_max[0] });
     let before_output = t.clone();
     // every rank writes its rows; the root attributes carry rank 0's report
-    let mut text = report.to_string().into_bytes();
+    let json = serde_json::to_value(&report).map_err(|e| Error::output(h5.display().to_string(), format!("report: {e}")))?;
+    let mut text = json.to_string().into_bytes();
     comm.broadcast_bytes(0, &mut text);
     let report_text = String::from_utf8_lossy(&text).into_owned();
-    let data = output_data(comm, &ls, &model, &sol, outcome.as_ref(), &before_output, &report_text);
-    let files = t.phase(comm, "output", || output::write_all(comm, &h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&report)))?;
+    // HDF5 attributes must be the same on every rank: the history's times are rank 0's too
+    let mut text = outcome.as_ref().map(|o| serde_json::to_string(&o.info.history).unwrap_or_default()).unwrap_or_default().into_bytes();
+    comm.broadcast_bytes(0, &mut text);
+    let history_text = String::from_utf8_lossy(&text).into_owned();
+    let data = output_data(comm, &ls, &model, &sol, outcome.as_ref(), &before_output, &report_text, &history_text);
+    let files = t.phase(comm, "output", || output::write_all(comm, &h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&json)))?;
     if ls.scene.output.verify {
         let checked = t.phase(comm, "verify", || output::hdf5::verify(&h5, &data))?;
         let mut total = [checked as u64];
         comm.sum_u64(&mut total);
-        report["output_verified_values"] = json!(total[0]);
+        report.output_verified_values = Some(total[0]);
     }
-    report["timings"] = t.to_json();
+    report.timings = t.times();
     Ok(Summary { report, files, solution: sol })
 }
 
@@ -412,7 +362,8 @@ pub fn peak_rss_bytes() -> f64 {
         .map_or(0.0, |kb| kb * 1024.0)
 }
 
-fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings) -> serde_json::Value {
+fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings) -> report::Report {
+    use report::*;
     let mesh = &model.mesh;
     let (umax, at) = sol
         .displacement
@@ -421,95 +372,73 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         .map(|(v, u)| ((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt(), v))
         .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
     let body_of_node = mesh.bodies.iter().position(|b| b.nodes.contains(&at)).unwrap_or(0);
-    let vm_max = sol.von_mises.iter().fold(0.0f64, |a, &b| a.max(b));
-    json!({
-        "scene": ls.path.display().to_string(),
-        "title": ls.scene.title,
-        "ranks": comm.size(),
-        "mpi": comm.library(),
-        "problem": match (outcome.is_some(), sol.tfeti.is_some()) {
+    let dec = &ls.scene.decomposition;
+    let solver = &ls.scene.solver.params;
+    Report {
+        scene: ls.path.display().to_string(),
+        title: ls.scene.title.clone(),
+        ranks: comm.size(),
+        mpi: comm.library(),
+        problem: match (outcome.is_some(), sol.tfeti.is_some()) {
             (true, false) => "contact with Tresca friction (monolithic dual)",
             (true, true) => "contact with Tresca friction (TFETI dual)",
             (false, false) => "linear elasticity (no contact)",
             (false, true) => "linear elasticity (no contact, TFETI dual)",
+        }
+        .into(),
+        tfeti: sol.tfeti.as_ref().map(|f| TfetiReport {
+            subdomains_per_body: (0..mesh.bodies.len()).map(|b| f.subdomains.iter().filter(|s| s.piece.body == b).count()).collect(),
+            gluing: dec.gluing,
+            multipliers: Multipliers { contact: f.contact_rows, gluing: f.gluing_rows, dirichlet: f.dirichlet_rows },
+            coarse_dim: f.coarse_dim,
+            nnz_c: f.nnz_c,
+            gluing_jump: f.gluing_jump,
+            feasibility: f.feasibility,
+            projector: dec.projector,
+            smalse: f.smalse.clone(),
+            distribution: f.distribution.clone(),
+            subdomains: f.subdomains.clone(),
+        }),
+        ordering: format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
+        mesh: MeshReport { nodes: mesh.nodes.len(), elements: mesh.hexes.len(), dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
+        bodies: sol.bodies.clone(),
+        results: Results {
+            max_displacement: umax,
+            max_displacement_node: at,
+            max_displacement_body: mesh.bodies.get(body_of_node).map(|b| b.name.clone()),
+            max_von_mises: sol.von_mises.iter().fold(0.0f64, |a, &b| a.max(b)),
         },
-        "tfeti": sol.tfeti.as_ref().map(|f| json!({
-            "subdomains_per_body": mesh.bodies.iter().enumerate().map(|(b, _)| f.subdomains.iter().filter(|s| s.body == b).count()).collect::<Vec<_>>(),
-            "gluing": ls.scene.decomposition.gluing,
-            "multipliers": {"contact": f.contact_rows, "gluing": f.gluing_rows, "dirichlet": f.dirichlet_rows},
-            "coarse_dim": f.coarse_dim,
-            "nnz_C_lower": f.nnz_c,
-            "gluing_jump_relative": f.gluing_jump,
-            "coarse_feasibility": f.feasibility,
-            "projector": ls.scene.decomposition.projector,
-            "smalse": f.smalse,
-            "distribution": f.distribution,
-            "subdomains": f.subdomains,
-        })),
-        "ordering": format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
-        "mesh": {
-            "nodes": mesh.nodes.len(),
-            "elements": mesh.hexes.len(),
-            "dofs": model.ndof(),
-            "free_dofs": sol.bodies.iter().map(|b| b.free_dofs).sum::<usize>(),
-        },
-        "bodies": sol.bodies.iter().map(|b| json!({
-            "name": b.name, "nodes": b.nodes, "elements": b.elements, "free_dofs": b.free_dofs,
-            "nnz_K_lower": b.nnz_k, "nnz_L": b.nnz_l, "relative_residual": b.residual, "rank": b.rank,
-        })).collect::<Vec<_>>(),
-        "results": {
-            "max_displacement": umax,
-            "max_displacement_node": at,
-            "max_displacement_body": mesh.bodies.get(body_of_node).map(|b| b.name.clone()),
-            "max_von_mises": vm_max,
-        },
-        "contact": outcome.map(|o| {
+        contact: outcome.map(|o| {
             let c = model.pairs.as_ref().expect("contact outcome implies pairs");
-            json!({
-                "pairs": c.len(),
-                "open": o.state.count(OPEN),
-                "stick": o.state.count(STICK),
-                "slip": o.state.count(SLIP),
-                "on_slip_bound": o.state.on_slip_bound,
-                "total_force_on_slave": o.state.total_force(c),
-            })
+            ContactReport {
+                pairs: c.len(),
+                open: o.state.count(OPEN),
+                stick: o.state.count(STICK),
+                slip: o.state.count(SLIP),
+                on_slip_bound: o.state.on_slip_bound,
+                total_force_on_slave: o.state.total_force(c),
+            }
         }),
-        "solver": outcome.map(|o| {
-            let i = &o.info;
-            json!({
-                "method": ls.scene.solver.method.name(),
-                "dual_dim": o.dim,
-                "eps": ls.scene.solver.eps,
-                "outer_iterations": i.iterations,
-                "nA": i.n_a,
-                "nA_power": i.n_a_power,
-                "inner_iterations": i.inner_iterations,
-                "preconditioner_applications": i.preconditioner_applications,
-                "final_relative_reduced_gradient": i.err,
-                "q": i.q,
-                "sigma_est": i.sigma_est,
-                "rho": i.rho,
-                "norm_b": o.bnorm,
-                "kkt": o.kkt,
-                "kkt_worst": o.kkt.worst(),
-            })
+        solver: outcome.map(|o| SolverReport {
+            method: solver.method().name().into(),
+            dual_dim: o.dim,
+            eps: solver.common.eps,
+            info: o.info.clone(),
+            norm_b: o.bnorm,
+            kkt: o.kkt,
+            kkt_worst: o.kkt.worst(),
         }),
-        "timings": t.to_json(),
-        "versions": crate::versions(),
-    })
-}
-
-fn history_json(info: &qp::Info) -> serde_json::Value {
-    json!(info
-        .history
-        .iter()
-        .map(|h| json!({"kind": h.kind.to_string(), "err": h.err, "tol": h.tol, "q": h.q, "nA": h.n_a, "inner": h.inner, "normal_active": h.normal_active, "stick": h.stick, "slip": h.slip}))
-        .collect::<Vec<_>>())
+        timings: t.times(),
+        versions: crate::versions(),
+        memory: None,
+        output_verified_values: None,
+    }
 }
 
 /// This rank's share of the result file: its rows of u and of the stresses, the replicated
 /// fields whole.
-fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str) -> OutputData {
+#[allow(clippy::too_many_arguments)]
+fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str, history: &str) -> OutputData {
     let mesh = &model.mesh;
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
     let mut fields = Vec::new();
@@ -550,13 +479,13 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
     let mut attributes = vec![
         ("scene".into(), ls.scene.to_toml()),
         ("versions".into(), crate::versions().to_string()),
-        ("timings".into(), t.to_json().to_string()),
+        ("timings".into(), serde_json::to_string(&t.times()).unwrap_or_default()),
         ("report".into(), report.to_string()),
         ("ranks".into(), comm.size().to_string()),
     ];
     if let (Some(o), Some(c)) = (outcome, &model.pairs) {
         fields.extend(contact_fields(mesh.nodes.len(), c, &o.state, want));
-        attributes.push(("solver_history".into(), history_json(&o.info).to_string()));
+        attributes.push(("solver_history".into(), history.to_string()));
     }
     OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes, rows }
 }
@@ -617,9 +546,10 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
         );
     }
     let dec = &ls.scene.decomposition;
+    preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
     if dec.is_tfeti(&body_dofs(&model)) {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
-        let d = crate::decomposition::decompose_each(mesh, &parts)?;
+        let d = crate::feti::decomposition::decompose_each(mesh, &parts)?;
         let _ = writeln!(s, "TFETI: {} subdomains ({} per body), {} interface nodes", d.subdomains.len(), parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "), d.interface_nodes());
         for (i, sd) in d.subdomains.iter().enumerate() {
             let iface = sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count();

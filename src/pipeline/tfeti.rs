@@ -4,10 +4,11 @@
 //! to ranks by size (largest first to the least loaded rank); the dual vectors are distributed
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own.
 
-use super::{BodyStats, ContactOutcome, LocalFields, Solution, Timings};
+use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
+use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
-use crate::decomposition::{decompose_each, Decomposition};
-use crate::dual::{DualOperator, Preconditioner};
+use crate::feti::decomposition::{decompose_each, Decomposition};
+use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::feti::coarse::Coarse;
 use crate::feti::constraints;
@@ -16,25 +17,17 @@ use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::SubdomainSystem;
 use crate::feti::{assign_ranks, subdomain_loads};
-use crate::fem::element::hex8_center_stress;
-use crate::fem::material::von_mises;
 use crate::model::Model;
-use crate::qp::{self, lambda::Lambda};
-use crate::recovery::contact_state;
+use crate::qp::{self, Lambda, Operator, Qp, Space};
+use crate::contact::state::contact_state;
 use crate::scene::{LoadedScene, Projector};
 
-/// Figures of one subdomain.
-#[derive(Clone, Debug, Default, serde::Serialize)]
+/// Figures of one subdomain: those of every piece, and its interface.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SubdomainStats {
-    pub body: usize,
-    pub nodes: usize,
-    pub elements: usize,
+    #[serde(flatten)]
+    pub piece: PieceStats,
     pub interface_nodes: usize,
-    pub nnz_k: usize,
-    pub nnz_l: usize,
-    /// ‖K_s u_s − (f_s − B_sᵀλ)‖ / ‖f_s − B_sᵀλ‖.
-    pub residual: f64,
-    pub rank: usize,
 }
 
 /// What the TFETI path adds to a [`Solution`].
@@ -61,7 +54,7 @@ pub struct TfetiInfo {
 
 /// The distribution of the multipliers and the time in each part of the A-products (max over
 /// the ranks; times summed over the solve, power iterations included).
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct DistributionStats {
     pub owned_rows_min: usize,
     pub owned_rows_max: usize,
@@ -147,16 +140,15 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
     let s = &ls.scene.solver;
-    // only TSSN's CG uses the preconditioner (the oblique projector's operator only)
-    if contact.is_some() && !orthogonal && s.method == qp::Method::Tssn && s.preconditioner != Preconditioner::None {
-        t.phase(comm, "preconditioner", || dual.set_preconditioner(s.preconditioner))?;
+    let kind = super::DualKind::Tfeti { orthogonal, contact: contact.is_some() };
+    if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, kind)? {
+        t.phase(comm, "preconditioner", || dual.set_preconditioner(m))?;
     }
     // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
-        Some(c) => Lambda::new(c).restrict(&dual.dist.pairs),
-        None => Lambda { layout: crate::dual::Layout::contact(0, false), tangent: vec![] },
-    }
-    .with_free(dual.layout.free);
+        Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
+        None => Lambda::unconstrained(dual.layout.free),
+    };
     Ok(TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c })
 }
 
@@ -168,16 +160,19 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &ls.scene.solver;
     let TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
-    let params = super::solver_params(s);
-    let name = if contact.is_some() { s.method.name() } else { "cg" };
+    let params = &s.params;
+    let name = if contact.is_some() { params.method().name() } else { "cg" };
+    let mut monitor = t.monitor();
     let (sol, smalse) = t.phase(comm, "iterate", || {
         let y0 = vec![0.0; dual.dim()];
+        let m = dual.preconditioner();
+        let qp = Qp::new(&dual, &b, &set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner));
         let r = match (orthogonal, contact.is_some()) {
-            (true, _) => smalse::solve(&dual, &set, &params, dec.penalty).map(|(s, i)| (s, Some(i))),
-            (false, true) => qp::solve(&dual, &b, &set, &y0, &params).map(|s| (s, None)),
-            (false, false) => qp::cg::solve(&dual, &b, &y0, &params).map(|s| (s, None)),
+            (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
+            (false, true) => qp::solve(&qp, &y0, params, &mut monitor).map(|s| (s, None)),
+            (false, false) => qp::cg::solve(&qp, &y0, &params.common, &mut monitor).map(|s| (s, None)),
         };
-        r.map_err(|e| Error::numerical(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e.to_string()))
+        r.map_err(|e| Error::solver(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e))
     })?;
     let rec = t.phase(comm, "recover", || {
         // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
@@ -185,7 +180,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     })?;
     let feasibility = rec.feasibility;
     let distribution = DistributionStats::new(&dual.dist);
-    let mut solution = finish(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
+    let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
     // finish filled the gathered figures (subdomains, gluing jump); add the global ones
     let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
     f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
@@ -198,23 +193,24 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     f.smalse = smalse;
     f.distribution = distribution;
     let outcome = contact.map(|c| {
-        let set_i = Lambda::new(c);
+        let set_i = c.constraint_set();
         // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
         // gradient on the I rows), whole on every rank
         let ni = set_i.layout.dim();
         let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
-        let bnorm = dual.norm(&b);
-        let state = contact_state(c, &set_i, &li, &ri, s.eps.max(1e-9), bnorm);
+        let bnorm = dual.space().norm(&b);
+        let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm);
         let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
-        ContactOutcome { dim: dual.count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt }
+        ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt }
     });
     Ok((solution, outcome))
 }
 
-/// Checks K_s u_s = f_s − B_sᵀλ, computes the element stresses (phase `stress`) and gathers u,
-/// the stresses and the figures on rank 0 (phase `gather`), with the gluing jumps.
+/// The post-solve path of the subdomains ([`finish`], one piece per subdomain): checks
+/// K_s u_s = f_s − B_sᵀλ, stresses, gather on rank 0 with the gluing jump; the bodies' figures
+/// summed over their subdomains.
 #[allow(clippy::too_many_arguments)]
-fn finish<C: Comm>(
+fn finish_subdomains<C: Comm>(
     comm: &C,
     model: &Model,
     d: &Decomposition,
@@ -225,91 +221,34 @@ fn finish<C: Comm>(
     t: &mut Timings,
 ) -> Result<Solution> {
     let mesh = &model.mesh;
-    let (packed, local) = t.phase(comm, "stress", || {
-        let mut buf = Vec::new();
-        let mut local = LocalFields::default();
-        for ((ls, us), f) in dual.subs.iter().zip(u).zip(rhs) {
-            let s = ls.sys.index;
-            let sd = &d.subdomains[s];
-            let ku = ls.sys.k.mul(us);
-            let rn = ku.iter().zip(f).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-            let fnorm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let residual = if fnorm > 0.0 { rn / fnorm } else { rn };
-            if !residual.is_finite() || residual > 1e-6 {
-                return Err(Error::numerical(
-                    format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
-                    format!("recovered u does not satisfy K_s u_s = f_s − B_sᵀλ (relative residual {residual:.1e})"),
-                ));
-            }
-            buf.extend(us);
-            // this rank's rows for the file: a node from the subdomain of its first copy
-            for (l, &v) in sd.nodes.iter().enumerate().filter(|(_, &v)| d.copies[v][0].0 == s) {
-                local.nodes.push(v);
-                local.displacement.push([us[3 * l], us[3 * l + 1], us[3 * l + 2]]);
-            }
-            for &e in &sd.elems {
-                let ue = mesh.hexes[e].map(|v| {
-                    let l = sd.local(v).expect("element node in subdomain");
-                    [us[3 * l], us[3 * l + 1], us[3 * l + 2]]
-                });
-                let vm = von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, model.lame[sd.body]));
-                buf.push(vm);
-                local.cells.push(e);
-                local.von_mises.push(vm);
-            }
-            buf.extend([ls.sys.k.nnz() as f64, ls.sys.nnz_l() as f64, residual]);
-        }
-        Ok((buf, local))
-    })?;
-    let mut sol = t.phase(comm, "gather", || {
-        let Some(all) = comm.gather_f64(0, &packed) else {
-            return Ok(Solution::default());
-        };
-        let mut cursor = vec![0usize; comm.size()];
-        let mut sol = Solution {
-            displacement: vec![[0.0; 3]; mesh.nodes.len()],
-            von_mises: vec![0.0; mesh.hexes.len()],
-            ..Default::default()
-        };
-        let mut seen = vec![false; mesh.nodes.len()];
-        let mut copies_u: Vec<(usize, [f64; 3])> = Vec::new();
-        let mut stats = Vec::with_capacity(d.subdomains.len());
-        // subdomains in the order each rank packed them (ascending index per rank)
-        for (s, sd) in d.subdomains.iter().enumerate() {
-            let r = owner[s];
-            let data = &all[r];
-            let mut p = cursor[r];
-            for &v in &sd.nodes {
-                let uv = [data[p], data[p + 1], data[p + 2]];
-                if seen[v] {
-                    copies_u.push((v, uv));
-                } else {
-                    sol.displacement[v] = uv;
-                    seen[v] = true;
-                }
-                p += 3;
-            }
-            for &e in &sd.elems {
-                sol.von_mises[e] = data[p];
-                p += 1;
-            }
-            stats.push(SubdomainStats {
-                body: sd.body,
-                nodes: sd.nodes.len(),
-                elements: sd.elems.len(),
-                interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count(),
-                nnz_k: data[p] as usize,
-                nnz_l: data[p + 1] as usize,
-                residual: data[p + 2],
-                rank: r,
-            });
-            cursor[r] = p + 3;
-        }
-        let umax = sol.displacement.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
-        let jump = copies_u
-            .iter()
-            .map(|(v, uv)| (0..3).map(|c| (uv[c] - sol.displacement[*v][c]).abs()).fold(0.0, f64::max))
-            .fold(0.0, f64::max);
+    let layout: Vec<PieceLayout> = d
+        .subdomains
+        .iter()
+        .enumerate()
+        .map(|(s, sd)| PieceLayout {
+            rank: owner[s],
+            body: sd.body,
+            nodes: sd.nodes.clone(),
+            elems: sd.elems.clone(),
+            name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
+        })
+        .collect();
+    let mine: Vec<PieceSolution<'_>> = dual
+        .subs
+        .iter()
+        .zip(u)
+        .zip(rhs)
+        .map(|((ls, us), f)| PieceSolution {
+            piece: ls.sys.index,
+            k: &ls.sys.k,
+            nnz_l: ls.sys.nnz_l(),
+            x: us,
+            rhs: f,
+            nodal: us.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        })
+        .collect();
+    let (mut sol, stats, jump) = finish(comm, model, &layout, &mine, "the recovered u is inaccurate", t)?;
+    if comm.is_root() {
         sol.bodies = mesh
             .bodies
             .iter()
@@ -320,7 +259,7 @@ fn finish<C: Comm>(
                     name: body.name.clone(),
                     nodes: body.nodes.len(),
                     elements: body.elems.len(),
-                    free_dofs: mine.clone().map(|x| 3 * x.nodes).sum(),
+                    free_dofs: mine.clone().map(|x| x.dofs).sum(),
                     nnz_k: mine.clone().map(|x| x.nnz_k).sum(),
                     nnz_l: mine.clone().map(|x| x.nnz_l).sum(),
                     residual: mine.clone().map(|x| x.residual).fold(0.0, f64::max),
@@ -328,10 +267,12 @@ fn finish<C: Comm>(
                 }
             })
             .collect();
-        sol.tfeti = Some(TfetiInfo { subdomains: stats, gluing_jump: jump / umax, ..Default::default() });
-        Ok(sol)
-    })?;
-    sol.local = local;
-    sol.element_rank = d.elem_subdomain(mesh.hexes.len()).into_iter().map(|s| owner[s]).collect();
+        let subdomains = stats
+            .into_iter()
+            .zip(&d.subdomains)
+            .map(|(piece, sd)| SubdomainStats { piece, interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count() })
+            .collect();
+        sol.tfeti = Some(TfetiInfo { subdomains, gluing_jump: jump, ..Default::default() });
+    }
     Ok(sol)
 }

@@ -15,7 +15,7 @@ use super::lambda::Lambda;
 use super::sets::ConvexSet;
 
 /// Relative KKT residuals (all ≥ 0; 0 at an exact solution).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Kkt {
     pub penetration: f64,
     pub normal_sign: f64,
@@ -88,12 +88,11 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dual::Layout;
     use crate::qp::sets::{Disc, TangentSet};
 
     /// One pair with a disc of radius 1: λ = (λν, λτ₁, λτ₂), r likewise.
     fn set() -> Lambda {
-        Lambda { layout: Layout::contact(1, true), tangent: vec![TangentSet::Disc(Disc::new(1.0))] }
+        Lambda::new(1, Some(vec![TangentSet::Disc(Disc::new(1.0))]))
     }
 
     #[test]

@@ -3,9 +3,42 @@
 //! free), on the multiplier layout of [`Layout`]. Provides P_Λ, the largest
 //! feasible step, the reduced gradient r̃_ρ(λ) = (λ − P_Λ(λ − ρ r))/ρ and the active sets (12)–(13).
 
-use super::sets::{ConvexSet, Disc, Ellipse, HalfLine, TangentSet};
-use crate::contact::pairing::{Contact, SlipBound};
-use crate::dual::Layout;
+use super::sets::{ConvexSet, HalfLine, TangentSet};
+
+/// Layout of the multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ, λ_E ∈ R^free), λτ absent when
+/// frictionless; pair i owns λν[i] and λτ[2i], λτ[2i+1]. λ_E are the unconstrained
+/// multipliers (TFETI's gluing and Dirichlet rows; none in the monolithic dual).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    pub m: usize,
+    pub friction: bool,
+    pub free: usize,
+}
+
+impl Layout {
+    /// The contact multipliers only.
+    pub fn contact(m: usize, friction: bool) -> Self {
+        Layout { m, friction, free: 0 }
+    }
+
+    /// Number of contact multipliers (λν and λτ): the free ones start here.
+    pub fn contact_dim(&self) -> usize {
+        if self.friction { 3 * self.m } else { self.m }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.contact_dim() + self.free
+    }
+    /// Index of λν,ᵢ.
+    pub fn normal(&self, i: usize) -> usize {
+        i
+    }
+    /// Index of the k-th tangential component of pair i (k = 0, 1).
+    pub fn tangent(&self, i: usize, k: usize) -> usize {
+        debug_assert!(self.friction);
+        self.m + 2 * i + k
+    }
+}
 
 /// The constraint set of the dual contact problem.
 #[derive(Clone, Debug)]
@@ -29,29 +62,28 @@ pub struct ActiveSets {
 }
 
 impl Lambda {
-    pub fn new(contact: &Contact) -> Self {
-        let layout = Layout::contact(contact.len(), contact.has_friction());
-        let tangent = if layout.friction {
-            contact
-                .bound
-                .iter()
-                .map(|b| match *b {
-                    SlipBound::None => TangentSet::Disc(Disc::new(0.0)),
-                    SlipBound::Disc(g) => TangentSet::Disc(Disc::new(g)),
-                    SlipBound::Ellipse(a, b) => TangentSet::Ellipse(Ellipse::new(a, b)),
-                })
-                .collect()
-        } else {
-            vec![]
-        };
-        Lambda { layout, tangent }
+    /// Λ of `m` pairs: half-lines only when `tangent` is None (frictionless), else one tangential
+    /// set per pair.
+    pub fn new(m: usize, tangent: Option<Vec<TangentSet>>) -> Self {
+        match tangent {
+            Some(t) => {
+                assert_eq!(t.len(), m, "one tangential set per pair");
+                Lambda { layout: Layout::contact(m, true), tangent: t }
+            }
+            None => Lambda { layout: Layout::contact(m, false), tangent: vec![] },
+        }
+    }
+
+    /// Only unconstrained components (TFETI without contact): Λ = R^free.
+    pub fn unconstrained(free: usize) -> Self {
+        Lambda { layout: Layout { m: 0, friction: false, free }, tangent: vec![] }
     }
 
     /// The blocks of the pairs `pairs` (ascending) only: a rank's part of Λ when the dual vectors
     /// are distributed.
     pub fn restrict(&self, pairs: &[usize]) -> Self {
         let layout = Layout { m: pairs.len(), friction: self.layout.friction, free: 0 };
-        let tangent = if layout.friction { pairs.iter().map(|&i| self.tangent[i].clone()).collect() } else { vec![] };
+        let tangent = if layout.friction { pairs.iter().map(|&i| self.tangent[i]).collect() } else { vec![] };
         Lambda { layout, tangent }
     }
 

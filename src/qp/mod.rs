@@ -1,160 +1,115 @@
-//! Quadratic programs with separable convex constraints: the constraint sets and the solvers.
+//! Quadratic programs with separable convex constraints — the solver layer, the floor of the
+//! crate: it imports nothing from the rest of the crate and knows no meshes, scenes or FETI.
 //!
-//! The dual contact problem (DESIGN §1, §3) is `min q(λ) = ½ λᵀAλ − λᵀb` over a product
-//! `Λ = Π_i Λ_i` of small closed convex blocks, one per contact pair: a half-line for the
-//! normal multiplier `λν,ᵢ ≥ 0` and a disc (isotropic Tresca) or an ellipse (orthotropic
-//! Tresca) for the tangential pair `λ̄τ,ᵢ`. [`sets`] holds these blocks behind one trait,
-//! [`lambda`] their product Λ. The solvers see A only through [`DualOperator`]: the
-//! symmetrized semi-smooth Newton family ([`gimssn`]: GIMSSN, IMSSN, MSSN), the unsymmetrized
-//! SSN with BiCGSTAB ([`ssn`]), its symmetric form TSSN with CG ([`tssn`]) and MPGP ([`mpgp`]). All share [`Params`], report [`Info`], fail
-//! with [`QpError`], stop on the same criterion `‖r̃_ρ(λ)‖ ≤ ε‖b‖` and never print. [`kkt`]
-//! measures how well a result satisfies the optimality conditions.
+//! The problem ([`Qp`]) is `min q(λ) = ½ λᵀAλ − λᵀb` over a product `Λ = Π_i Λ_i` of small
+//! closed convex blocks ([`sets`]; their product and the multiplier layout in [`lambda`]),
+//! with A seen only through [`Operator`] (its reductions through [`Space`]) and an optional
+//! [`Preconditioner`] ([`operator`]). The solvers — the symmetrized semi-smooth Newton family
+//! ([`gimssn`]: GIMSSN, IMSSN, MSSN), SSN with BiCGSTAB ([`ssn`]), TSSN ([`tssn`]), MPGP
+//! ([`mpgp`]) and plain CG for Λ = Rⁿ ([`cg`]) — each read their own settings ([`params`]),
+//! share one outer loop ([`driver`]: stop test `‖r̃_ρ(λ)‖ ≤ ε‖b‖`, budgets, [`Info`], the
+//! [`Monitor`]) and the Krylov kernels ([`krylov`]), fail with [`QpError`] and never print.
+//! [`kkt`] measures how well a result satisfies the optimality conditions.
 
 pub mod cg;
+pub mod driver;
 pub mod gimssn;
 pub mod kkt;
+pub mod krylov;
 pub mod lambda;
 pub mod mpgp;
+pub mod operator;
+pub mod params;
 pub mod sets;
 pub mod ssn;
 pub mod tssn;
 
-use serde::{Deserialize, Serialize};
+pub use driver::{power_sigma, Monitor, Silent, SIGMA_SAFETY};
+pub use lambda::{Lambda, Layout};
+pub use operator::{Operator, Preconditioner, ProductCounter, Replicated, Space};
+pub use params::{CgStop, Common, Method, MethodParams, Params};
 
-use crate::dual::DualOperator;
-use lambda::Lambda;
+/// The QP: A, b, Λ and, for the solvers that take one, a preconditioner of A.
+pub struct Qp<'a, A: Operator> {
+    pub a: &'a A,
+    pub b: &'a [f64],
+    pub set: &'a Lambda,
+    /// M ≈ A⁻¹ on a block of the components (only TSSN's CG uses it: see
+    /// [`Method::takes_preconditioner`]).
+    pub preconditioner: Option<&'a dyn Preconditioner>,
+}
 
-/// The dual solvers.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Hash)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Monotone, feasible (CGMfeas), globally convergent symmetrized SSN.
-    Gimssn,
-    /// Inexact symmetrized SSN: CG to an adaptive tolerance, iterates may leave Λ.
-    Imssn,
-    /// Symmetrized SSN with exact inner solves.
-    Mssn,
-    /// Unsymmetrized SSN (full slant derivative), inner systems by BiCGSTAB.
-    SsnBicgstab,
-    /// Modified proportioning with gradient projections (Dostál–Kozubek).
-    Mpgp,
-    /// Tangent-symmetric SSN: the exact SSN step as an SPD system, solved by CG (DESIGN §3b).
-    Tssn,
+impl<'a, A: Operator> Qp<'a, A> {
+    pub fn new(a: &'a A, b: &'a [f64], set: &'a Lambda) -> Self {
+        Qp { a, b, set, preconditioner: None }
+    }
+
+    pub fn with_preconditioner(self, m: Option<&'a dyn Preconditioner>) -> Self {
+        Qp { preconditioner: m, ..self }
+    }
 }
 
 impl Method {
-    pub const ALL: [Method; 6] = [Method::Gimssn, Method::Imssn, Method::Mssn, Method::SsnBicgstab, Method::Mpgp, Method::Tssn];
-
-    /// The scene's (and the command line's) name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Gimssn => "gimssn",
-            Method::Imssn => "imssn",
-            Method::Mssn => "mssn",
-            Method::SsnBicgstab => "ssn-bicgstab",
-            Method::Mpgp => "mpgp",
-            Method::Tssn => "tssn",
-        }
-    }
-
-    pub fn from_name(s: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == s)
+    /// Whether the method has a symmetric inner solve that a preconditioner can act on (TSSN's
+    /// CG). The others' inner systems are masked or unsymmetric and take none.
+    pub fn takes_preconditioner(self) -> bool {
+        self == Method::Tssn
     }
 }
 
-/// What an inner tolerance is relative to.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+/// What kind of outer step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum CgStop {
-    /// ‖g_F‖ ≤ tol·‖b‖ (the faster choice, DESIGN §3a).
-    Rhs,
-    /// ‖g_F‖ ≤ tol·‖g_F at the start of the inner solve‖ (the paper's).
-    InitialGradient,
+pub enum StepKind {
+    /// A semi-smooth Newton step (GIMSSN, IMSSN, MSSN, SSN-BiCGSTAB).
+    Newton,
+    /// TSSN's tangent-symmetric Newton step.
+    Tangent,
+    /// TSSN's safeguard: a GIMSSN step.
+    Safeguard,
+    /// MPGP's conjugate gradient step; a plain CG iteration.
+    Cg,
+    /// MPGP's expansion step.
+    Expansion,
+    /// MPGP's proportioning step.
+    Proportioning,
 }
 
-/// Settings shared by all solvers (each reads the ones it needs).
-#[derive(Clone, Debug)]
-pub struct Params {
-    pub method: Method,
-    /// ε: stop when ‖r̃_ρ(λ)‖ ≤ ε‖b‖.
-    pub eps: f64,
-    /// ρ = rho_factor / (1.1 σ_est) (also MPGP's fixed step ᾱ); below 2 for the monotone theory.
-    pub rho_factor: f64,
-    /// Adaptive inner tolerance `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`.
-    pub rtol: f64,
-    pub cfact: f64,
-    /// TSSN's forcing exponent θ: inner tolerance `rtol·(err_k/err_0)^θ` (θ > 1: superlinear).
-    pub forcing: f64,
-    /// A fixed relative inner tolerance instead of the adaptive one (SSN-BiCGSTAB; the paper's
-    /// baseline needs about 1e-6).
-    pub inner_tol: Option<f64>,
-    pub cg_stop: CgStop,
-    /// No inner solve is asked for less than `inner_floor·ε·‖b‖` (0: no floor, as in the
-    /// paper; the inner solves then go far below what the outer test can see).
-    pub inner_floor: f64,
-    /// Outer iterations at most (MPGP: steps).
-    pub max_outer: usize,
-    /// Inner iterations per outer step at most.
-    pub max_inner: usize,
-    /// A-products (power iterations excluded) at most: a budget checked between outer steps.
-    pub max_products: usize,
-    pub power_iterations: usize,
-    /// σ_max(A) when already known (no power iterations then): a caller solving a sequence of
-    /// QPs with the same A (SMALSE-M's outer loop) measures it once.
-    pub sigma: Option<f64>,
-    /// MPGP's proportioning constant Γ.
-    pub gamma: f64,
-}
-
-impl Default for Params {
-    fn default() -> Self {
-        Params {
-            method: Method::SsnBicgstab,
-            eps: 1e-6,
-            rho_factor: 1.9,
-            rtol: 0.5,
-            cfact: 0.9,
-            forcing: 1.0,
-            inner_tol: None,
-            cg_stop: CgStop::Rhs,
-            inner_floor: 0.1,
-            max_outer: 1000,
-            max_inner: 10_000,
-            max_products: usize::MAX,
-            power_iterations: 30,
-            sigma: None,
-            gamma: 1.0,
-        }
-    }
-}
-
-/// One outer iteration (MPGP: one step).
-#[derive(Clone, Debug, PartialEq)]
+/// One outer iteration (MPGP: one step; plain CG: one iteration).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Step {
     /// ‖r̃_ρ‖ / ‖b‖ after the step.
     pub err: f64,
     /// Inner tolerance used (0 where there is none).
     pub tol: f64,
     pub q: f64,
-    /// Active normals (pairs in contact) at the start of the step.
+    /// Active normals (pairs in contact) at the start of the step (MPGP: free normals).
     pub normal_active: usize,
+    /// Sticking pairs (MPGP: free tangential pairs).
     pub stick: usize,
+    /// Sliding pairs (MPGP: tangential pairs on the bound).
     pub slip: usize,
     /// Inner (CG / BiCGSTAB) iterations of this step.
     pub inner: usize,
     /// A-products so far (without the power iterations).
+    #[serde(rename = "nA")]
     pub n_a: usize,
-    /// What kind of step (MPGP: 'c' CG, 'e' expansion, 'p' proportioning; Newton methods: 'n').
-    pub kind: char,
+    pub kind: StepKind,
+    /// Seconds since the solve started (power iterations included).
+    pub time: f64,
 }
 
 /// Counters of a solve.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Info {
+    /// Outer iterations.
+    #[serde(rename = "outer_iterations")]
     pub iterations: usize,
     /// A-products, the power iterations excluded.
+    #[serde(rename = "nA")]
     pub n_a: usize,
     /// A-products of the power iterations for σ_max.
+    #[serde(rename = "nA_power")]
     pub n_a_power: usize,
     pub inner_iterations: usize,
     /// Applications of the preconditioner M (TSSN with a preconditioner; 0 otherwise).
@@ -162,8 +117,10 @@ pub struct Info {
     pub sigma_est: f64,
     pub rho: f64,
     /// Final ‖r̃_ρ(λ)‖/‖b‖ from a fresh product.
+    #[serde(rename = "final_relative_reduced_gradient")]
     pub err: f64,
     pub q: f64,
+    /// Every outer step.
     pub history: Vec<Step>,
 }
 
@@ -190,139 +147,15 @@ pub struct QpSolution {
     pub info: Info,
 }
 
-/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) with `p.method`.
-pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
-    match p.method {
-        Method::Gimssn | Method::Imssn | Method::Mssn => gimssn::solve(a, b, set, lambda0, p),
-        Method::SsnBicgstab => ssn::solve(a, b, set, lambda0, p),
-        Method::Mpgp => mpgp::solve(a, b, set, lambda0, p),
-        Method::Tssn => tssn::solve(a, b, set, lambda0, p),
+/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) with the method of `p`,
+/// showing every outer step to `monitor`.
+pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    match &p.method {
+        MethodParams::Gimssn(m) => gimssn::solve(qp, lambda0, &p.common, gimssn::Variant::Feasible(m), monitor),
+        MethodParams::Imssn(m) => gimssn::solve(qp, lambda0, &p.common, gimssn::Variant::Inexact(m), monitor),
+        MethodParams::Mssn(_) => gimssn::solve(qp, lambda0, &p.common, gimssn::Variant::Exact, monitor),
+        MethodParams::SsnBicgstab(m) => ssn::solve(qp, lambda0, &p.common, m, monitor),
+        MethodParams::Mpgp(m) => mpgp::solve(qp, lambda0, &p.common, m, monitor),
+        MethodParams::Tssn(m) => tssn::solve(qp, lambda0, &p.common, m, monitor),
     }
-}
-
-/// σ_max(A) by `iterations` power iterations from a fixed start vector.
-pub fn power_sigma<A: DualOperator>(a: &A, iterations: usize) -> f64 {
-    let n = a.dim();
-    // the same vector for every distribution of the components
-    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((a.global_index(i) * 7919) % 13) as f64).collect();
-    let nx = a.norm(&x);
-    x.iter_mut().for_each(|v| *v /= nx);
-    let mut y = vec![0.0; n];
-    let mut sigma = 0.0;
-    for _ in 0..iterations {
-        a.apply(&x, &mut y);
-        sigma = a.norm(&y);
-        if sigma == 0.0 || !sigma.is_finite() {
-            break;
-        }
-        for (xi, yi) in x.iter_mut().zip(&y) {
-            *xi = yi / sigma;
-        }
-    }
-    sigma
-}
-
-/// The common start of every solver: σ_est, ρ, ‖b‖ and the product count at the start.
-pub(crate) struct Setup {
-    pub n0: usize,
-    pub n_power: usize,
-    pub sigma: f64,
-    pub rho: f64,
-    pub bnorm: f64,
-}
-
-impl Setup {
-    pub fn new<A: DualOperator>(a: &A, b: &[f64], p: &Params) -> Result<Setup, QpError> {
-        let n0 = a.products();
-        let sigma = p.sigma.unwrap_or_else(|| power_sigma(a, p.power_iterations));
-        let n_power = a.products() - n0;
-        if !(sigma.is_finite() && sigma > 0.0) {
-            return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
-        }
-        let rho = p.rho_factor / (1.1 * sigma);
-        let bnorm = a.norm(b).max(f64::MIN_POSITIVE);
-        Ok(Setup { n0, n_power, sigma, rho, bnorm })
-    }
-
-    /// A-products since the start, the power iterations excluded.
-    pub fn products<A: DualOperator>(&self, a: &A) -> usize {
-        a.products() - self.n0 - self.n_power
-    }
-
-    pub fn info(&self) -> Info {
-        Info { sigma_est: self.sigma, rho: self.rho, n_a_power: self.n_power, ..Default::default() }
-    }
-}
-
-/// r = A x − b.
-pub(crate) fn residual<A: DualOperator>(a: &A, b: &[f64], x: &[f64], r: &mut [f64]) {
-    a.apply(x, r);
-    r.iter_mut().zip(b).for_each(|(ri, bi)| *ri -= bi);
-}
-
-/// ad = A d and the curvature dᵀAd, which must be positive (else a breakdown or NaN error).
-pub(crate) fn curvature<A: DualOperator>(a: &A, d: &[f64], ad: &mut [f64], outer: usize) -> Result<f64, QpError> {
-    a.apply(d, ad);
-    let dad = a.dot(d, ad);
-    if dad > 0.0 && dad.is_finite() {
-        Ok(dad)
-    } else if !dad.is_finite() {
-        Err(QpError::NotFinite { what: "the curvature dᵀAd", outer })
-    } else {
-        Err(QpError::Breakdown { outer, p_ap: dad })
-    }
-}
-
-impl Step {
-    /// A Newton step's record with the sets it started from (counted over all ranks).
-    pub(crate) fn newton<A: DualOperator>(a: &A, err: f64, tol: f64, q: f64, sets: &lambda::ActiveSets, inner: usize, n_a: usize) -> Step {
-        let (normal_active, stick, slip) = (a.count(sets.normal_active), a.count(sets.stick), a.count(sets.slip));
-        Step { err, tol, q, normal_active, stick, slip, inner, n_a, kind: 'n' }
-    }
-}
-
-/// q(λ) = ½λᵀAλ − λᵀb = ½λᵀ(r − b) with r = Aλ − b.
-pub(crate) fn q_of<A: DualOperator>(a: &A, lambda: &[f64], r: &[f64], b: &[f64]) -> f64 {
-    let rb: Vec<f64> = r.iter().zip(b).map(|(x, y)| x - y).collect();
-    0.5 * a.dot(lambda, &rb)
-}
-
-/// The stop test of a solver whose iterate x need not lie in Λ (SSN, TSSN), once its own
-/// ‖r̃_ρ(x)‖ ≤ ε‖b‖: confirm at P_Λ(x) with a fresh product. Returns the solution when it holds
-/// there; otherwise x, r become P_Λ(x) and its gradient (the solver goes on from there) and the
-/// error there is returned. `z`, `rz` are workspace.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn confirm_projected<A: DualOperator>(
-    a: &A,
-    b: &[f64],
-    set: &Lambda,
-    st: &Setup,
-    eps: f64,
-    k: usize,
-    x: &mut Vec<f64>,
-    r: &mut Vec<f64>,
-    z: &mut Vec<f64>,
-    rz: &mut Vec<f64>,
-    rt: &mut [f64],
-    info: &mut Info,
-) -> Result<QpSolution, f64> {
-    set.project(x, z);
-    residual(a, b, z, rz);
-    let ez = err_of(a, set, z, rz, st, rt);
-    if ez <= eps {
-        info.iterations = k;
-        info.err = ez;
-        info.q = q_of(a, z, rz, b);
-        info.n_a = st.products(a);
-        return Ok(QpSolution { lambda: std::mem::take(z), gradient: std::mem::take(rz), info: std::mem::take(info) });
-    }
-    std::mem::swap(x, z);
-    std::mem::swap(r, rz);
-    Err(ez)
-}
-
-/// ‖r̃_ρ(λ)‖/‖b‖, with r̃ written to `rt`.
-pub(crate) fn err_of<A: DualOperator>(a: &A, set: &Lambda, lambda: &[f64], r: &[f64], s: &Setup, rt: &mut [f64]) -> f64 {
-    set.reduced_gradient(lambda, r, s.rho, rt);
-    a.norm(rt) / s.bnorm
 }

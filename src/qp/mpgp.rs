@@ -22,10 +22,12 @@
 //! (`‖r̃_ρ(λ)‖ ≤ ε‖b‖`, confirmed with a fresh product). q decreases in every step. One
 //! outer iteration is one step; `inner_iterations` counts the CG steps.
 
+use super::driver::{curvature, Driver, Monitor, Setup};
 use super::lambda::Lambda;
+use super::operator::{Operator, Space};
+use super::params::{Common, Mpgp};
 use super::sets::ConvexSet;
-use super::{curvature, err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
-use crate::dual::DualOperator;
+use super::{Qp, QpError, QpSolution, Step, StepKind};
 
 /// Relative distance to the boundary under which a block counts as active.
 const ON_BOUNDARY: f64 = 1e-10;
@@ -42,9 +44,9 @@ struct Split {
     active_tangent: usize,
 }
 
-fn split<A: DualOperator>(a: &A, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
+fn split<S: Space>(sp: &S, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, out: &mut Split) {
     let m = set.layout.m;
-    let lmax = a.max(lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs())));
+    let lmax = sp.max(lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs())));
     let (phi, beta, phit) = (&mut out.phi, &mut out.beta, &mut out.phit);
     out.free_normal = 0;
     out.free_tangent = 0;
@@ -102,124 +104,104 @@ fn split<A: DualOperator>(a: &A, set: &Lambda, lambda: &[f64], g: &[f64], alpha:
 }
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by MPGP.
-pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
+pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    let (a, set) = (qp.a, qp.set);
+    let sp = a.space();
     let n = a.dim();
-    let st = Setup::new(a, b, p)?;
-    let alpha_bar = st.rho;
+    let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
+    let alpha_bar = drv.st.rho;
     let mut lambda = vec![0.0; n];
     set.project(lambda0, &mut lambda);
     let mut g = vec![0.0; n];
-    residual(a, b, &lambda, &mut g);
-    let mut sp = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
-    split(a, set, &lambda, &g, alpha_bar, &mut sp);
-    let mut dir = sp.phi.clone();
+    drv.residual(&lambda, &mut g);
+    let mut spl = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
+    split(sp, set, &lambda, &g, alpha_bar, &mut spl);
+    let mut dir = spl.phi.clone();
     let (mut ad, mut y, mut rt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut info: Info = st.info();
-    let mut err = err_of(a, set, &lambda, &g, &st, &mut rt);
+    let mut err = drv.err(&lambda, &g, &mut rt);
     // λ ← P_Λ(λ − ᾱ v), g fresh, split, CG restarted
     let projected_step = |lambda: &mut Vec<f64>, v: &[f64], g: &mut Vec<f64>, y: &mut Vec<f64>| {
         for i in 0..n {
             y[i] = lambda[i] - alpha_bar * v[i];
         }
         set.project(y, lambda);
-        residual(a, b, lambda, g);
+        super::driver::residual(qp, lambda, g);
     };
     for k in 0.. {
-        if !err.is_finite() {
-            return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
-        }
-        if err <= p.eps {
+        drv.check(k, err, "the reduced gradient")?;
+        if drv.met(err) {
             // confirm with a fresh product: the recurrences drift
-            residual(a, b, &lambda, &mut g);
-            err = err_of(a, set, &lambda, &g, &st, &mut rt);
-            if err <= p.eps {
-                info.iterations = k;
-                info.err = err;
-                info.q = q_of(a, &lambda, &g, b);
-                info.n_a = st.products(a);
-                return Ok(QpSolution { lambda, gradient: g, info });
+            drv.residual(&lambda, &mut g);
+            err = drv.err(&lambda, &g, &mut rt);
+            if drv.met(err) {
+                return Ok(drv.finish(k, lambda, g, err));
             }
-            split(a, set, &lambda, &g, alpha_bar, &mut sp);
-            dir.copy_from_slice(&sp.phi);
+            split(sp, set, &lambda, &g, alpha_bar, &mut spl);
+            dir.copy_from_slice(&spl.phi);
         }
-        if k == p.max_outer || st.products(a) >= p.max_products {
-            info.iterations = k;
-            info.err = err;
-            info.n_a = st.products(a);
-            return Err(QpError::NoConvergence { info: Box::new(info), eps: p.eps });
-        }
-        let (free_normal, stick, slip) = (a.count(sp.free_normal), a.count(sp.free_tangent), a.count(sp.active_tangent));
-        let bb = a.dot(&sp.beta, &sp.beta);
+        drv.budget(k, err)?;
+        let (free_normal, stick, slip) = (sp.count(spl.free_normal), sp.count(spl.free_tangent), sp.count(spl.active_tangent));
+        let bb = sp.dot(&spl.beta, &spl.beta);
         let kind;
-        if bb <= p.gamma * p.gamma * a.dot(&sp.phit, &sp.phi) {
+        if bb <= p.gamma * p.gamma * sp.dot(&spl.phit, &spl.phi) {
             let pap = curvature(a, &dir, &mut ad, k)?;
-            let acg = a.dot(&g, &dir) / pap;
-            let af = a.min(set.max_step(&lambda, &dir));
+            let acg = sp.dot(&g, &dir) / pap;
+            let af = sp.min(set.max_step(&lambda, &dir));
             if acg <= af {
-                kind = 'c';
-                info.inner_iterations += 1;
+                kind = StepKind::Cg;
                 for i in 0..n {
                     lambda[i] -= acg * dir[i];
                     g[i] -= acg * ad[i];
                 }
-                split(a, set, &lambda, &g, alpha_bar, &mut sp);
-                let gamma = a.dot(&sp.phi, &ad) / pap;
+                split(sp, set, &lambda, &g, alpha_bar, &mut spl);
+                let gamma = sp.dot(&spl.phi, &ad) / pap;
                 for i in 0..n {
-                    dir[i] = sp.phi[i] - gamma * dir[i];
+                    dir[i] = spl.phi[i] - gamma * dir[i];
                 }
             } else {
-                kind = 'e';
+                kind = StepKind::Expansion;
                 for i in 0..n {
                     lambda[i] -= af * dir[i];
                     g[i] -= af * ad[i];
                 }
-                split(a, set, &lambda, &g, alpha_bar, &mut sp);
-                let phi = std::mem::take(&mut sp.phi);
+                split(sp, set, &lambda, &g, alpha_bar, &mut spl);
+                let phi = std::mem::take(&mut spl.phi);
                 projected_step(&mut lambda, &phi, &mut g, &mut y);
-                sp.phi = phi; // split overwrites every entry
-                split(a, set, &lambda, &g, alpha_bar, &mut sp);
-                dir.copy_from_slice(&sp.phi);
+                spl.phi = phi; // split overwrites every entry
+                split(sp, set, &lambda, &g, alpha_bar, &mut spl);
+                dir.copy_from_slice(&spl.phi);
             }
         } else {
-            kind = 'p';
+            kind = StepKind::Proportioning;
             // the search direction d = β lives in `dir` (reset to φ below)
-            dir.copy_from_slice(&sp.beta);
+            dir.copy_from_slice(&spl.beta);
             let d: &[f64] = &dir;
-            let af = a.min(set.max_step(&lambda, d));
+            let af = sp.min(set.max_step(&lambda, d));
             let mut done = false;
             if af > 0.0 {
                 let dad = curvature(a, d, &mut ad, k)?;
-                let acg = a.dot(&g, d) / dad;
+                let acg = sp.dot(&g, d) / dad;
                 let step = acg.min(af);
                 for i in 0..n {
                     lambda[i] -= step * d[i];
                     g[i] -= step * ad[i];
                 }
-                split(a, set, &lambda, &g, alpha_bar, &mut sp);
+                split(sp, set, &lambda, &g, alpha_bar, &mut spl);
                 done = acg <= af;
             }
             if !done {
                 // the gradient-projection step on the active blocks (monotone for ᾱ < 2/‖A‖)
                 for i in 0..n {
-                    ad[i] = g[i] - sp.phi[i];
+                    ad[i] = g[i] - spl.phi[i];
                 }
                 projected_step(&mut lambda, &ad, &mut g, &mut y);
-                split(a, set, &lambda, &g, alpha_bar, &mut sp);
+                split(sp, set, &lambda, &g, alpha_bar, &mut spl);
             }
-            dir.copy_from_slice(&sp.phi);
+            dir.copy_from_slice(&spl.phi);
         }
-        err = err_of(a, set, &lambda, &g, &st, &mut rt);
-        info.history.push(Step {
-            err,
-            tol: 0.0,
-            q: q_of(a, &lambda, &g, b),
-            normal_active: free_normal,
-            stick,
-            slip,
-            inner: usize::from(kind == 'c'),
-            n_a: st.products(a),
-            kind,
-        });
+        err = drv.err(&lambda, &g, &mut rt);
+        let q = drv.q(&lambda, &g);
+        drv.record(Step { err, tol: 0.0, q, normal_active: free_normal, stick, slip, inner: usize::from(kind == StepKind::Cg), n_a: 0, kind, time: 0.0 });
     }
     unreachable!("the outer loop returns")
 }

@@ -29,20 +29,23 @@
 //! subspace (vectors v with v = Πv, Π the mask and t tᵀ on sliding pairs; operator
 //! `Π A v + C v`), each iteration one A-product, r(x) updated by the recurrence, stopped at
 //! `‖Π r + Cσ‖ ≤ max(min(rtol·(err_k/err_0)^θ·‖b‖, rtol·‖start‖), floor·ε·‖b‖)` (forcing
-//! exponent θ = `Params::forcing`: superlinear for θ > 1). The result x^{k+1} (its gradient from
+//! exponent θ = [`Tssn::forcing`]: superlinear for θ > 1). The result x^{k+1} (its gradient from
 //! the recurrence) need not lie in Λ; the test `‖r̃_ρ‖ ≤ ε‖b‖` is made there and confirmed at
 //! P_Λ(x) with a fresh product, which is the result.
 //!
 //! **Safeguard.** q at the starts x⁰ (in Λ, exact gradient) should decrease. If q(x⁰_{k+1})
 //! exceeds the last accepted value, the step is undone and a GIMSSN step (projected gradient,
 //! then CGMfeas; monotone for ρ < 2/σ_max) is taken from the last accepted start instead
-//! (`Info`'s steps of kind 'g'). Newton steps are kind 't'.
+//! ([`StepKind::Safeguard`]). Newton steps are [`StepKind::Tangent`].
 
+use super::driver::{Driver, Monitor, Setup, SIGMA_SAFETY};
 use super::gimssn;
+use super::krylov::{pcg, Coefficients, InnerSystem, Pcg};
 use super::lambda::Lambda;
+use super::operator::{Operator, Space};
+use super::params::{Common, Tssn};
 use super::sets::ConvexSet;
-use super::{confirm_projected, err_of, q_of, residual, Info, Params, QpError, QpSolution, Setup, Step};
-use crate::dual::DualOperator;
+use super::{Qp, QpError, QpSolution, StepKind};
 
 /// A sliding pair's part of the Newton system: its first component, the unit tangent t at
 /// x = P(y) and cᵢ.
@@ -93,6 +96,9 @@ impl System {
         System { sets, slides }
     }
 
+}
+
+impl InnerSystem for System {
     /// out = Π g + C v (v in the subspace): the operator on v when g = A v; the residual of the
     /// Newton system at x⁰ (σ = 0) when g = r(x⁰) and v is None.
     fn apply(&self, g: &[f64], v: Option<&[f64]>, out: &mut [f64]) {
@@ -111,49 +117,42 @@ impl System {
     }
 }
 
-/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) by TSSN.
-pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p: &Params) -> Result<QpSolution, QpError> {
+/// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) by TSSN; the QP's
+/// preconditioner, if any, acts in the inner CG.
+pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    let (a, set) = (qp.a, qp.set);
+    let sp = a.space();
     let n = a.dim();
-    let st = Setup::new(a, b, p)?;
-    let (rho, bnorm) = (st.rho, st.bnorm);
-    let products = || st.products(a);
+    let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
+    let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
     let mut x = vec![0.0; n];
     set.project(lambda0, &mut x);
     let mut r = vec![0.0; n];
-    if a.max(x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) == 0.0 {
+    if sp.max(x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) == 0.0 {
         // r(0) = −b: no product
-        r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = -bi);
+        r.iter_mut().zip(qp.b).for_each(|(ri, bi)| *ri = -bi);
     } else {
-        residual(a, b, &x, &mut r);
+        drv.residual(&x, &mut r);
     }
     let mut rt = vec![0.0; n];
-    let mut err = err_of(a, set, &x, &r, &st, &mut rt);
+    let mut err = drv.err(&x, &r, &mut rt);
     let err0 = err.max(f64::MIN_POSITIVE);
-    let mut info: Info = st.info();
     let (mut x0, mut g0) = (vec![0.0; n], vec![0.0; n]);
-    let (mut h, mut d, mut ad, mut md, mut zv, mut pz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // the last accepted start (in Λ, exact gradient) and its q
     let (mut base, mut base_r, mut base_q) = (x.clone(), r.clone(), f64::INFINITY);
     let (mut z, mut rz) = (vec![0.0; n], vec![0.0; n]);
     for k in 0.. {
-        if !err.is_finite() {
-            return Err(QpError::NotFinite { what: "the reduced gradient", outer: k });
-        }
-        if err <= p.eps {
-            match confirm_projected(a, b, set, &st, p.eps, k, &mut x, &mut r, &mut z, &mut rz, &mut rt, &mut info) {
+        drv.check(k, err, "the reduced gradient")?;
+        if drv.met(err) {
+            match drv.confirm_projected(k, &mut x, &mut r, &mut z, &mut rz, &mut rt) {
                 Ok(sol) => return Ok(sol),
                 Err(e) => err = e,
             }
         }
-        if k == p.max_outer || products() >= p.max_products {
-            info.iterations = k;
-            info.err = err;
-            info.n_a = products();
-            return Err(QpError::NoConvergence { info: Box::new(info), eps: p.eps });
-        }
+        drv.budget(k, err)?;
         let sys = System::new(set, &x, &r, rho, &mut x0);
-        residual(a, b, &x0, &mut g0);
-        let q0 = q_of(a, &x0, &g0, b);
+        drv.residual(&x0, &mut g0);
+        let q0 = drv.q(&x0, &g0);
         if !q0.is_finite() {
             return Err(QpError::NotFinite { what: "q at the Newton start", outer: k });
         }
@@ -161,18 +160,16 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         if q0 > base_q + 1e-12 * base_q.abs() {
             // the safeguard: a GIMSSN step from the last accepted start
             // GIMSSN's descent needs ρ < 2/σ_max
-            let rho_g = rho.min(1.9 / (1.1 * st.sigma));
-            let g = gimssn::feasible_step(a, b, set, &base, &base_r, rho_g, (tol * bnorm).max(p.inner_floor * p.eps * bnorm), p.max_inner, k)?;
+            let rho_g = rho.min(1.9 / (SIGMA_SAFETY * drv.st.sigma));
+            let g = gimssn::feasible_step(&drv, set, &base, &base_r, rho_g, (tol * bnorm).max(p.inner_floor * c.eps * bnorm), c.max_inner, k)?;
             x.copy_from_slice(&g.lambda);
             r.copy_from_slice(&g.gradient);
             base.copy_from_slice(&x);
             base_r.copy_from_slice(&r);
-            base_q = q_of(a, &x, &r, b);
-            err = err_of(a, set, &x, &r, &st, &mut rt);
-            info.inner_iterations += g.inner;
-            let mut s = Step::newton(a, err, tol, base_q, &sys.sets, g.inner, products());
-            s.kind = 'g';
-            info.history.push(s);
+            base_q = drv.q(&x, &r);
+            err = drv.err(&x, &r, &mut rt);
+            let step = drv.newton(StepKind::Safeguard, err, tol, base_q, &sys.sets, g.inner);
+            drv.record(step);
             continue;
         }
         base.copy_from_slice(&x0);
@@ -181,58 +178,20 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
         // CG on the subspace from x⁰ (σ = 0 there)
         x.copy_from_slice(&x0);
         r.copy_from_slice(&g0);
-        sys.apply(&r, None, &mut h);
-        let h0 = a.norm(&h);
-        let threshold = (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * p.eps * bnorm);
-        // (P)CG: z = Π M h (z = h without a preconditioner)
-        let precond = a.preconditioned();
-        let mut precondition = |h: &[f64], z: &mut [f64]| {
-            if precond {
-                a.precondition(h, &mut pz, rho);
-                sys.apply(&pz, None, z);
-            } else {
-                z.copy_from_slice(h);
-            }
+        let opts = Pcg {
+            system: &sys,
+            preconditioner: qp.preconditioner.map(|m| (m, rho)),
+            coefficients: Coefficients::Standard,
+            feasible: false,
+            max_iter: c.max_inner,
+            outer: k,
         };
-        precondition(&h, &mut zv);
-        d.copy_from_slice(&zv);
-        let mut hz = a.dot(&h, &zv);
-        let mut hnorm = h0;
-        let mut inner = 0;
-        while hnorm > threshold && inner < p.max_inner {
-            a.apply(&d, &mut ad);
-            sys.apply(&ad, Some(&d), &mut md);
-            let dmd = a.dot(&d, &md);
-            inner += 1;
-            if !dmd.is_finite() {
-                return Err(QpError::NotFinite { what: "the curvature dᵀMd", outer: k });
-            }
-            if dmd <= 0.0 {
-                return Err(QpError::Breakdown { outer: k, p_ap: dmd });
-            }
-            let alpha = hz / dmd;
-            for i in 0..n {
-                x[i] -= alpha * d[i];
-                r[i] -= alpha * ad[i];
-                h[i] -= alpha * md[i];
-            }
-            precondition(&h, &mut zv);
-            let hz_new = a.dot(&h, &zv);
-            hnorm = if precond { a.norm(&h) } else { hz_new.sqrt() };
-            let beta = hz_new / hz;
-            hz = hz_new;
-            for i in 0..n {
-                d[i] = zv[i] + beta * d[i];
-            }
-        }
-        if precond {
-            info.preconditioner_applications += inner + 1;
-        }
-        err = err_of(a, set, &x, &r, &st, &mut rt);
-        info.inner_iterations += inner;
-        let mut s = Step::newton(a, err, tol, q0, &sys.sets, inner, products());
-        s.kind = 't';
-        info.history.push(s);
+        let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
+        let cg = pcg(qp, &opts, &mut x, &mut r, threshold, |_| {})?;
+        drv.info.preconditioner_applications += cg.applications;
+        err = drv.err(&x, &r, &mut rt);
+        let step = drv.newton(StepKind::Tangent, err, tol, q0, &sys.sets, cg.iterations);
+        drv.record(step);
     }
     unreachable!("the outer loop returns")
 }
@@ -240,9 +199,8 @@ pub fn solve<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, lambda0: &[f64], p
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dual::{Layout, ProductCounter};
     use crate::qp::sets::{Disc, Ellipse, TangentSet};
-    use crate::qp::{kkt, Method};
+    use crate::qp::{kkt, solve, Method, Params, ProductCounter, Replicated, Silent};
 
     /// A dense SPD A = QᵀQ + shift·I (Q random), counting its products.
     struct Dense {
@@ -264,7 +222,11 @@ mod tests {
         }
     }
 
-    impl DualOperator for Dense {
+    impl Operator for Dense {
+        type Space = Replicated;
+        fn space(&self) -> &Replicated {
+            &Replicated
+        }
         fn dim(&self) -> usize {
             self.n
         }
@@ -291,7 +253,7 @@ mod tests {
         let tangent = (0..m)
             .map(|i| if i % 2 == 0 { TangentSet::Disc(Disc::new(0.5 + 0.3 * lcg(seed).abs())) } else { TangentSet::Ellipse(Ellipse::new(0.8, 0.2)) })
             .collect();
-        (a, b, Lambda { layout: Layout::contact(m, true), tangent })
+        (a, b, Lambda::new(m, Some(tangent)))
     }
 
     #[test]
@@ -300,18 +262,19 @@ mod tests {
         for _ in 0..5 {
             let (a, b, set) = problem(12, &mut seed);
             let zero = vec![0.0; a.dim()];
-            let p = Params { eps: 1e-11, ..Params::default() };
-            let t = solve(&a, &b, &set, &zero, &Params { method: Method::Tssn, ..p.clone() }).expect("TSSN converges");
-            let s = super::super::ssn::solve(&a, &b, &set, &zero, &p).expect("SSN converges");
+            let qp = Qp::new(&a, &b, &set);
+            let p = Params::default().with_eps(1e-11);
+            let t = solve(&qp, &zero, &p.with_method(Method::Tssn), &mut Silent).expect("TSSN converges");
+            let s = solve(&qp, &zero, &p, &mut Silent).expect("SSN converges");
             let d = t.lambda.iter().zip(&s.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             let scale = s.lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             assert!(d <= 1e-8 * scale, "TSSN and SSN differ by {d:e} of {scale:e}");
-            let k = kkt::residuals(&set, &t.lambda, &t.gradient, a.norm(&b));
+            let k = kkt::residuals(&set, &t.lambda, &t.gradient, Replicated.norm(&b));
             assert!(k.worst() <= 1e-9, "KKT {k:?}");
             assert!(set.contains(&t.lambda, 1e-12), "the result lies in Λ");
             let slides = t.info.history.iter().map(|h| h.slip).max().unwrap_or(0);
             assert!(slides > 0, "the problem has sliding pairs");
-            assert!(t.info.history.iter().all(|h| h.kind == 't'), "no safeguard step at ρ = 1.9/σ");
+            assert!(t.info.history.iter().all(|h| h.kind == StepKind::Tangent), "no safeguard step at ρ = 1.9/σ");
         }
     }
 
@@ -323,10 +286,12 @@ mod tests {
         for _ in 0..5 {
             let (a, b, set) = problem(12, &mut seed);
             let zero = vec![0.0; a.dim()];
-            let p = Params { method: Method::Tssn, eps: 1e-9, rho_factor: 300.0, max_outer: 2000, ..Params::default() };
-            let t = solve(&a, &b, &set, &zero, &p).expect("converges with the safeguard");
-            fired += t.info.history.iter().filter(|h| h.kind == 'g').count();
-            let k = kkt::residuals(&set, &t.lambda, &t.gradient, a.norm(&b));
+            let mut p = Params::new(Method::Tssn).with_eps(1e-9);
+            p.common.rho_factor = 300.0;
+            p.common.max_outer = 2000;
+            let t = solve(&Qp::new(&a, &b, &set), &zero, &p, &mut Silent).expect("converges with the safeguard");
+            fired += t.info.history.iter().filter(|h| h.kind == StepKind::Safeguard).count();
+            let k = kkt::residuals(&set, &t.lambda, &t.gradient, Replicated.norm(&b));
             assert!(k.worst() <= 1e-7, "KKT {k:?}");
         }
         assert!(fired > 0, "the safeguard never fired at ρ = 300/σ");

@@ -1,6 +1,6 @@
 //! `tresca-feti work-precision`: run time against error. For each mesh size N of a scene (the
 //! seed scene by default) and each solver — the dual solvers of [`crate::qp`] with the scene's
-//! settings, and Clarabel on the primal SOCP ([`crate::socp`]) — sweep the tolerance ε and
+//! settings, and Clarabel on the primal SOCP ([`crate::studies::socp`]) — sweep the tolerance ε and
 //! record the wall time of the solve, the A-products, the error in u (max-norm, relative) and in
 //! λ (2-norm, relative) against a tight reference (SSN-BiCGSTAB at `reference_eps`), and the KKT
 //! residual measured the same way for every solver. A solver is one more [`Solver`] value.
@@ -18,15 +18,14 @@ use std::time::Instant;
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::{DualOperator, Preconditioner};
+use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::pipeline::tfeti::setup;
-use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
-use crate::qp::lambda::Lambda;
-use crate::qp::{self, kkt, Method, Params, QpSolution};
+use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
+use crate::qp::{self, kkt, Lambda, Method, Operator, Params, Preconditioner, Qp, QpSolution, Silent, Space};
 use crate::scene::Projector;
-use crate::socp::PrimalSocp;
-use crate::table1::{u_error, Column};
+use crate::studies::socp::PrimalSocp;
+use crate::studies::table1::{u_error, Column};
 
 /// One row of the study: a dual solver (with its parameter preset) or Clarabel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,15 +157,17 @@ fn blank(n: usize, subdomains: usize, solver: Solver, setup_s: f64) -> Point {
 /// One dual solver's ε sweep (loose → tight) on the operator `a`; the sweep stops once a solve
 /// fails or takes longer than `max_seconds`.
 #[allow(clippy::too_many_arguments)]
-fn sweep<A: DualOperator>(a: &A, b: &[f64], set: &Lambda, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
-    let zero = vec![0.0; a.dim()];
+fn sweep<A: Operator>(qp: &Qp<'_, A>, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
+    let zero = vec![0.0; qp.a.dim()];
     let mut stop = false;
     for &e in eps {
         let mut pt = Point { eps: e, ..template.clone() };
         if !stop {
-            let p = Params { max_outer: usize::MAX, max_products: args.max_products, ..column.params(base, e) };
+            let mut p = column.params(base, e);
+            p.common.max_outer = usize::MAX;
+            p.common.max_products = args.max_products;
             let t0 = Instant::now();
-            let r = qp::solve(a, b, set, &zero, &p);
+            let r = qp::solve(qp, &zero, &p, &mut Silent);
             pt.solve_s = t0.elapsed().as_secs_f64();
             match r {
                 Ok(sol) => {
@@ -211,14 +212,17 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
         let factorize_s: f64 = t.phases.iter().map(|p| p.1).sum();
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);
-        let set = Lambda::new(contact);
-        let base = solver_params(&ls.scene.solver);
+        let set = contact.constraint_set();
+        let qp_mono = Qp::new(&dual, &b, &set);
+        let base = &ls.scene.solver.params;
         let zero = vec![0.0; dual.dim()];
-        let bnorm = dual.norm(&b);
-        let p = Params { method: Method::SsnBicgstab, eps: args.reference_eps, max_outer: 10_000, ..base.clone() };
+        let bnorm = dual.space().norm(&b);
+        let mut p = base.with_method(Method::SsnBicgstab);
+        p.common.eps = args.reference_eps;
+        p.common.max_outer = 10_000;
         let what = format!("the reference solve (SSN-BiCGSTAB, ε = {:.0e}) at N = {n}", args.reference_eps);
-        let reference = qp::solve(&dual, &b, &set, &zero, &p).map_err(|e| Error::numerical(&what, e.to_string()))?;
-        let u_ref = dual.recover(&reference.lambda).0;
+        let reference = qp::solve(&qp_mono, &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
+        let u_ref = dual.recover(&reference.lambda).u;
         // the reference per mesh node, for the subdomains' copies
         let mut u_nodes = vec![[0.0; 3]; model.mesh.nodes.len()];
         for (blk, u) in dual.blocks.iter().zip(&u_ref) {
@@ -229,17 +233,17 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let dofs = 3 * model.mesh.nodes.len();
         for &s in &args.subdomains {
             if s == 0 {
-                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: ls.scene.solver.method };
+                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: base.method() };
                 on_problem(&problem);
                 let measure = |sol: &QpSolution| {
-                    let e_u = u_error(comm, &dual.recover(&sol.lambda).0, &u_ref);
+                    let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &u_ref);
                     (e_u, lambda_error(&sol.lambda, &reference.lambda), kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst())
                 };
                 for &solver in &args.solvers {
                     match solver {
                         // the monolithic dual has no preconditioner
-                        Solver::Dual(c) if c.preconditioner() != Preconditioner::None => {}
-                        Solver::Dual(c) => sweep(&dual, &b, &set, c, &base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
+                        Solver::Dual(c) if preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err() => {}
+                        Solver::Dual(c) => sweep(&qp_mono, c, base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
                         Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, factorize_s), &mut on_point, &mut points)?,
                     }
                 }
@@ -251,13 +255,14 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
             let mut tt = Timings::default();
             let mut prob = setup(comm, &tls, &tmodel, &mut tt)?;
             let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
-            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: ls.scene.solver.method };
+            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: base.method() };
             on_problem(&problem);
             let ni = set.layout.dim();
             for &solver in &args.solvers {
                 let Solver::Dual(c) = solver else { continue };
                 let t0 = Instant::now();
-                prob.dual.set_preconditioner(c.preconditioner())?;
+                let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true })?;
+                prob.dual.set_preconditioner(pc.unwrap_or_default())?;
                 let pc_s = t0.elapsed().as_secs_f64();
                 let (dual_t, d) = (&prob.dual, &prob.decomposition);
                 let measure = |sol: &QpSolution| {
@@ -273,7 +278,9 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                     let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
                     (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&set, &li, &ri, bnorm).worst())
                 };
-                sweep(&prob.dual, &prob.b, &prob.set, c, &base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
+                let m = prob.dual.preconditioner();
+                let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner));
+                sweep(&qp, c, base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
             }
             problems.push(problem);
         }
@@ -374,7 +381,7 @@ pub fn format_point(p: &Point) -> String {
 pub fn summary(problems: &[Problem], points: &[Point], solvers: &[Solver], targets: &[f64]) -> String {
     let mut s = String::new();
     for pr in problems {
-        let default = Solver::Dual(Column { method: pr.default, preset: crate::table1::Preset::Default });
+        let default = Solver::Dual(Column { method: pr.default, preset: crate::studies::table1::Preset::Default });
         let setup = if pr.subdomains == 0 { "assembly + factorization" } else { "TFETI set-up" };
         s += &format!(
             "N = {}, {} (n = {}, m = {}; {setup} {:.2} s; reference {}/{} nA, ‖r̃‖/‖b‖ = {:.1e})\n",
@@ -419,7 +426,7 @@ pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<
     writeln!(f, "N,S,n,m,solver,default,eps,status,iter,nA,nA_power,inner,setup_s,solve_s,err_u,err_lambda,kkt,residual").map_err(io)?;
     for p in points {
         let pr = problems.iter().find(|pr| pr.n == p.n && pr.subdomains == p.subdomains).expect("a point's problem");
-        let is_default = matches!(p.solver, Solver::Dual(c) if c.method == pr.default && c.preset == crate::table1::Preset::Default);
+        let is_default = matches!(p.solver, Solver::Dual(c) if c.method == pr.default && c.preset == crate::studies::table1::Preset::Default);
         let status = match &p.status {
             Status::Ok => "ok".to_string(),
             Status::Skipped => "skipped".to_string(),

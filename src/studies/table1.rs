@@ -15,11 +15,11 @@ use std::time::Instant;
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::{DualOperator, Preconditioner};
+use crate::dual::DualProblem;
 use crate::error::{Error, Result};
-use crate::pipeline::{assemble_and_factorize, solver_params, Timings};
-use crate::qp::lambda::Lambda;
-use crate::qp::{self, kkt, CgStop, Method, Params};
+use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
+use crate::qp::{self, kkt, CgStop, Method, MethodParams, Operator, Params, Qp, Silent, Space};
+use crate::scene::Preconditioner;
 
 /// The paper's Table 1 (IMSSN, SSN-BiCGSTAB iter/nA) by N.
 pub const PAPER: [(usize, [usize; 2], [usize; 2]); 6] = [
@@ -66,10 +66,12 @@ impl Column {
         if method == Method::Tssn && preset == Preset::Paper {
             return Err("tssn has no paper preset (the paper does not have the method)".into());
         }
-        if method != Method::Tssn && matches!(preset, Preset::Lumped | Preset::Dirichlet) {
+        let column = Column { method, preset };
+        // on the dual that takes one most widely, so that only the method can refuse
+        if preconditioner(method, column.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true }).is_err() {
             return Err(format!("{name} takes no preconditioner (only tssn: tssn:lumped, tssn:dirichlet)"));
         }
-        Ok(Column { method, preset })
+        Ok(column)
     }
 
     pub fn label(&self) -> String {
@@ -91,20 +93,28 @@ impl Column {
         }
     }
 
-    /// The solver parameters of this column from the scene's.
+    /// The solver parameters of this column from the scene's: the scene's own when the column
+    /// runs the scene's method, else its common settings with the method's defaults.
     pub fn params(&self, base: &Params, eps: f64) -> Params {
-        let mut p = Params { method: self.method, eps, ..base.clone() };
+        let mut p = if base.method() == self.method { base.clone() } else { base.with_method(self.method) };
+        p.common.eps = eps;
         if self.preset == Preset::Paper {
-            if self.method == Method::SsnBicgstab {
-                p.rho_factor = 1.1; // ρ = 1/σ_est
-                p.inner_tol = Some(1e-6);
-            } else {
-                p.rho_factor = 1.9 * 1.1; // ρ = 1.9/σ_est
-                p.rtol = 0.1;
-                p.cfact = 0.6;
+            // ρ = 1/σ_est for SSN, 1.9/σ_est for the others
+            p.common.rho_factor = if self.method == Method::SsnBicgstab { 1.0 } else { 1.9 } * qp::SIGMA_SAFETY;
+            match &mut p.method {
+                MethodParams::SsnBicgstab(m) => {
+                    m.inner_tol = Some(1e-6);
+                    m.cg_stop = CgStop::InitialGradient;
+                    m.inner_floor = 0.0;
+                }
+                MethodParams::Gimssn(m) | MethodParams::Imssn(m) => {
+                    m.rtol = 0.1;
+                    m.cfact = 0.6;
+                    m.cg_stop = CgStop::InitialGradient;
+                    m.inner_floor = 0.0;
+                }
+                MethodParams::Mssn(_) | MethodParams::Mpgp(_) | MethodParams::Tssn(_) => {}
             }
-            p.cg_stop = CgStop::InitialGradient;
-            p.inner_floor = 0.0;
         }
         p
     }
@@ -159,14 +169,15 @@ pub fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64
 
 /// The columns table1 can run: none with a preconditioner (the monolithic dual has none).
 pub fn check_columns(columns: &[Column]) -> Result<()> {
-    match columns.iter().find(|c| c.preconditioner() != Preconditioner::None) {
+    match columns.iter().find(|c| preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err()) {
         Some(c) => Err(Error::scene("--solvers", format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label()))),
         None => Ok(()),
     }
 }
 
-/// Runs the table; `progress` is called with each finished row (rank 0 prints it).
-pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Result<Vec<Row>> {
+/// Runs the table; `each` sees every solve as it finishes, `progress` every finished row (rank
+/// 0 prints them).
+pub fn run<C: Comm>(comm: &C, args: &Args, mut each: impl FnMut(&Cell), mut progress: impl FnMut(&Row)) -> Result<Vec<Row>> {
     check_columns(&args.columns)?;
     let mut rows = Vec::new();
     for &n in &args.sizes {
@@ -178,34 +189,38 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Re
         let mut t = Timings::default();
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);
-        let set = Lambda::new(contact);
-        let base = solver_params(&ls.scene.solver);
+        let set = contact.constraint_set();
+        let qp = Qp::new(&dual, &b, &set);
+        let base = &ls.scene.solver.params;
         let zero = vec![0.0; dual.dim()];
         let reference = if args.error {
-            let p = Params { method: Method::SsnBicgstab, eps: 1e-11, max_outer: 10_000, ..base.clone() };
-            let sol = qp::solve(&dual, &b, &set, &zero, &p).map_err(|e| Error::numerical("the reference solve (SSN-BiCGSTAB, ε = 1e-11)", e.to_string()))?;
-            Some(dual.recover(&sol.lambda).0)
+            let mut p = Params::new(Method::SsnBicgstab).with_eps(1e-11);
+            p.common = qp::Common { eps: 1e-11, max_outer: 10_000, ..base.common.clone() };
+            let sol = qp::solve(&qp, &zero, &p, &mut Silent).map_err(|e| Error::solver("the reference solve (SSN-BiCGSTAB, ε = 1e-11)", e))?;
+            Some(dual.recover(&sol.lambda).u)
         } else {
             None
         };
-        let bnorm = dual.norm(&b);
+        let bnorm = dual.space().norm(&b);
         let mut cells = Vec::new();
         for &column in &args.columns {
-            let p = column.params(&base, args.eps);
+            let p = column.params(base, args.eps);
             comm.barrier();
             let t0 = Instant::now();
-            let r = qp::solve(&dual, &b, &set, &zero, &p);
+            let r = qp::solve(&qp, &zero, &p, &mut Silent);
             let mut secs = [t0.elapsed().as_secs_f64()];
             comm.max_f64(&mut secs);
             let (outcome, kkt, u_err) = match r {
                 Ok(sol) => {
                     let k = kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst();
-                    let e = reference.as_ref().map(|rf| u_error(comm, &dual.recover(&sol.lambda).0, rf));
+                    let e = reference.as_ref().map(|rf| u_error(comm, &dual.recover(&sol.lambda).u, rf));
                     (Ok(sol.info), k, e)
                 }
                 Err(e) => (Err(e.to_string()), f64::NAN, None),
             };
-            cells.push(Cell { n, column, outcome, seconds: secs[0], kkt, u_error: u_err });
+            let cell = Cell { n, column, outcome, seconds: secs[0], kkt, u_error: u_err };
+            each(&cell);
+            cells.push(cell);
         }
         let mut dofs = [model.mesh.nodes.len() as f64 * 3.0];
         comm.max_f64(&mut dofs);
@@ -220,6 +235,14 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Re
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// One solve as it finishes: `N = 16 gimssn: 10/161 (+30) 1.23 s`.
+pub fn format_cell(c: &Cell) -> String {
+    match &c.outcome {
+        Ok(i) => format!("N = {} {}: {}/{} (+{}) {:.2} s", c.n, c.column.label(), i.iterations, i.n_a, i.n_a_power, c.seconds),
+        Err(e) => format!("N = {} {}: {e}", c.n, c.column.label()),
+    }
 }
 
 /// The header lines of the printed table.

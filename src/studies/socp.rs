@@ -20,7 +20,7 @@ use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeCone
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::dual::Layout;
+use crate::qp::Layout;
 use crate::error::{Error, Result};
 use crate::qp::lambda::Lambda;
 use crate::qp::sets::TangentSet;

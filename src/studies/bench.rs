@@ -11,6 +11,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+use crate::pipeline::report::Report;
 use crate::error::{Error, Result};
 use crate::scene::Projector;
 
@@ -113,14 +114,6 @@ pub fn scaled(weak: bool, n: usize, s: usize, p: usize) -> (usize, usize) {
     (((n as f64) * (p as f64).cbrt()).round() as usize, s * p)
 }
 
-fn f(v: &serde_json::Value) -> f64 {
-    v.as_f64().unwrap_or(0.0)
-}
-
-fn u(v: &serde_json::Value) -> u64 {
-    v.as_u64().unwrap_or(0)
-}
-
 /// One run: `case` names the curve, (n, s) the problem solved on `ranks` ranks.
 struct Case<'a> {
     name: &'a str,
@@ -150,7 +143,7 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     for x in &sets {
         cmd.arg("--set").arg(x);
     }
-    cmd.arg("--out").arg(&out);
+    cmd.arg("--out").arg(&out).arg("--quiet");
     let o = cmd.output().map_err(|e| Error::io(format!("--mpirun {}", a.mpirun), e))?;
     if !o.status.success() {
         let err = String::from_utf8_lossy(&o.stderr);
@@ -164,34 +157,34 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     }
     let json = out.with_extension("json");
     let text = std::fs::read_to_string(&json).map_err(|e| Error::io(json.display().to_string(), e))?;
-    let r: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse { file: json.display().to_string(), msg: e.to_string() })?;
+    let r: Report = serde_json::from_str(&text).map_err(|e| Error::Parse { file: json.display().to_string(), msg: e.to_string() })?;
     // a launcher that starts P separate 1-rank programs (srun without PMI support) shows here
-    if u(&r["ranks"]) != ranks as u64 {
+    if r.ranks != ranks {
         return Err(Error::numerical(
             format!("case {name}"),
-            format!("the report says {} rank(s), not {ranks}: does --mpirun {} start one MPI job?", r["ranks"], a.mpirun),
+            format!("the report says {} rank(s), not {ranks}: does --mpirun {} start one MPI job?", r.ranks, a.mpirun),
         ));
     }
-    let t = &r["timings"];
-    let sv = &r["solver"];
-    let tf = &r["tfeti"];
-    let nnz_l = match tf.as_object() {
-        Some(tf) => tf["subdomains"].as_array().into_iter().flatten().map(|x| f(&x["nnz_l"])).sum(),
-        None => r["bodies"].as_array().into_iter().flatten().map(|x| f(&x["nnz_L"])).sum(),
+    let t = &r.timings;
+    let sv = r.solver.clone().unwrap_or_default();
+    let nnz_l: f64 = match &r.tfeti {
+        Some(tf) => tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum(),
+        None => r.bodies.iter().map(|x| x.nnz_l as f64).sum(),
     };
-    let (n_a, n_a_power) = (u(&sv["nA"]), u(&sv["nA_power"]));
+    let (n_a, n_a_power) = (sv.info.n_a as u64, sv.info.n_a_power as u64);
     let phases = [
-        f(&t["decompose"]),
-        f(&t["assemble"]) + f(&t["factorize"]),
-        f(&t["coarse"]),
-        f(&t["dual"]),
-        f(&t["iterate"]),
-        f(&t["recover"]),
-        f(&t["stress"]),
-        f(&t["gather"]),
-        f(&t["total"]) - f(&t["output"]),
+        t.get("decompose"),
+        t.get("assemble") + t.get("factorize"),
+        t.get("coarse"),
+        t.get("dual"),
+        t.get("iterate"),
+        t.get("recover"),
+        t.get("stress"),
+        t.get("gather"),
+        t.total() - t.get("output"),
     ];
     let t_a = phases[4] / (n_a + n_a_power).max(1) as f64;
+    let memory = r.memory.clone().unwrap_or_default();
     Ok(Row {
         mode: if a.weak { "weak" } else { "strong" }.into(),
         case: c.name.into(),
@@ -200,21 +193,21 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
         n,
         s,
         projector: if s == 0 { "-".into() } else { format!("{projector:?}").to_lowercase() },
-        dofs: u(&r["mesh"]["dofs"]),
-        multipliers: u(&sv["dual_dim"]),
-        coarse_dim: u(&tf["coarse_dim"]),
-        outer: u(&sv["outer_iterations"]),
-        inner: u(&sv["inner_iterations"]),
+        dofs: r.mesh.dofs as u64,
+        multipliers: sv.dual_dim as u64,
+        coarse_dim: r.tfeti.as_ref().map_or(0, |tf| tf.coarse_dim as u64),
+        outer: sv.info.iterations as u64,
+        inner: sv.info.inner_iterations as u64,
         n_a,
         n_a_power,
         phases,
-        peak_gb_sum: f(&r["memory"]["peak_rss_bytes_sum_over_ranks"]) / 1e9,
-        peak_gb_max: f(&r["memory"]["peak_rss_bytes_max_rank"]) / 1e9,
+        peak_gb_sum: memory.peak_rss_bytes_sum_over_ranks / 1e9,
+        peak_gb_max: memory.peak_rss_bytes_max_rank / 1e9,
         nnz_l,
         t_a,
         floor: 2.0 * 8.0 * nnz_l / (a.bandwidth * 1e9),
-        kkt: f(&sv["kkt_worst"]),
-        max_u: f(&r["results"]["max_displacement"]),
+        kkt: sv.kkt_worst,
+        max_u: r.results.max_displacement,
     })
 }
 

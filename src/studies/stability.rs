@@ -1,7 +1,7 @@
-//! `tresca-feti stress`: the numerical-stability suite. Solves every scene of a folder
-//! (`run/stress/*.toml`: stiffness contrast, near incompressibility, flat elements, extreme slip
-//! bounds, open gaps, lift-off, thin ellipses, tiny subdomains, 10⁴ pairs) through the whole
-//! pipeline and sorts each run into one of three outcomes:
+//! `tresca-feti stability` (alias `stress`): the numerical-stability suite. Solves every scene
+//! of a folder (`run/stress/*.toml`: stiffness contrast, near incompressibility, flat elements,
+//! extreme slip bounds, open gaps, lift-off, thin ellipses, tiny subdomains, 10⁴ pairs) through
+//! the whole pipeline and sorts each run into one of three outcomes:
 //!
 //! - **converged**: the solver met ε, the KKT residuals (measured independently of the solver's
 //!   stopping test) and, under TFETI, the relative jump of u across the subdomain interfaces are
@@ -14,20 +14,19 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
-
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::pipeline;
+use crate::pipeline::report::Report;
 
-/// What `stress` is asked to do.
+/// What `stability` is asked to do.
 #[derive(Clone, Debug)]
 pub struct Args {
     /// The scenes: every `*.toml` in this folder, by name.
     pub dir: PathBuf,
     /// Overrides applied to every scene (e.g. `solver.method="gimssn"`).
     pub sets: Vec<String>,
-    /// Results go to `<out>/<scene>.h5` (+ .xdmf, .json); the table to `<out>/stress.csv`.
+    /// Results go to `<out>/<scene>.h5` (+ .xdmf, .json); the table to `<out>/stability.csv`.
     pub out: PathBuf,
     /// A converged run's worst KKT residual must be at most `kkt_factor·ε`.
     pub kkt_factor: f64,
@@ -47,7 +46,7 @@ pub struct Row {
     pub scene: String,
     pub outcome: Outcome,
     /// The report of a run that returned a result.
-    pub report: Option<Value>,
+    pub report: Option<Report>,
 }
 
 /// The `*.toml` files of `dir`, sorted.
@@ -62,15 +61,13 @@ pub fn scenes(dir: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// Sorts a returned report into converged or wrong.
-pub fn judge(r: &Value, kkt_factor: f64) -> Outcome {
-    let Some(sv) = r["solver"].as_object() else {
+pub fn judge(r: &Report, kkt_factor: f64) -> Outcome {
+    let Some(sv) = &r.solver else {
         return Outcome::Wrong("no solver report (no contact in the scene?)".into());
     };
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
-    let (eps, err, kkt) = (num(&sv["eps"]), num(&sv["final_relative_reduced_gradient"]), num(&sv["kkt_worst"]));
-    let umax = num(&r["results"]["max_displacement"]);
-    let residuals: Vec<f64> = r["bodies"].as_array().into_iter().flatten().map(|b| num(&b["relative_residual"])).collect();
-    if !(err.is_finite() && kkt.is_finite() && umax.is_finite() && residuals.iter().all(|v| v.is_finite())) {
+    let (eps, err, kkt) = (sv.eps, sv.info.err, sv.kkt_worst);
+    let umax = r.results.max_displacement;
+    if !(err.is_finite() && kkt.is_finite() && umax.is_finite() && r.bodies.iter().all(|b| b.residual.is_finite())) {
         return Outcome::Wrong("a non-finite number in the result".into());
     }
     if err > eps {
@@ -80,7 +77,8 @@ pub fn judge(r: &Value, kkt_factor: f64) -> Outcome {
         return Outcome::Wrong(format!("KKT residual {kkt:.1e} above {kkt_factor}·ε"));
     }
     // TFETI: the subdomains must be glued (the gluing rows are part of the dual gradient)
-    if let Some(jump) = r["tfeti"]["gluing_jump_relative"].as_f64() {
+    if let Some(tf) = &r.tfeti {
+        let jump = tf.gluing_jump;
         if !(jump <= kkt_factor * eps) {
             return Outcome::Wrong(format!("relative gluing jump {jump:.1e} above {kkt_factor}·ε"));
         }
@@ -95,7 +93,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut progress: impl FnMut(&Row)) -> Re
     for path in paths {
         let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let out = args.out.join(format!("{stem}.h5"));
-        let row = match pipeline::run_solve(comm, &path, &args.sets, Some(out)) {
+        let row = match pipeline::run_solve(comm, &path, &args.sets, Some(out), true) {
             Ok(s) => Row { scene: stem, outcome: judge(&s.report, args.kkt_factor), report: Some(s.report) },
             Err(e) => Row { scene: stem, outcome: Outcome::Stopped(e.to_string()), report: None },
         };
@@ -115,25 +113,23 @@ fn cells(row: &Row) -> Vec<String> {
     let Some(r) = &row.report else {
         return [row.scene.clone()].into_iter().chain(std::iter::repeat_n("—".to_string(), 10)).chain([status]).collect();
     };
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
-    let sv = &r["solver"];
-    let c = &r["contact"];
-    let dual = match r["tfeti"].as_object() {
-        Some(tf) => format!("TFETI S={}", tf["subdomains_per_body"].as_array().map_or(0, |v| v.iter().filter_map(Value::as_u64).sum::<u64>())),
+    let dual = match &r.tfeti {
+        Some(tf) => format!("TFETI S={}", tf.subdomains_per_body.iter().sum::<usize>()),
         None => "monolithic".to_string(),
     };
+    let (sv, c) = (r.solver.clone().unwrap_or_default(), r.contact.clone().unwrap_or_default());
     vec![
         row.scene.clone(),
-        r["mesh"]["dofs"].to_string(),
-        c["pairs"].to_string(),
+        r.mesh.dofs.to_string(),
+        c.pairs.to_string(),
         dual,
-        sv["outer_iterations"].to_string(),
-        sv["nA"].to_string(),
-        format!("{:.2}", num(&r["timings"]["total"])),
-        format!("{:.1e}", num(&sv["final_relative_reduced_gradient"])),
-        format!("{:.1e}", num(&sv["kkt_worst"])),
-        format!("{}/{}/{}", c["open"], c["stick"], c["slip"]),
-        format!("{:.3e}", num(&r["results"]["max_displacement"])),
+        sv.info.iterations.to_string(),
+        sv.info.n_a.to_string(),
+        format!("{:.2}", r.timings.total()),
+        format!("{:.1e}", sv.info.err),
+        format!("{:.1e}", sv.kkt_worst),
+        format!("{}/{}/{}", c.open, c.stick, c.slip),
+        format!("{:.3e}", r.results.max_displacement),
         status,
     ]
 }

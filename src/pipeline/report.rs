@@ -1,0 +1,149 @@
+//! The typed report of a solve: what `solve` writes to the JSON file and to the HDF5 file's
+//! `report` attribute, and what the studies and the summary read (fields, not strings).
+
+use serde::{Deserialize, Serialize};
+
+use super::tfeti::{DistributionStats, SubdomainStats};
+use super::BodyStats;
+use crate::feti::smalse::SmalseInfo;
+use crate::qp;
+use crate::scene::{Gluing, Projector};
+
+/// Everything a solve reports.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Report {
+    /// The scene file.
+    pub scene: String,
+    pub title: String,
+    pub ranks: usize,
+    /// Name and version of the MPI library.
+    pub mpi: String,
+    /// What was solved, in words.
+    pub problem: String,
+    pub tfeti: Option<TfetiReport>,
+    /// The fill-reducing ordering of the factorizations.
+    pub ordering: String,
+    pub mesh: MeshReport,
+    pub bodies: Vec<BodyStats>,
+    pub results: Results,
+    pub contact: Option<ContactReport>,
+    pub solver: Option<SolverReport>,
+    /// Wall time of each phase (max over the ranks), in the order they ran, and the total.
+    pub timings: PhaseTimes,
+    pub versions: serde_json::Value,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub memory: Option<Memory>,
+    /// Values read back and checked (`output.verify`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_verified_values: Option<u64>,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct MeshReport {
+    pub nodes: usize,
+    pub elements: usize,
+    pub dofs: usize,
+    pub free_dofs: usize,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Results {
+    pub max_displacement: f64,
+    pub max_displacement_node: usize,
+    pub max_displacement_body: Option<String>,
+    pub max_von_mises: f64,
+}
+
+/// The contact state at the solution.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ContactReport {
+    pub pairs: usize,
+    pub open: usize,
+    pub stick: usize,
+    pub slip: usize,
+    pub on_slip_bound: usize,
+    pub total_force_on_slave: [f64; 3],
+}
+
+/// The dual solve: the method, its counters and history ([`qp::Info`]), the KKT residuals.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct SolverReport {
+    pub method: String,
+    /// Length of the solvers' dual vector (over all ranks).
+    pub dual_dim: usize,
+    pub eps: f64,
+    #[serde(flatten)]
+    pub info: qp::Info,
+    pub norm_b: f64,
+    pub kkt: qp::kkt::Kkt,
+    pub kkt_worst: f64,
+}
+
+/// What the TFETI path adds.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct TfetiReport {
+    pub subdomains_per_body: Vec<usize>,
+    pub gluing: Gluing,
+    pub multipliers: Multipliers,
+    pub coarse_dim: usize,
+    #[serde(rename = "nnz_C_lower")]
+    pub nnz_c: usize,
+    /// max over nodes and copies of |u_copy − u_first| / max |u|.
+    #[serde(rename = "gluing_jump_relative")]
+    pub gluing_jump: f64,
+    /// ‖Gλ − e‖/‖e‖ at the solution.
+    #[serde(rename = "coarse_feasibility")]
+    pub feasibility: f64,
+    pub projector: Projector,
+    pub smalse: Option<SmalseInfo>,
+    pub distribution: DistributionStats,
+    pub subdomains: Vec<SubdomainStats>,
+}
+
+/// Multipliers by kind.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Multipliers {
+    pub contact: usize,
+    pub gluing: usize,
+    pub dirichlet: usize,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Memory {
+    pub peak_rss_bytes_sum_over_ranks: f64,
+    pub peak_rss_bytes_max_rank: f64,
+}
+
+/// Phase times in the order they ran, written as a map with a `total`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PhaseTimes(pub Vec<(String, f64)>);
+
+impl PhaseTimes {
+    pub fn total(&self) -> f64 {
+        self.0.iter().map(|p| p.1).sum()
+    }
+
+    /// The time of phase `name` (0 when it did not run).
+    pub fn get(&self, name: &str) -> f64 {
+        self.0.iter().filter(|p| p.0 == name).map(|p| p.1).sum()
+    }
+}
+
+impl Serialize for PhaseTimes {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len() + 1))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.serialize_entry("total", &self.total())?;
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for PhaseTimes {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let m = serde_json::Map::<String, serde_json::Value>::deserialize(d)?;
+        Ok(PhaseTimes(m.into_iter().filter(|(k, _)| k != "total").map(|(k, v)| (k, v.as_f64().unwrap_or(0.0))).collect()))
+    }
+}

@@ -1,0 +1,265 @@
+//! The Krylov kernels of the inner solves: one masked, preconditioned CG ([`pcg`]) for every
+//! symmetric inner system (GIMSSN's CGMfeas, IMSSN/MSSN, TSSN, plain CG) and one BiCGSTAB
+//! ([`Bicgstab`]) for SSN's unsymmetric Newton systems.
+
+use super::driver::positive_curvature;
+use super::operator::{Operator, Preconditioner, Space};
+use super::{Qp, QpError};
+
+/// The symmetric inner system `S v = Π A v + C v` on a subspace of the dual vectors (v = Π v):
+/// Π a projection (a mask of free components, and t tᵀ on TSSN's sliding pairs), C ≥ 0 diagonal
+/// on the subspace.
+pub(crate) trait InnerSystem {
+    /// out = Π g + C v; with `v` None, out = Π g (the system's residual from a gradient g).
+    fn apply(&self, g: &[f64], v: Option<&[f64]>, out: &mut [f64]);
+}
+
+/// Every component free, C = 0: S = A.
+pub(crate) struct Whole;
+
+impl InnerSystem for Whole {
+    fn apply(&self, g: &[f64], _: Option<&[f64]>, out: &mut [f64]) {
+        out.copy_from_slice(g);
+    }
+}
+
+/// The components where `free` holds, C = 0.
+pub(crate) struct Masked<'a>(pub &'a [bool]);
+
+impl InnerSystem for Masked<'_> {
+    fn apply(&self, g: &[f64], _: Option<&[f64]>, out: &mut [f64]) {
+        for ((o, gi), f) in out.iter_mut().zip(g).zip(self.0) {
+            *o = if *f { *gi } else { 0.0 };
+        }
+    }
+}
+
+/// How the CG coefficients are formed (equal in exact arithmetic).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Coefficients {
+    /// α = hᵀz/dᵀSd, β = h₊ᵀz₊/hᵀz, d = z + βd: the textbook PCG (TSSN, plain CG).
+    Standard,
+    /// α = hᵀd/dᵀSd, β = h₊ᵀSd/dᵀSd, d = h − βd: conjugacy enforced against the last direction
+    /// (the paper's CGMfeas; no preconditioner).
+    Conjugated,
+}
+
+/// One inner solve: the system, where it stops, what it may use.
+pub(crate) struct Pcg<'a> {
+    pub system: &'a dyn InnerSystem,
+    /// M on its block, with ρ·I on the other components (then projected by Π).
+    pub preconditioner: Option<(&'a dyn Preconditioner, f64)>,
+    pub coefficients: Coefficients,
+    /// CGMfeas: a step that would leave Λ goes to the boundary and ends the solve.
+    pub feasible: bool,
+    pub max_iter: usize,
+    pub outer: usize,
+}
+
+/// What one [`pcg`] did.
+pub(crate) struct PcgInfo {
+    pub iterations: usize,
+    /// Applications of the preconditioner.
+    pub applications: usize,
+}
+
+/// CG on the inner system from x with g = r(x) = A x − b: the system's residual h = Π g (+ C σ,
+/// σ = 0 at the start), stopped at ‖h‖ ≤ `threshold(‖h₀‖)` or after `max_iter` iterations (one
+/// A-product each). x and g (by the recurrence) are updated in place; `each(‖h‖)` is called
+/// after every iteration.
+pub(crate) fn pcg<A: Operator>(
+    qp: &Qp<'_, A>,
+    opts: &Pcg<'_>,
+    x: &mut [f64],
+    g: &mut [f64],
+    threshold: impl FnOnce(f64) -> f64,
+    mut each: impl FnMut(f64),
+) -> Result<PcgInfo, QpError> {
+    let a = qp.a;
+    let sp = a.space();
+    let n = x.len();
+    let (mut h, mut z, mut d, mut ad, mut md) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut pz = if opts.preconditioner.is_some() { vec![0.0; n] } else { vec![] };
+    let mut applications = 0;
+    // z = Π M h (z = h without a preconditioner)
+    let mut precondition = |h: &[f64], z: &mut [f64]| match opts.preconditioner {
+        Some((m, scale)) => {
+            m.apply(h, &mut pz);
+            let block = m.block();
+            for (k, (p, hk)) in pz.iter_mut().zip(h).enumerate() {
+                if !block.contains(&k) {
+                    *p = scale * hk;
+                }
+            }
+            opts.system.apply(&pz, None, z);
+            applications += 1;
+        }
+        None => z.copy_from_slice(h),
+    };
+    opts.system.apply(g, None, &mut h);
+    let preconditioned = opts.preconditioner.is_some();
+    let mut hz = sp.dot(&h, &h);
+    let mut hnorm = hz.sqrt();
+    let threshold = threshold(hnorm);
+    if preconditioned {
+        precondition(&h, &mut z);
+        hz = sp.dot(&h, &z);
+    } else {
+        z.copy_from_slice(&h);
+    }
+    d.copy_from_slice(&z);
+    let mut it = 0;
+    while hnorm > threshold && it < opts.max_iter {
+        a.apply(&d, &mut ad);
+        opts.system.apply(&ad, Some(&d), &mut md);
+        let dmd = positive_curvature(sp.dot(&d, &md), "the curvature dᵀSd", opts.outer)?;
+        it += 1;
+        let alpha = match opts.coefficients {
+            Coefficients::Standard => hz / dmd,
+            Coefficients::Conjugated => sp.dot(&h, &d) / dmd,
+        };
+        if opts.feasible {
+            let alpha_f = sp.min(qp.set.max_step(x, &d));
+            if alpha > alpha_f {
+                // the CG step would leave Λ: go to the boundary and stop
+                for i in 0..n {
+                    x[i] -= alpha_f * d[i];
+                    g[i] -= alpha_f * ad[i];
+                }
+                each(hnorm);
+                break;
+            }
+        }
+        for i in 0..n {
+            x[i] -= alpha * d[i];
+            g[i] -= alpha * ad[i];
+            h[i] -= alpha * md[i];
+        }
+        match opts.coefficients {
+            Coefficients::Standard => {
+                let hz_new = if preconditioned {
+                    precondition(&h, &mut z);
+                    let v = sp.dot(&h, &z);
+                    hnorm = sp.norm(&h);
+                    v
+                } else {
+                    z.copy_from_slice(&h);
+                    let v = sp.dot(&h, &h);
+                    hnorm = v.sqrt();
+                    v
+                };
+                let beta = hz_new / hz;
+                hz = hz_new;
+                for i in 0..n {
+                    d[i] = z[i] + beta * d[i];
+                }
+            }
+            Coefficients::Conjugated => {
+                let beta = sp.dot(&h, &md) / dmd;
+                for i in 0..n {
+                    d[i] = h[i] - beta * d[i];
+                }
+                hnorm = sp.dot(&h, &h).sqrt();
+            }
+        }
+        each(hnorm);
+    }
+    if preconditioned {
+        // the last residual's preconditioning counts too (as it always did: one per iteration + 1)
+        debug_assert_eq!(applications, it + 1);
+    }
+    Ok(PcgInfo { iterations: it, applications })
+}
+
+/// BiCGSTAB workspace: the solution x of J x = rhs and A x, accumulated from the products.
+pub(crate) struct Bicgstab {
+    pub x: Vec<f64>,
+    pub ax: Vec<f64>,
+    res: Vec<f64>,
+    rhat: Vec<f64>,
+    p: Vec<f64>,
+    v: Vec<f64>,
+    ap: Vec<f64>,
+    s: Vec<f64>,
+    t: Vec<f64>,
+    as_: Vec<f64>,
+}
+
+impl Bicgstab {
+    pub fn new(n: usize) -> Self {
+        let z = || vec![0.0; n];
+        Bicgstab { x: z(), ax: z(), res: z(), rhat: z(), p: z(), v: z(), ap: z(), s: z(), t: z(), as_: z() }
+    }
+
+    /// Solves J x = rhs from x = 0 until ‖rhs − Jx‖ ≤ threshold; returns the iterations.
+    /// `jacobian(v, jv, av)` writes J v and A v. A breakdown after some progress ends the solve
+    /// with the last iterate (Newton goes on from an inexact step); one before any progress is
+    /// an error.
+    pub fn solve<S: Space>(
+        &mut self,
+        sp: &S,
+        rhs: &[f64],
+        threshold: f64,
+        max_iter: usize,
+        jacobian: impl Fn(&[f64], &mut [f64], &mut [f64]),
+        outer: usize,
+    ) -> Result<usize, QpError> {
+        let n = rhs.len();
+        self.x.fill(0.0);
+        self.ax.fill(0.0);
+        self.res.copy_from_slice(rhs);
+        self.rhat.copy_from_slice(rhs);
+        self.p.fill(0.0);
+        self.v.fill(0.0);
+        self.ap.fill(0.0);
+        let (mut rho_old, mut alpha, mut omega) = (1.0, 1.0, 1.0);
+        let mut it = 0;
+        let mut rnorm = sp.norm(&self.res);
+        let fail = |it: usize, what| if it == 0 { Err(QpError::BicgstabBreakdown { outer, what }) } else { Ok(it) };
+        while rnorm > threshold && it < max_iter {
+            if !rnorm.is_finite() {
+                return Err(QpError::NotFinite { what: "the BiCGSTAB residual", outer });
+            }
+            let rho_new = sp.dot(&self.rhat, &self.res);
+            if rho_new == 0.0 {
+                return fail(it, "r̂ᵀr = 0");
+            }
+            let beta = (rho_new / rho_old) * (alpha / omega);
+            for i in 0..n {
+                self.p[i] = self.res[i] + beta * (self.p[i] - omega * self.v[i]);
+            }
+            jacobian(&self.p, &mut self.v, &mut self.ap);
+            let rv = sp.dot(&self.rhat, &self.v);
+            if rv == 0.0 || !rv.is_finite() {
+                return fail(it, "r̂ᵀJp = 0");
+            }
+            alpha = rho_new / rv;
+            for i in 0..n {
+                self.s[i] = self.res[i] - alpha * self.v[i];
+            }
+            it += 1;
+            let snorm = sp.norm(&self.s);
+            if snorm <= threshold {
+                for i in 0..n {
+                    self.x[i] += alpha * self.p[i];
+                    self.ax[i] += alpha * self.ap[i];
+                }
+                return Ok(it);
+            }
+            jacobian(&self.s, &mut self.t, &mut self.as_);
+            let tt = sp.dot(&self.t, &self.t);
+            omega = if tt > 0.0 { sp.dot(&self.t, &self.s) / tt } else { 0.0 };
+            for i in 0..n {
+                self.x[i] += alpha * self.p[i] + omega * self.s[i];
+                self.ax[i] += alpha * self.ap[i] + omega * self.as_[i];
+                self.res[i] = self.s[i] - omega * self.t[i];
+            }
+            if omega == 0.0 {
+                return Ok(it);
+            }
+            rnorm = sp.norm(&self.res);
+            rho_old = rho_new;
+        }
+        Ok(it)
+    }
+}

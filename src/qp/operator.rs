@@ -1,0 +1,85 @@
+//! What the solvers see of a dual problem: the operator A ([`Operator`], counting its products),
+//! the space its vectors live in ([`Space`]: every reduction, so that all ranks take the same
+//! branches) and an optional preconditioner M ≈ A⁻¹ on a block of the components
+//! ([`Preconditioner`]).
+
+use std::cell::Cell;
+use std::ops::Range;
+
+/// The reductions over the dual vectors. Each rank holds some components of every vector
+/// (replicated vectors: all of them); these return the same value on every rank. There are no
+/// single-process defaults: a distributed implementation that forgot one would be silently
+/// rank-local. Replicated vectors say so with [`Replicated`].
+pub trait Space {
+    /// Inner product of two dual vectors.
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64;
+    /// The maximum over the ranks of a value each rank computed from its own components.
+    fn max(&self, v: f64) -> f64;
+    /// The sum over the ranks of a count each rank made on its own components.
+    fn count(&self, n: usize) -> usize;
+    /// The global index of component `i` of this rank's vectors.
+    fn global_index(&self, i: usize) -> usize;
+
+    fn norm(&self, x: &[f64]) -> f64 {
+        self.dot(x, x).sqrt()
+    }
+    /// The minimum over the ranks (see [`Space::max`]).
+    fn min(&self, v: f64) -> f64 {
+        -self.max(-v)
+    }
+}
+
+/// Vectors held whole on every rank (the monolithic dual, serial problems): every reduction is
+/// local.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Replicated;
+
+impl Space for Replicated {
+    fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
+        x.iter().zip(y).map(|(a, b)| a * b).sum()
+    }
+    fn max(&self, v: f64) -> f64 {
+        v
+    }
+    fn count(&self, n: usize) -> usize {
+        n
+    }
+    fn global_index(&self, i: usize) -> usize {
+        i
+    }
+}
+
+/// "Apply A": a symmetric positive (semi)definite operator on the dual vectors. Every call
+/// counts as one A-product (nA).
+pub trait Operator {
+    type Space: Space;
+    /// The space of the dual vectors (the reductions).
+    fn space(&self) -> &Self::Space;
+    /// Length of this rank's part of a dual vector.
+    fn dim(&self) -> usize;
+    /// y = A x.
+    fn apply(&self, x: &[f64], y: &mut [f64]);
+    /// A-products so far.
+    fn products(&self) -> usize;
+}
+
+/// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]
+/// (this rank's indices); the other components of y are left to the solver (a scaled identity
+/// there). Not an A-product.
+pub trait Preconditioner {
+    fn block(&self) -> Range<usize>;
+    fn apply(&self, x: &[f64], y: &mut [f64]);
+}
+
+/// A counter of A-products for the implementations of [`Operator`].
+#[derive(Debug, Default)]
+pub struct ProductCounter(Cell<usize>);
+
+impl ProductCounter {
+    pub fn tick(&self) {
+        self.0.set(self.0.get() + 1);
+    }
+    pub fn get(&self) -> usize {
+        self.0.get()
+    }
+}

@@ -1,0 +1,299 @@
+//! The solvers' settings, each with its defaults in one place (its `Default`): [`Common`] to
+//! every method, and one struct per method for what only it reads ([`MethodParams`]). Each
+//! deserializes with unknown keys refused, so a scene that sets a key its method does not read
+//! fails instead of being silently ignored.
+
+use serde::{Deserialize, Serialize};
+
+/// The dual solvers.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq, Hash)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Monotone, feasible (CGMfeas), globally convergent symmetrized SSN.
+    Gimssn,
+    /// Inexact symmetrized SSN: CG to an adaptive tolerance, iterates may leave Λ.
+    Imssn,
+    /// Symmetrized SSN with exact inner solves.
+    Mssn,
+    /// Unsymmetrized SSN (full slant derivative), inner systems by BiCGSTAB. The default: the
+    /// fastest to ε = 1e-6 and to every error in u from 1e-4 to 1e-8 on the seed scene (README).
+    #[default]
+    SsnBicgstab,
+    /// Modified proportioning with gradient projections (Dostál–Kozubek).
+    Mpgp,
+    /// Tangent-symmetric SSN: the exact SSN step as an SPD system, solved by CG (DESIGN §3b).
+    Tssn,
+}
+
+impl Method {
+    pub const ALL: [Method; 6] = [Method::Gimssn, Method::Imssn, Method::Mssn, Method::SsnBicgstab, Method::Mpgp, Method::Tssn];
+
+    /// The scene's (and the command line's) name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Gimssn => "gimssn",
+            Method::Imssn => "imssn",
+            Method::Mssn => "mssn",
+            Method::SsnBicgstab => "ssn-bicgstab",
+            Method::Mpgp => "mpgp",
+            Method::Tssn => "tssn",
+        }
+    }
+
+    pub fn from_name(s: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == s)
+    }
+}
+
+/// What an inner tolerance is relative to.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CgStop {
+    /// ‖g_F‖ ≤ tol·‖b‖ (the faster choice, DESIGN §3a).
+    #[default]
+    Rhs,
+    /// ‖g_F‖ ≤ tol·‖g_F at the start of the inner solve‖ (the paper's).
+    InitialGradient,
+}
+
+/// Settings every method reads.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct Common {
+    /// ε: stop when ‖r̃_ρ(λ)‖ ≤ ε‖b‖.
+    pub eps: f64,
+    /// ρ = rho_factor / (1.1 σ_est) (also MPGP's fixed step ᾱ); below 2 for the monotone theory.
+    pub rho_factor: f64,
+    /// Outer iterations at most (MPGP: steps).
+    pub max_outer: usize,
+    /// Inner iterations per outer step at most.
+    pub max_inner: usize,
+    /// Power iterations for the estimate of σ_max(A).
+    pub power_iterations: usize,
+    /// A-products (power iterations excluded) at most: a budget checked between outer steps.
+    #[serde(skip)]
+    pub max_products: usize,
+    /// σ_max(A) when already known (no power iterations then): a caller solving a sequence of
+    /// QPs with the same A (SMALSE-M's outer loop) measures it once.
+    #[serde(skip)]
+    pub sigma: Option<f64>,
+}
+
+impl Default for Common {
+    fn default() -> Self {
+        Common { eps: 1e-6, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 30, max_products: usize::MAX, sigma: None }
+    }
+}
+
+/// GIMSSN and IMSSN: the adaptive inner tolerance `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct Inexact {
+    pub rtol: f64,
+    pub cfact: f64,
+    /// What inner tolerances are relative to: "rhs" (‖b‖) or "initial-gradient" (the paper's).
+    pub cg_stop: CgStop,
+    /// No inner solve is asked for less than inner_floor·ε·‖b‖ (0: none, as in the paper; the
+    /// inner solves then go far below what the outer test can see).
+    pub inner_floor: f64,
+}
+
+impl Default for Inexact {
+    fn default() -> Self {
+        Inexact { rtol: 0.5, cfact: 0.9, cg_stop: CgStop::Rhs, inner_floor: 0.1 }
+    }
+}
+
+/// MSSN: the inner systems are solved to round-off; nothing to set.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Exact {}
+
+/// SSN-BiCGSTAB: the adaptive tolerance of [`Inexact`], or a fixed one.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct Ssn {
+    pub rtol: f64,
+    pub cfact: f64,
+    pub cg_stop: CgStop,
+    pub inner_floor: f64,
+    /// A fixed relative inner tolerance instead of the adaptive one (the paper's baseline needs
+    /// about 1e-6).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inner_tol: Option<f64>,
+}
+
+impl Default for Ssn {
+    fn default() -> Self {
+        let Inexact { rtol, cfact, cg_stop, inner_floor } = Inexact::default();
+        Ssn { rtol, cfact, cg_stop, inner_floor, inner_tol: None }
+    }
+}
+
+/// TSSN: CG to the forcing tolerance `rtol·(err_k/err_0)^θ`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct Tssn {
+    pub rtol: f64,
+    /// The forcing exponent θ (θ > 1: superlinear).
+    pub forcing: f64,
+    pub inner_floor: f64,
+}
+
+impl Default for Tssn {
+    fn default() -> Self {
+        let Inexact { rtol, inner_floor, .. } = Inexact::default();
+        Tssn { rtol, forcing: 1.0, inner_floor }
+    }
+}
+
+/// MPGP.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct Mpgp {
+    /// The proportioning constant Γ.
+    pub gamma: f64,
+}
+
+impl Default for Mpgp {
+    fn default() -> Self {
+        Mpgp { gamma: 1.0 }
+    }
+}
+
+/// The method and what only it reads.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum MethodParams {
+    Gimssn(Inexact),
+    Imssn(Inexact),
+    Mssn(Exact),
+    SsnBicgstab(Ssn),
+    Mpgp(Mpgp),
+    Tssn(Tssn),
+}
+
+impl MethodParams {
+    /// `method` with its defaults.
+    pub fn new(method: Method) -> Self {
+        match method {
+            Method::Gimssn => MethodParams::Gimssn(Inexact::default()),
+            Method::Imssn => MethodParams::Imssn(Inexact::default()),
+            Method::Mssn => MethodParams::Mssn(Exact::default()),
+            Method::SsnBicgstab => MethodParams::SsnBicgstab(Ssn::default()),
+            Method::Mpgp => MethodParams::Mpgp(Mpgp::default()),
+            Method::Tssn => MethodParams::Tssn(Tssn::default()),
+        }
+    }
+
+    /// `method`'s own settings from `d` (unknown keys refused).
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(method: Method, d: D) -> Result<Self, D::Error> {
+        Ok(match method {
+            Method::Gimssn => MethodParams::Gimssn(Inexact::deserialize(d)?),
+            Method::Imssn => MethodParams::Imssn(Inexact::deserialize(d)?),
+            Method::Mssn => MethodParams::Mssn(Exact::deserialize(d)?),
+            Method::SsnBicgstab => MethodParams::SsnBicgstab(Ssn::deserialize(d)?),
+            Method::Mpgp => MethodParams::Mpgp(Mpgp::deserialize(d)?),
+            Method::Tssn => MethodParams::Tssn(Tssn::deserialize(d)?),
+        })
+    }
+
+    pub fn method(&self) -> Method {
+        match self {
+            MethodParams::Gimssn(_) => Method::Gimssn,
+            MethodParams::Imssn(_) => Method::Imssn,
+            MethodParams::Mssn(_) => Method::Mssn,
+            MethodParams::SsnBicgstab(_) => Method::SsnBicgstab,
+            MethodParams::Mpgp(_) => Method::Mpgp,
+            MethodParams::Tssn(_) => Method::Tssn,
+        }
+    }
+}
+
+/// Everything a solve reads: the common settings and the method's own.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    pub common: Common,
+    pub method: MethodParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params::new(Method::default())
+    }
+}
+
+impl Params {
+    /// `method` with every default.
+    pub fn new(method: Method) -> Self {
+        Params { common: Common::default(), method: MethodParams::new(method) }
+    }
+
+    /// The same with ε = `eps`.
+    pub fn with_eps(mut self, eps: f64) -> Self {
+        self.common.eps = eps;
+        self
+    }
+
+    /// Another method with these common settings and its own defaults.
+    pub fn with_method(&self, method: Method) -> Self {
+        Params { common: self.common.clone(), method: MethodParams::new(method) }
+    }
+
+    pub fn method(&self) -> Method {
+        self.method.method()
+    }
+}
+
+/// A setting out of its range: the key and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Invalid {
+    pub key: &'static str,
+    pub msg: String,
+}
+
+fn positive(key: &'static str, v: f64) -> Result<(), Invalid> {
+    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(Invalid { key, msg: format!("must be finite and > 0, got {v}") }) }
+}
+
+fn fraction(key: &'static str, v: f64) -> Result<(), Invalid> {
+    if v > 0.0 && v < 1.0 { Ok(()) } else { Err(Invalid { key, msg: format!("must lie in (0, 1), got {v}") }) }
+}
+
+fn floor(v: f64) -> Result<(), Invalid> {
+    if v >= 0.0 && v.is_finite() { Ok(()) } else { Err(Invalid { key: "inner_floor", msg: format!("must be finite and ≥ 0, got {v}") }) }
+}
+
+impl Params {
+    /// Checks every value against its range.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let c = &self.common;
+        positive("eps", c.eps)?;
+        positive("rho_factor", c.rho_factor)?;
+        for (key, v) in [("max_outer", c.max_outer), ("max_inner", c.max_inner), ("power_iterations", c.power_iterations)] {
+            if v == 0 {
+                return Err(Invalid { key, msg: "must be at least 1".into() });
+            }
+        }
+        match &self.method {
+            MethodParams::Gimssn(m) | MethodParams::Imssn(m) => {
+                fraction("rtol", m.rtol)?;
+                fraction("cfact", m.cfact)?;
+                floor(m.inner_floor)
+            }
+            MethodParams::SsnBicgstab(m) => {
+                fraction("rtol", m.rtol)?;
+                fraction("cfact", m.cfact)?;
+                floor(m.inner_floor)?;
+                m.inner_tol.map_or(Ok(()), |t| fraction("inner_tol", t))
+            }
+            MethodParams::Tssn(m) => {
+                fraction("rtol", m.rtol)?;
+                positive("forcing", m.forcing)?;
+                floor(m.inner_floor)
+            }
+            MethodParams::Mpgp(m) => positive("gamma", m.gamma),
+            MethodParams::Mssn(_) => Ok(()),
+        }
+    }
+}

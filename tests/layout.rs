@@ -1,0 +1,90 @@
+//! The crate's shape (DESIGN §5): the graph of its top-level modules, read from the `crate::…`
+//! paths in the sources (comments and test modules left out), has no cycle, and the solver layer
+//! `qp` is the floor: it uses nothing of the crate but `error` and `comm`.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Top-level module → the top-level modules its code names.
+fn graph() -> BTreeMap<String, BTreeSet<String>> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let modules: BTreeSet<String> = std::fs::read_dir(&src)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter_map(|p| {
+            let stem = p.file_stem()?.to_string_lossy().into_owned();
+            (p.is_dir() || p.extension().is_some_and(|x| x == "rs")).then_some(stem)
+        })
+        .filter(|m| m != "lib" && m != "main")
+        .collect();
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            if p.extension().is_none_or(|x| x != "rs") {
+                continue;
+            }
+            let rel = p.strip_prefix(&src).unwrap();
+            let top = rel.components().next().unwrap().as_os_str().to_string_lossy().trim_end_matches(".rs").to_string();
+            if !modules.contains(&top) {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            let code = text.split("#[cfg(test)]").next().unwrap();
+            for line in code.lines().map(str::trim_start).filter(|l| !l.starts_with("//")) {
+                for (i, _) in line.match_indices("crate::") {
+                    let name: String = line[i + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
+                    if modules.contains(&name) && name != top {
+                        g.entry(top.clone()).or_default().insert(name);
+                    }
+                }
+            }
+            g.entry(top).or_default();
+        }
+    }
+    g
+}
+
+#[test]
+fn the_module_graph_has_no_cycle() {
+    let g = graph();
+    assert!(g.len() > 10, "found the modules: {g:?}");
+    // depth-first search with colours: 1 on the stack, 2 done
+    fn visit(u: &str, g: &BTreeMap<String, BTreeSet<String>>, colour: &mut BTreeMap<String, u8>, path: &mut Vec<String>) {
+        colour.insert(u.to_string(), 1);
+        path.push(u.to_string());
+        for v in g.get(u).into_iter().flatten() {
+            match colour.get(v) {
+                Some(1) => panic!("import cycle: {} → {v}", path.join(" → ")),
+                Some(_) => {}
+                None => visit(v, g, colour, path),
+            }
+        }
+        path.pop();
+        colour.insert(u.to_string(), 2);
+    }
+    let mut colour = BTreeMap::new();
+    for u in g.keys() {
+        if !colour.contains_key(u) {
+            visit(u, &g, &mut colour, &mut vec![]);
+        }
+    }
+}
+
+#[test]
+fn the_solver_layer_is_the_floor() {
+    let g = graph();
+    let qp = &g["qp"];
+    let allowed: BTreeSet<String> = ["error", "comm"].map(String::from).into();
+    assert!(qp.is_subset(&allowed), "qp uses {qp:?}");
+    // and the layers above it do use it
+    for m in ["dual", "feti", "pipeline", "contact"] {
+        assert!(g[m].contains("qp"), "{m} does not use qp: {:?}", g[m]);
+    }
+}
