@@ -322,12 +322,10 @@ fn unit() -> f64 {
     1.0
 }
 
-/// The automatic decomposition (measured, `tresca-feti bench-tfeti`, 2 ranks, seed scene):
-/// bodies up to this many DOFs stay whole (monolithic dual: N = 16 1.4 s against 1.8 s for the
-/// best TFETI run) …
+/// The automatic decomposition, chosen by `tresca-feti bench-tfeti` on the seed scene (figures
+/// in the README, TFETI): bodies up to this many DOFs stay whole (the monolithic dual) …
 pub const AUTO_MONOLITHIC_DOFS: usize = 30_000;
-/// … larger ones get at least this many subdomains (N = 26: 10.8 s against 12.9 s monolithic;
-/// N = 41: 64.6 s against 106.5 s, and 71.8 s with 64) …
+/// … larger ones get at least this many subdomains …
 pub const AUTO_MIN_SUBDOMAINS: usize = 32;
 /// … and no more than about this many DOFs per subdomain.
 pub const AUTO_TARGET_DOFS: usize = 6_500;

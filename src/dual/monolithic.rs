@@ -36,7 +36,7 @@ pub struct MonolithicDual<'c, C: Comm> {
 }
 
 /// The rows of B (free part) for the body with DOF map `dofs`, and the shift of c by the
-/// prescribed values: returns (entries, c_shift) where c_shift[r] = Σ coef·u_prescribed.
+/// prescribed values: returns (entries, c_shift) where c_shift\[r\] = Σ coef·u_prescribed.
 pub fn body_rows(contact: &Contact, layout: Layout, dofs: &DofMap) -> (Vec<(usize, usize, f64)>, Vec<f64>) {
     let mut entries = Vec::new();
     let mut shift = vec![0.0; layout.dim()];

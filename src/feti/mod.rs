@@ -3,7 +3,7 @@
 //! ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors
 //! ([`coarse`]), and the dual operator on which the QP solvers run unchanged ([`dual`]). It is a
 //! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
-//! feasible multipliers, and [`dual::TfetiDual::recover`] maps the solution back to λ, α and u.
+//! feasible multipliers, and `DualProblem::recover` of [`dual::TfetiDual`] maps the solution back to λ, α and u.
 
 pub mod coarse;
 pub mod constraints;

@@ -1,4 +1,4 @@
-//! The outer loop every solver shares: σ_est and ρ ([`Setup`]), the stop test `‖r̃_ρ‖ ≤ ε‖b‖`
+//! The outer loop every solver shares: σ_est and ρ (`Setup`), the stop test `‖r̃_ρ‖ ≤ ε‖b‖`
 //! with its confirmation by a fresh product, the budgets (outer steps, A-products), non-finite
 //! values, the history and [`Info`], and the [`Monitor`] that sees each outer step as it ends.
 

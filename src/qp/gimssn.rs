@@ -13,9 +13,9 @@
 //! The same loop gives the paper's two other symmetrized variants: **IMSSN** fixes
 //! the components of (11) but starts CG from λᵏ's free components, runs CG without the
 //! feasibility test, and projects: λ^{k+1} = P_Λ(CG result), with a fresh gradient (one more
-//! product per step). (Going on from the unprojected CG result instead, as a literal reading of
-//! the paper allows, took 13 steps where the paper reports 10 at N = 16; from the projected one
-//! we get the paper's 10.) **MSSN** is IMSSN with the free-set system solved to round-off.
+//! product per step); going on from the projected iterate, not the unprojected CG result that
+//! a literal reading of the paper allows, is what reproduces the paper's step counts (README,
+//! Table 1). **MSSN** is IMSSN with the free-set system solved to round-off.
 //!
 //! The variant is [`Variant`] (GIMSSN, IMSSN or MSSN).
 

@@ -1,6 +1,6 @@
-//! The Krylov kernels of the inner solves: one masked, preconditioned CG ([`pcg`]) for every
+//! The Krylov kernels of the inner solves: one masked, preconditioned CG (`pcg`) for every
 //! symmetric inner system (GIMSSN's CGMfeas, IMSSN/MSSN, TSSN, plain CG) and one BiCGSTAB
-//! ([`Bicgstab`]) for SSN's unsymmetric Newton systems.
+//! (`Bicgstab`) for SSN's unsymmetric Newton systems.
 
 use super::driver::positive_curvature;
 use super::operator::{Operator, Preconditioner, Space};

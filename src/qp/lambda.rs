@@ -6,7 +6,7 @@
 use super::sets::{ConvexSet, HalfLine, TangentSet};
 
 /// Layout of the multipliers: λ = (λν ∈ Rᵐ, λτ ∈ R²ᵐ, λ_E ∈ R^free), λτ absent when
-/// frictionless; pair i owns λν[i] and λτ[2i], λτ[2i+1]. λ_E are the unconstrained
+/// frictionless; pair i owns λν\[i\] and λτ\[2i\], λτ\[2i+1\]. λ_E are the unconstrained
 /// multipliers (TFETI's gluing and Dirichlet rows; none in the monolithic dual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {

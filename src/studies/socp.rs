@@ -49,7 +49,7 @@ pub struct PrimalSocp {
 
 /// Clarabel's answer mapped back to the dual problem's quantities.
 pub struct SocpSolution {
-    /// Free DOFs per body (as [`MonolithicDual::recover`] returns them).
+    /// Free DOFs per body (as `DualProblem::recover` of the monolithic dual returns them).
     pub u: Vec<Vec<f64>>,
     pub lambda: Vec<f64>,
     /// r = c − Bu (= −(Aλ − b) at the dual solution's sign convention: the dual gradient).
