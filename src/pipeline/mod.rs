@@ -419,15 +419,28 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 total_force_on_slave: o.state.total_force(c),
             }
         }),
-        solver: outcome.map(|o| SolverReport {
-            method: solver.method().name().into(),
-            dual_dim: o.dim,
-            eps: solver.common.eps,
-            info: o.info.clone(),
-            norm_b: o.bnorm,
-            kkt: o.kkt,
-            kkt_worst: o.kkt.worst(),
-        }),
+        solver: match (outcome, sol.tfeti.as_ref().and_then(|f| f.cg.as_ref())) {
+            (Some(o), _) => Some(SolverReport {
+                method: solver.method().name().into(),
+                dual_dim: o.dim,
+                eps: solver.common.eps,
+                info: o.info.clone(),
+                norm_b: o.bnorm,
+                kkt: o.kkt,
+                kkt_worst: o.kkt.worst(),
+            }),
+            // TFETI without contact: CG on the gluing and Dirichlet rows (no KKT beyond Ax = b)
+            (None, Some((info, dim, bnorm))) => Some(SolverReport {
+                method: "cg".into(),
+                dual_dim: *dim,
+                eps: solver.common.eps,
+                info: info.clone(),
+                norm_b: *bnorm,
+                kkt: Default::default(),
+                kkt_worst: 0.0,
+            }),
+            (None, None) => None,
+        },
         timings: t.times(),
         versions: crate::versions(),
         memory: None,

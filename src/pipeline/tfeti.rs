@@ -50,6 +50,9 @@ pub struct TfetiInfo {
     pub smalse: Option<SmalseInfo>,
     /// How the dual vectors and the work of an A-product are spread over the ranks.
     pub distribution: DistributionStats,
+    /// Without contact: the plain CG's counters, the dual's length and ‖b‖ (with contact they
+    /// are the [`ContactOutcome`]'s).
+    pub cg: Option<(qp::Info, usize, f64)>,
 }
 
 /// The distribution of the multipliers and the time in each part of the A-products (max over
@@ -192,6 +195,9 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     f.feasibility = feasibility;
     f.smalse = smalse;
     f.distribution = distribution;
+    if contact.is_none() {
+        f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), dual.space().norm(&b)));
+    }
     let outcome = contact.map(|c| {
         let set_i = c.constraint_set();
         // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
