@@ -352,6 +352,18 @@ fn solve_shows_phases_and_iterations_live_unless_quiet() {
     assert!(!quiet.contains("] iterate") && !quiet.contains("‖r̃‖/‖b‖ ") && quiet.starts_with("tresca-feti "), "{quiet}");
 }
 
+/// The benchmark set's own scenes (`run/bench/*.toml`) stay valid: each checks, with the pairs
+/// it is built for.
+#[test]
+fn the_benchmark_scenes_check() {
+    for (scene, pairs) in [("plane_strain_rollers", 162), ("thin_clamped_plate", 121)] {
+        let o = run(&["check", root().join(format!("run/bench/{scene}.toml")).to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(text.contains(&format!("contact: m = {pairs} node-to-node pairs")), "{scene}: {text}");
+    }
+}
+
 #[test]
 fn unwritable_output_is_one_line() {
     let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=3", "--set", "contact.enabled=false", "--out", "/proc/no/such/dir/r.h5"]);

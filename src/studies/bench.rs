@@ -135,7 +135,11 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     sets.push(format!("solver.eps={:e}", a.eps));
     sets.push("output.fields=[]".into());
     sets.push("output.xdmf=false".into());
-    if s > 0 {
+    if s == 0 {
+        // the monolithic dual at every size (not the automatic decomposition)
+        sets.push("decomposition.subdomains=1".into());
+        sets.push("decomposition.tfeti=false".into());
+    } else {
         sets.push(format!("decomposition.subdomains={s}"));
         sets.push("decomposition.tfeti=true".into());
         sets.push(format!("decomposition.projector=\"{}\"", if projector == Projector::Oblique { "oblique" } else { "orthogonal" }));
