@@ -88,7 +88,7 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty
     let bnorm = sp.norm(&b0).max(f64::MIN_POSITIVE);
     let mut op = Penalized::new(dual, 0.0);
     let n_power = p.common.power_iterations;
-    let sigma = qp::power_sigma(&op, n_power);
+    let sigma = qp::estimate_sigma(&op, &p.common);
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
     }

@@ -24,10 +24,10 @@ pub mod sets;
 pub mod ssn;
 pub mod tssn;
 
-pub use driver::{power_sigma, Monitor, Silent, SIGMA_SAFETY};
+pub use driver::{estimate_sigma, lanczos_sigma, power_sigma, Monitor, Silent, SIGMA_SAFETY};
 pub use lambda::{Lambda, Layout};
 pub use operator::{Operator, Preconditioner, ProductCounter, Replicated, Space};
-pub use params::{CgStop, Common, Method, MethodParams, Params};
+pub use params::{CgStop, Common, Method, MethodParams, Params, SigmaEstimate};
 
 /// The QP: A, b, Λ and, for the solvers that take one, a preconditioner of A.
 pub struct Qp<'a, A: Operator> {

@@ -56,6 +56,17 @@ pub enum CgStop {
     InitialGradient,
 }
 
+/// How σ_max(A) (for ρ) is estimated.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SigmaEstimate {
+    /// The power method from a fixed start vector.
+    #[default]
+    Power,
+    /// Lanczos from the same vector: the largest Ritz value.
+    Lanczos,
+}
+
 /// Settings every method reads.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
@@ -68,8 +79,10 @@ pub struct Common {
     pub max_outer: usize,
     /// Inner iterations per outer step at most.
     pub max_inner: usize,
-    /// Power iterations for the estimate of σ_max(A).
+    /// Steps of the estimate of σ_max(A) (power iterations or Lanczos steps).
     pub power_iterations: usize,
+    /// How σ_max(A) is estimated.
+    pub sigma_estimate: SigmaEstimate,
     /// A-products (power iterations excluded) at most: a budget checked between outer steps.
     #[serde(skip)]
     pub max_products: usize,
@@ -81,7 +94,7 @@ pub struct Common {
 
 impl Default for Common {
     fn default() -> Self {
-        Common { eps: 1e-6, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 30, max_products: usize::MAX, sigma: None }
+        Common { eps: 1e-6, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 30, sigma_estimate: SigmaEstimate::Power, max_products: usize::MAX, sigma: None }
     }
 }
 
