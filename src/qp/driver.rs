@@ -73,7 +73,8 @@ pub fn lanczos_sigma<A: Operator>(a: &A, steps: usize) -> f64 {
         }
         alpha.push(al);
         let b = sp.norm(&w);
-        if !(b > 1e-14 * al.abs()) || !b.is_finite() {
+        // breakdown (an invariant subspace) or NaN: T_k is all there is
+        if b.is_nan() || b <= 1e-14 * al.abs() || !b.is_finite() {
             break;
         }
         beta.push(b);
