@@ -26,14 +26,21 @@ impl Monitor for Silent {
     fn step(&mut self, _: usize, _: &Step) {}
 }
 
+/// The unit start vector of the σ_max estimates, the same for every distribution of the
+/// components (it depends on the global index only).
+fn start_vector<A: Operator>(a: &A) -> Vec<f64> {
+    let sp = a.space();
+    let mut x: Vec<f64> = (0..a.dim()).map(|i| 1.0 + 0.1 * ((sp.global_index(i) * 7919) % 13) as f64).collect();
+    let nx = sp.norm(&x);
+    x.iter_mut().for_each(|v| *v /= nx);
+    x
+}
+
 /// σ_max(A) by `iterations` power iterations from a fixed start vector.
 pub fn power_sigma<A: Operator>(a: &A, iterations: usize) -> f64 {
     let sp = a.space();
     let n = a.dim();
-    // the same vector for every distribution of the components
-    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((sp.global_index(i) * 7919) % 13) as f64).collect();
-    let nx = sp.norm(&x);
-    x.iter_mut().for_each(|v| *v /= nx);
+    let mut x = start_vector(a);
     let mut y = vec![0.0; n];
     let mut sigma = 0.0;
     for _ in 0..iterations {
@@ -56,9 +63,7 @@ pub fn power_sigma<A: Operator>(a: &A, iterations: usize) -> f64 {
 pub fn lanczos_sigma<A: Operator>(a: &A, steps: usize) -> f64 {
     let sp = a.space();
     let n = a.dim();
-    let mut q: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((sp.global_index(i) * 7919) % 13) as f64).collect();
-    let nq = sp.norm(&q);
-    q.iter_mut().for_each(|v| *v /= nq);
+    let mut q = start_vector(a);
     let (mut q_prev, mut w) = (vec![0.0; n], vec![0.0; n]);
     let (mut alpha, mut beta) = (Vec::with_capacity(steps), Vec::with_capacity(steps));
     let mut b_prev = 0.0;
