@@ -243,9 +243,7 @@ impl SolverSettings {
         let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::None), |v| value("preconditioner", v))?;
         let common_keys = Self::common_keys();
         let (common, own): (toml::Table, toml::Table) = t.into_iter().partition(|(k, _)| common_keys.contains(k));
-        let common: qp::Common = serde_path_to_error::deserialize(toml::Value::Table(common)).map_err(|e| {
-            Error::scene(format!("solver.{}", e.path()), e.inner().message().replace('\n', " "))
-        })?;
+        let common: qp::Common = value("", toml::Value::Table(common))?;
         let mut track = serde_path_to_error::Track::new();
         let own = qp::MethodParams::deserialize(method, serde_path_to_error::Deserializer::new(toml::Value::Table(own), &mut track)).map_err(|e| {
             let msg = e.message().replace('\n', " ");

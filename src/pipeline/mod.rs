@@ -329,7 +329,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     report.memory = Some(report::Memory { peak_rss_bytes_sum_over_ranks: peak_sum[0], peak_rss_bytes_max_rank: peak_max[0] });
     let before_output = t.clone();
     // every rank writes its rows; the root attributes carry rank 0's report
-    let json = serde_json::to_value(&report).map_err(|e| Error::output(h5.display().to_string(), format!("report: {e}")))?;
+    // collective: a failure on one rank must stop all of them before the broadcast below
+    let json = comm.agree(serde_json::to_value(&report).map_err(|e| Error::output(h5.display().to_string(), format!("report: {e}"))))?;
     let mut text = json.to_string().into_bytes();
     comm.broadcast_bytes(0, &mut text);
     let report_text = String::from_utf8_lossy(&text).into_owned();

@@ -143,8 +143,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
     let s = &ls.scene.solver;
-    let kind = super::DualKind::Tfeti { orthogonal, contact: contact.is_some() };
-    if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, kind)? {
+    if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
         t.phase(comm, "preconditioner", || dual.set_preconditioner(m))?;
     }
     // this rank's part of Λ: its pairs, its λ_E
