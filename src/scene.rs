@@ -197,12 +197,14 @@ pub enum Friction {
 
 pub use crate::qp::{CgStop, Method};
 
-/// The FETI preconditioner of the TFETI gluing and Dirichlet block (`solver.preconditioner`;
-/// where it applies is decided by `pipeline::preconditioner`).
+/// The FETI preconditioner of the TFETI dual (`solver.preconditioner`; where it applies is
+/// decided by `pipeline::preconditioner`).
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Preconditioner {
+    /// Dirichlet for the plain CG of a TFETI scene without contact, none elsewhere.
     #[default]
+    Auto,
     None,
     /// K_s's block on the DOFs the rows touch.
     Lumped,
@@ -213,6 +215,7 @@ pub enum Preconditioner {
 impl Preconditioner {
     pub fn name(self) -> &'static str {
         match self {
+            Preconditioner::Auto => "auto",
             Preconditioner::None => "none",
             Preconditioner::Lumped => "lumped",
             Preconditioner::Dirichlet => "dirichlet",
@@ -240,7 +243,7 @@ impl SolverSettings {
             })
         }
         let method: Method = t.remove("method").map_or(Ok(Method::default()), |v| value("method", v))?;
-        let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::None), |v| value("preconditioner", v))?;
+        let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::Auto), |v| value("preconditioner", v))?;
         let common_keys = Self::common_keys();
         let (common, own): (toml::Table, toml::Table) = t.into_iter().partition(|(k, _)| common_keys.contains(k));
         let common: qp::Common = value("", toml::Value::Table(common))?;
@@ -276,7 +279,7 @@ impl SolverSettings {
         for part in [toml::Table::try_from(&self.params.common), toml::Table::try_from(&self.params.method)] {
             t.extend(part.unwrap_or_default());
         }
-        if self.preconditioner != Preconditioner::None {
+        if self.preconditioner != Preconditioner::Auto {
             t.insert("preconditioner".into(), self.preconditioner.name().into());
         }
         t
@@ -314,11 +317,17 @@ pub struct DecompositionSettings {
     /// SMALSE-M's penalty ϱ as a multiple of σ_max(PFP) (orthogonal projector only).
     #[serde(default = "unit")]
     pub penalty: f64,
+    /// The inner CG (TSSN's, plain CG's) runs projected onto Ker G ∩ W, W a Newton step's
+    /// subspace, with the orthogonal projector of G = RᵀBᵀ restricted to W (oblique projector
+    /// only); the FETI preconditioner acts there. Default true.
+    #[serde(default = "yes")]
+    pub projected_cg: bool,
 }
 
 fn unit() -> f64 {
     1.0
 }
+
 
 /// The automatic decomposition, chosen by `tresca-feti bench-tfeti` on the seed scene (figures
 /// in the README, TFETI): bodies up to this many DOFs stay whole (the monolithic dual) …
@@ -330,7 +339,7 @@ pub const AUTO_TARGET_DOFS: usize = 6_500;
 
 impl Default for DecompositionSettings {
     fn default() -> Self {
-        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0 }
+        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true }
     }
 }
 

@@ -41,6 +41,16 @@ pub struct Coarse {
     full: Option<Cholesky>,
     /// Nonzeros of the lower triangle of C.
     pub nnz_c: usize,
+    /// The pattern of GGᵀ with C's values and G's contact columns, built at the first
+    /// [`Coarse::restricted`].
+    pattern: std::cell::OnceCell<Pattern>,
+}
+
+/// G Π Gᵀ's pieces: the lower-triangle pattern of GGᵀ over all rows carrying C = G_E G_Eᵀ's
+/// values, and per contact row its column of G as (coarse index, value).
+struct Pattern {
+    c: SymCsc,
+    contact: Vec<Vec<(usize, f64)>>,
 }
 
 impl Coarse {
@@ -74,7 +84,7 @@ impl Coarse {
             true => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), d, mesh)?.0),
             false => None,
         };
-        Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c })
+        Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
 
     /// Size of the coarse problem, 6 per subdomain.
@@ -176,6 +186,85 @@ impl Coarse {
         self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
     }
 
+    /// The columns of G per row from `first` on: (coarse index, value).
+    fn columns(&self, first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
+        let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
+        for (s, (rows, g)) in self.blocks.iter().enumerate() {
+            let len = rows.len();
+            for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= first) {
+                for k in 0..NR {
+                    by_row[row - first].push((NR * s + k, g[k * len + p]));
+                }
+            }
+        }
+        by_row
+    }
+
+    fn pattern(&self, dim: usize) -> &Pattern {
+        self.pattern.get_or_init(|| {
+            let by_row = self.columns(0, dim);
+            let nc = self.dim();
+            let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
+            for (r, list) in by_row.iter().enumerate() {
+                let w = if r >= self.e_start { 1.0 } else { 0.0 };
+                for &(i, x) in list {
+                    for &(j, y) in list {
+                        if i >= j {
+                            *cols[j].entry(i).or_insert(0.0) += w * x * y;
+                        }
+                    }
+                }
+            }
+            let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
+            for (j, col) in cols.iter().enumerate() {
+                cols_push(&mut c, j, col);
+            }
+            let contact = by_row[..self.e_start].to_vec();
+            Pattern { c, contact }
+        })
+    }
+
+    /// G Π Gᵀ factorized, Π = I on the E rows, and on the contact rows: the rows where
+    /// `weight` is 1 (free), the combination t₀g_k + t₁g_{k+1} for the sliding pairs (first
+    /// row k, t) of `slides`, nothing for the others (global row indices). `None` if singular.
+    pub fn restricted(&self, dim: usize, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Cholesky> {
+        let pat = self.pattern(dim);
+        let mut c = pat.c.clone();
+        let mut add = |list: &[(usize, f64)]| {
+            for &(i, x) in list {
+                for &(j, y) in list {
+                    if i >= j {
+                        let p = c.position(i, j).expect("in GGᵀ's pattern");
+                        c.values[p] += x * y;
+                    }
+                }
+            }
+        };
+        for (r, list) in pat.contact.iter().enumerate() {
+            if free[r] {
+                add(list);
+            }
+        }
+        for &(k, t) in slides {
+            let mut merged: std::collections::BTreeMap<usize, f64> = Default::default();
+            for (row, w) in [(k, t[0]), (k + 1, t[1])] {
+                for &(i, x) in &pat.contact[row] {
+                    *merged.entry(i).or_insert(0.0) += w * x;
+                }
+            }
+            add(&merged.into_iter().collect::<Vec<_>>());
+        }
+        Cholesky::factorize(&c, Ordering::Amd).ok()
+    }
+
+    /// x ← x − Gᵀ(GΠGᵀ)⁻¹ G x on owned vectors, with `chol` from [`Coarse::restricted`].
+    pub fn project_restricted<C: Comm>(&self, dist: &Distribution<'_, C>, chol: &Cholesky, x: &mut [f64]) {
+        let xl = dist.ghosted(x);
+        let mut a = self.g_mul(dist, &xl, false);
+        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(&mut a));
+        self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
+    }
+
     /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows.
     pub fn lambda_hat_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {
         let mut a = self.e.clone();
@@ -240,6 +329,15 @@ fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d:
         Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
     })?;
     Ok((chol, c.nnz()))
+}
+
+/// Appends column j (lower triangle, the diagonal first) to `c`.
+fn cols_push(c: &mut SymCsc, _j: usize, col: &std::collections::BTreeMap<usize, f64>) {
+    for (&i, &v) in col {
+        c.row_idx.push(i);
+        c.values.push(v);
+    }
+    c.col_ptr.push(c.row_idx.len());
 }
 
 fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
@@ -316,5 +414,68 @@ mod tests {
         let mut pzo = z.clone();
         c.project_orthogonal(&dist, &mut pzo);
         assert!((dot(&z, &py) - dot(&pzo, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
+    }
+
+    /// The restricted projector: for x ∈ W (free rows, sliding pairs' t directions, E rows),
+    /// Π(x − Gᵀ(GΠGᵀ)⁻¹Gx) lies in Ker G ∩ W and is idempotent.
+    #[test]
+    fn restricted_projector_maps_into_ker_g_on_w() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+        let ls = crate::scene::load(&path, &["mesh.n=5".to_string()]).unwrap();
+        let model = crate::model::build(&ls).unwrap();
+        let d = decompose(&model.mesh, 3).unwrap();
+        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+        let loads = subdomain_loads(&d, &model.loads);
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, false).unwrap();
+        let comm = crate::comm::SerialComm;
+        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
+        let n = cons.layout.dim();
+        let (m, ni) = (cons.layout.m, cons.e_start());
+        let mut s = 9u64;
+        // every third normal free, pairs alternating stick / slide / fixed
+        let mut free = vec![false; ni];
+        let mut slides = Vec::new();
+        for i in 0..m {
+            free[i] = i % 3 == 0;
+            let k = m + 2 * i;
+            match i % 3 {
+                0 => (free[k], free[k + 1]) = (true, true),
+                1 => {
+                    let a = lcg(&mut s) * 3.0;
+                    slides.push((k, [a.cos(), a.sin()]));
+                }
+                _ => {}
+            }
+        }
+        let pi = |x: &mut Vec<f64>| {
+            let mut y = x.clone();
+            for r in 0..ni {
+                if !free[r] {
+                    y[r] = 0.0;
+                }
+            }
+            for &(k, t) in &slides {
+                let a = t[0] * x[k] + t[1] * x[k + 1];
+                y[k] = a * t[0];
+                y[k + 1] = a * t[1];
+            }
+            *x = y;
+        };
+        let chol = c.restricted(n, &free, &slides).expect("GΠGᵀ regular");
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut x: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
+        pi(&mut x);
+        let mut y = x.clone();
+        c.project_restricted(&dist, &chol, &mut y);
+        pi(&mut y);
+        let gy = c.g_mul(&dist, &y, false);
+        assert!(norm(&gy) < 1e-12 * norm(&x), "G y = {:e}", norm(&gy));
+        let mut z = y.clone();
+        c.project_restricted(&dist, &chol, &mut z);
+        pi(&mut z);
+        assert!(y.iter().zip(&z).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&y)));
+        // orthogonal: (x − y) ⊥ y
+        let dot: f64 = x.iter().zip(&y).map(|(a, b)| (a - b) * b).sum();
+        assert!(dot.abs() < 1e-12 * norm(&x) * norm(&y), "{dot:e}");
     }
 }

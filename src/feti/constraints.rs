@@ -6,6 +6,9 @@
 //!
 //! - **B_I** (contact): the rows N and T of each pair, acting on the *first* copy of the slave
 //!   and of the master node (the other copies follow by gluing); c = gap for the normal rows.
+//!   A prescribed DOF's part of a contact row moves to c (c −= coefficient·value, as on the
+//!   monolithic dual) and leaves a zero entry: otherwise a contact row on held DOFs repeats
+//!   Dirichlet rows (a tangent along a roller face: B loses rank, F turns singular there).
 //! - **Dirichlet**: a prescribed DOF gets one row e_dof on *every* copy of its node (c = the
 //!   value) and no gluing rows: each copy is held directly, the rows are orthonormal and
 //!   non-redundant.
@@ -56,9 +59,14 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
     let mut layout = Layout::contact(m, friction);
     let mut rows = vec![Vec::new(); d.subdomains.len()];
     let mut c = vec![0.0; layout.contact_dim()];
+    let mut prescribed = std::collections::HashMap::new();
+    for &(v, k, val) in dirichlet {
+        prescribed.insert((v, k), val);
+    }
     if let Some(ct) = contact {
         let first = |v: usize| d.copies[v][0];
         for i in 0..m {
+            c[layout.normal(i)] = ct.gap[i];
             let pair_rows = std::iter::once((layout.normal(i), ct.normal[i]))
                 .chain(friction.then(|| [(layout.tangent(i, 0), ct.t1[i]), (layout.tangent(i, 1), ct.t2[i])]).into_iter().flatten());
             for (row, dir) in pair_rows {
@@ -66,17 +74,21 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
                     let (s, l) = first(node);
                     for k in 0..3 {
                         if dir[k] != 0.0 {
-                            rows[s].push((row, 3 * l + k, sign * dir[k]));
+                            // a prescribed DOF's part moves to c (as on the monolithic dual); the
+                            // entry stays with coefficient 0 so the row keeps its subdomains
+                            let coef = sign * dir[k];
+                            match prescribed.get(&(node, k)) {
+                                Some(&val) => {
+                                    c[row] -= coef * val;
+                                    rows[s].push((row, 3 * l + k, 0.0));
+                                }
+                                None => rows[s].push((row, 3 * l + k, coef)),
+                            }
                         }
                     }
                 }
             }
-            c[layout.normal(i)] = ct.gap[i];
         }
-    }
-    let mut prescribed = std::collections::HashMap::new();
-    for &(v, k, val) in dirichlet {
-        prescribed.insert((v, k), val);
     }
     let (mut gluing_rows, mut dirichlet_rows) = (0, 0);
     for (v, copies) in d.copies.iter().enumerate() {

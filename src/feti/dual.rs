@@ -13,10 +13,11 @@ use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
-use crate::dual::{row_stiffness, scaled_entries, DualProblem, Recovered};
+use crate::dual::{DualProblem, Recovered};
 use crate::error::{Error, Result};
 use crate::linalg::schur::Schur;
-use crate::qp::{Layout, Operator, Preconditioner, ProductCounter};
+use super::precond::Scaling;
+use crate::qp::{self, Layout, Operator, Preconditioner, ProductCounter};
 use crate::scene::Preconditioner as PreconditionerKind;
 
 /// A subdomain of this rank with its B entries (position in its sorted rows, local DOF,
@@ -44,15 +45,10 @@ pub struct TfetiDual<'c, C: Comm> {
     counter: ProductCounter,
     /// First E (gluing, Dirichlet) row of the global numbering.
     e_start: usize,
-    /// The preconditioner's pieces (one per local subdomain), once built.
-    precond: Option<Vec<PrecondPiece>>,
-}
-
-/// One subdomain's part of M_E: S_s (or K_s's block) and its scaled E entries D_s B_E,s
-/// (position in its sorted rows, local DOF, coefficient).
-struct PrecondPiece {
-    schur: Schur,
-    entries: Vec<(usize, usize, f64)>,
+    /// Number of multipliers over all ranks.
+    rows: usize,
+    /// The preconditioner's scaling and its S_s (one per local subdomain), once built.
+    precond: Option<(Scaling, Vec<Schur>)>,
 }
 
 impl<'c, C: Comm> TfetiDual<'c, C> {
@@ -73,7 +69,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let lambda_hat = coarse.lambda_hat_local(&dist);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None };
+        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None };
         // d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c
         let mut b = vec![0.0; layout.dim()];
         let z = dual.pinv_of_rhs(&dual.lambda_hat);
@@ -84,39 +80,23 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         (dual, b)
     }
 
-    /// Builds the FETI preconditioner M_E of [`FetiPreconditioner`] on the E rows (`None`:
-    /// drops it). Dirichlet factorizes each subdomain's K_ii (the DOFs its E rows do not touch).
-    pub fn set_preconditioner(&mut self, kind: PreconditionerKind) -> Result<()> {
-        if kind == PreconditionerKind::None {
+    /// Builds the FETI preconditioner of [`DualPreconditioner`] (`None`: drops it). Dirichlet
+    /// factorizes each subdomain's K_ii (the DOFs its rows of B do not touch).
+    /// `weight[s]` = Δ_s, the stiffness weighting of every subdomain.
+    pub fn set_preconditioner(&mut self, kind: PreconditionerKind, cons: &Constraints, weight: Vec<f64>) -> Result<()> {
+        if !matches!(kind, PreconditionerKind::Lumped | PreconditionerKind::Dirichlet) {
             self.precond = None;
             return Ok(());
         }
-        let e_start = self.e_start;
-        let dist = &self.dist;
-        let e_entries: Vec<Vec<(usize, usize, f64)>> = self
-            .subs
-            .iter()
-            .zip(&dist.subs)
-            .map(|(s, sr)| s.entries.iter().copied().filter(|&(p, _, _)| dist.local_rows[sr.rows[p]] >= e_start).collect())
-            .collect();
-        let stiff: Vec<(Vec<f64>, Vec<f64>)> = self.subs.iter().zip(&e_entries).map(|(s, e)| row_stiffness(e, &s.sys.k, s.nrows)).collect();
-        // totals over all subdomains touching each row, back on every subdomain's rows
-        let per_row = |pick: fn(&(Vec<f64>, Vec<f64>)) -> &Vec<f64>| -> Vec<Vec<f64>> {
-            let v: Vec<Vec<f64>> = stiff.iter().map(|x| pick(x).clone()).collect();
-            let mut owned = vec![0.0; self.layout.dim()];
-            dist.assemble(&v, &mut owned);
-            let local = dist.ghosted(&owned);
-            dist.subs.iter().map(|sr| sr.rows.iter().map(|&l| local[l]).collect()).collect()
-        };
-        let (total, count) = (per_row(|x| &x.0), per_row(|x| &x.1));
+        let scaling = Scaling::new(cons, weight)?;
         let mut pieces = Vec::with_capacity(self.subs.len());
-        for (i, (s, e)) in self.subs.iter().zip(&e_entries).enumerate() {
-            let touched: Vec<usize> = e.iter().map(|x| x.1).collect();
+        for s in &self.subs {
+            let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();
             let schur = Schur::new(&s.sys.k, &touched, kind == PreconditionerKind::Dirichlet)
                 .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
-            pieces.push(PrecondPiece { schur, entries: scaled_entries(e, &stiff[i].0, &total[i], &count[i]) });
+            pieces.push(schur);
         }
-        self.precond = Some(pieces);
+        self.precond = Some((scaling, pieces));
         Ok(())
     }
 
@@ -190,8 +170,8 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// The preconditioner, when one was built.
-    pub fn preconditioner(&self) -> Option<FetiPreconditioner<'_, 'c, C>> {
-        self.precond.as_ref().map(|pieces| FetiPreconditioner { dual: self, pieces })
+    pub fn preconditioner(&self) -> Option<DualPreconditioner<'_, 'c, C>> {
+        self.precond.as_ref().map(|(scaling, schur)| DualPreconditioner { dual: self, scaling, schur })
     }
 }
 
@@ -246,48 +226,66 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     }
 }
 
-/// The FETI preconditioner of the symmetric inner solves (TSSN's CG) on the TFETI gluing and
-/// Dirichlet block: `M_E = Σ_s B_E,s D_s S_s D_s B_E,sᵀ` over the subdomains s, S_s the Schur
-/// complement of K_s onto the DOFs its E rows touch (Dirichlet) or just K_s's block there
-/// (lumped), D_s the stiffness scaling of the rows (a row shared by subdomains s and o gets
-/// k_o/(k_s + k_o), k the diagonal stiffness B sees; a row of one subdomain 1); applied as
-/// `P_E M_E P_E` on the E rows, P_E the orthogonal projector onto Ker G_E. The E components
-/// are free in every inner solve, so M_E acts on them unrestricted; the contact block is left to
-/// the solver.
-pub struct FetiPreconditioner<'a, 'c, C: Comm> {
+/// M⁻¹ = (BBᵀ)⁻¹ (Σ_s B_s S_s B_sᵀ) (BBᵀ)⁻¹ on every row of the dual (gluing, Dirichlet and
+/// contact: [`super::precond`]); the solver projects it with its coarse space.
+pub struct DualPreconditioner<'a, 'c, C: Comm> {
     dual: &'a TfetiDual<'c, C>,
-    pieces: &'a [PrecondPiece],
+    scaling: &'a Scaling,
+    schur: &'a [Schur],
 }
 
-impl<C: Comm> Preconditioner for FetiPreconditioner<'_, '_, C> {
+impl<C: Comm> Preconditioner for DualPreconditioner<'_, '_, C> {
     fn block(&self) -> std::ops::Range<usize> {
-        self.dual.layout.contact_dim()..self.dual.layout.dim()
+        0..self.dual.layout.dim()
     }
 
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         let d = self.dual;
-        let mut wl = d.dist.ghosted(x);
-        d.coarse.project_e_local(&d.dist, &mut wl);
-        let v: Vec<Vec<f64>> = self
-            .pieces
-            .iter()
-            .zip(&d.subs)
-            .zip(&d.dist.subs)
-            .map(|((pc, s), sr)| {
-                let mut z = vec![0.0; s.sys.ndof()];
-                for &(p, j, c) in &pc.entries {
-                    z[j] += c * wl[sr.rows[p]];
-                }
-                pc.schur.apply_in_place(&mut z);
-                let mut vs = vec![0.0; s.nrows];
-                for &(p, j, c) in &pc.entries {
-                    vs[p] += c * z[j];
-                }
-                vs
-            })
-            .collect();
-        d.dist.assemble(&v, y);
-        // P_E reads and writes the E rows only
-        d.coarse.project_e(&d.dist, y);
+        let mut xs = x.to_vec();
+        self.scaling.apply(&d.dist, &mut xs);
+        let mut z = d.scatter(&d.dist.ghosted(&xs));
+        for ((zs, schur), s) in z.iter_mut().zip(self.schur).zip(&d.subs) {
+            schur.apply_in_place(zs);
+            let w = self.scaling.weight[s.sys.index];
+            zs.iter_mut().for_each(|v| *v *= w * w);
+        }
+        d.gather(&z, y);
+        self.scaling.apply(&d.dist, y);
+    }
+}
+
+/// The coarse space of the inner solves: G = RᵀBᵀ over every row, restricted to a Newton
+/// step's subspace W (its free contact components and sliding directions; λ_E always free).
+impl<C: Comm> qp::Coarse for TfetiDual<'_, C> {
+    fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn qp::CoarseProjector + 'a>> {
+        let ni = self.e_start;
+        let owned = &self.dist.owned;
+        let mut w = vec![0.0; 3 * ni];
+        for (i, &r) in owned.iter().enumerate().take_while(|(_, &r)| r < ni) {
+            w[r] = if free[i] { 1.0 } else { 0.0 };
+        }
+        for &(k, t) in slides {
+            let r = owned[k];
+            w[ni + r] = 1.0;
+            w[2 * ni + r] = t[0];
+            w[2 * ni + r + 1] = t[1];
+        }
+        self.dist.reduce(&mut w);
+        let free_all: Vec<bool> = w[..ni].iter().map(|&v| v == 1.0).collect();
+        let slides_all: Vec<(usize, [f64; 2])> = (0..ni).filter(|&r| w[ni + r] == 1.0).map(|r| (r, [w[2 * ni + r], w[2 * ni + r + 1]])).collect();
+        let chol = self.coarse.restricted(self.rows, &free_all, &slides_all)?;
+        Some(Box::new(Restricted { dual: self, chol }))
+    }
+}
+
+/// P_W's coarse part: x ← x − Gᵀ(GΠGᵀ)⁻¹Gx.
+struct Restricted<'a, 'c, C: Comm> {
+    dual: &'a TfetiDual<'c, C>,
+    chol: crate::linalg::cholesky::Cholesky,
+}
+
+impl<C: Comm> qp::CoarseProjector for Restricted<'_, '_, C> {
+    fn apply(&self, x: &mut [f64]) {
+        self.dual.coarse.project_restricted(&self.dual.dist, &self.chol, x);
     }
 }

@@ -10,6 +10,7 @@ pub mod constraints;
 pub mod decomposition;
 pub mod distribution;
 pub mod dual;
+pub mod precond;
 pub mod smalse;
 pub mod subdomain;
 

@@ -144,7 +144,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
     let s = &ls.scene.solver;
     if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
-        t.phase(comm, "preconditioner", || dual.set_preconditioner(m))?;
+        t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, stiffness_weights(model, &d)))?;
     }
     // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
@@ -152,6 +152,13 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         None => Lambda::unconstrained(dual.layout.free),
     };
     Ok(TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c })
+}
+
+/// Δ_s = μ_min/μ_s per subdomain: the preconditioner's stiffness weighting (1 for one material).
+pub fn stiffness_weights(model: &Model, d: &Decomposition) -> Vec<f64> {
+    let mu = |s: &crate::feti::decomposition::Subdomain| model.lame[s.body].mu;
+    let min = d.subdomains.iter().map(mu).fold(f64::INFINITY, f64::min);
+    d.subdomains.iter().map(|s| min / mu(s)).collect()
 }
 
 /// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
@@ -168,7 +175,10 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let (sol, smalse) = t.phase(comm, "iterate", || {
         let y0 = vec![0.0; dual.dim()];
         let m = dual.preconditioner();
-        let qp = Qp::new(&dual, &b, &set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner));
+        let projected = super::projected(params.method(), super::DualKind::of(ls, model));
+        let qp = Qp::new(&dual, &b, &set)
+            .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
+            .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
         let r = match (orthogonal, contact.is_some()) {
             (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
             (false, true) => qp::solve(&qp, &y0, params, &mut monitor).map(|s| (s, None)),

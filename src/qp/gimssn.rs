@@ -132,7 +132,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, variant: 
 /// updated; returns the CG iterations (one A-product each).
 #[allow(clippy::too_many_arguments)]
 fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g: &mut [f64], threshold: impl FnOnce(f64) -> f64, max_inner: usize, feasible: bool, outer: usize) -> Result<usize, QpError> {
-    let opts = Pcg { system: &Masked(free), preconditioner: None, coefficients: Coefficients::Conjugated, feasible, max_iter: max_inner, outer };
+    let opts = Pcg { system: &Masked(free), preconditioner: None, coarse: None, coefficients: Coefficients::Conjugated, feasible, max_iter: max_inner, outer };
     Ok(pcg(drv.qp, &opts, x, g, threshold, |_| {})?.iterations)
 }
 

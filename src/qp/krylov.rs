@@ -3,7 +3,7 @@
 //! (`Bicgstab`) for SSN's unsymmetric Newton systems.
 
 use super::driver::positive_curvature;
-use super::operator::{Operator, Preconditioner, Space};
+use super::operator::{CoarseProjector, Operator, Preconditioner, Space};
 use super::{Qp, QpError};
 
 /// The symmetric inner system `S v = Π A v + C v` on a subspace of the dual vectors (v = Π v):
@@ -49,11 +49,22 @@ pub(crate) struct Pcg<'a> {
     pub system: &'a dyn InnerSystem,
     /// M on its block, with ρ·I on the other components (then projected by Π).
     pub preconditioner: Option<(&'a dyn Preconditioner, f64)>,
+    /// Keeps the residuals and directions in Ker G ∩ W (projected CG).
+    pub coarse: Option<&'a dyn CoarseProjector>,
     pub coefficients: Coefficients,
     /// CGMfeas: a step that would leave Λ goes to the boundary and ends the solve.
     pub feasible: bool,
     pub max_iter: usize,
     pub outer: usize,
+}
+
+/// v ← Π(v − Gᵀ(GΠGᵀ)⁻¹Gv) for v in the subspace: the orthogonal projection onto Ker G ∩ W.
+fn project(system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, v: &mut [f64], work: &mut [f64]) {
+    if let Some(p) = coarse {
+        p.apply(v);
+        system.apply(v, None, work);
+        v.copy_from_slice(work);
+    }
 }
 
 /// What one [`pcg`] did.
@@ -80,6 +91,7 @@ pub(crate) fn pcg<A: Operator>(
     let n = x.len();
     let (mut h, mut z, mut d, mut ad, mut md) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut pz = if opts.preconditioner.is_some() { vec![0.0; n] } else { vec![] };
+    let mut work = if opts.coarse.is_some() { vec![0.0; n] } else { vec![] };
     let mut applications = 0;
     // z = Π M h (z = h without a preconditioner)
     let mut precondition = |h: &[f64], z: &mut [f64]| match opts.preconditioner {
@@ -92,11 +104,13 @@ pub(crate) fn pcg<A: Operator>(
                 }
             }
             opts.system.apply(&pz, None, z);
+            project(opts.system, opts.coarse, z, &mut pz);
             applications += 1;
         }
         None => z.copy_from_slice(h),
     };
     opts.system.apply(g, None, &mut h);
+    project(opts.system, opts.coarse, &mut h, &mut work);
     let preconditioned = opts.preconditioner.is_some();
     let mut hz = sp.dot(&h, &h);
     let mut hnorm = hz.sqrt();
@@ -112,6 +126,7 @@ pub(crate) fn pcg<A: Operator>(
     while hnorm > threshold && it < opts.max_iter {
         a.apply(&d, &mut ad);
         opts.system.apply(&ad, Some(&d), &mut md);
+        project(opts.system, opts.coarse, &mut md, &mut work);
         let dmd = positive_curvature(sp.dot(&d, &md), "the curvature dᵀSd", opts.outer)?;
         it += 1;
         let alpha = match opts.coefficients {

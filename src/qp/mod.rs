@@ -26,7 +26,7 @@ pub mod tssn;
 
 pub use driver::{estimate_sigma, lanczos_sigma, power_sigma, Monitor, Silent, SIGMA_SAFETY};
 pub use lambda::{Lambda, Layout};
-pub use operator::{Operator, Preconditioner, ProductCounter, Replicated, Space};
+pub use operator::{Coarse, CoarseProjector, Operator, Preconditioner, ProductCounter, Replicated, Space};
 pub use params::{CgStop, Common, Method, MethodParams, Params, SigmaEstimate};
 
 /// The QP: A, b, Λ and, for the solvers that take one, a preconditioner of A.
@@ -37,11 +37,17 @@ pub struct Qp<'a, A: Operator> {
     /// M ≈ A⁻¹ on a block of the components (only TSSN's CG uses it: see
     /// [`Method::takes_preconditioner`]).
     pub preconditioner: Option<&'a dyn Preconditioner>,
+    /// G δ = 0 on the inner corrections (TSSN's CG and plain CG project onto Ker G ∩ W).
+    pub coarse: Option<&'a dyn Coarse>,
 }
 
 impl<'a, A: Operator> Qp<'a, A> {
     pub fn new(a: &'a A, b: &'a [f64], set: &'a Lambda) -> Self {
-        Qp { a, b, set, preconditioner: None }
+        Qp { a, b, set, preconditioner: None, coarse: None }
+    }
+
+    pub fn with_coarse(self, g: Option<&'a dyn Coarse>) -> Self {
+        Qp { coarse: g, ..self }
     }
 
     pub fn with_preconditioner(self, m: Option<&'a dyn Preconditioner>) -> Self {
@@ -133,6 +139,8 @@ pub enum QpError {
     Breakdown { outer: usize, p_ap: f64 },
     #[error("BiCGSTAB breakdown ({what}) at outer iteration {outer} before any progress")]
     BicgstabBreakdown { outer: usize, what: &'static str },
+    #[error("the coarse problem GΠGᵀ is singular at outer iteration {outer}")]
+    SingularCoarse { outer: usize },
     #[error("non-finite value (NaN or infinity) in {what} at outer iteration {outer}")]
     NotFinite { what: &'static str, outer: usize },
 }

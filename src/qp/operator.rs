@@ -65,10 +65,29 @@ pub trait Operator {
 
 /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]
 /// (this rank's indices); the other components of y are left to the solver (a scaled identity
-/// there). Not an A-product.
+/// there). Not an A-product. With a [`Coarse`] space the solver projects M's result (P M P).
 pub trait Preconditioner {
     fn block(&self) -> Range<usize>;
     fn apply(&self, x: &[f64], y: &mut [f64]);
+}
+
+/// A linear equality G δ = 0 on the directions of the inner solves (TFETI's natural coarse
+/// space G = RᵀBᵀ). With it a Newton step's corrections stay in Ker G ∩ W, W the step's
+/// subspace, and CG runs on the orthogonally projected system — the form in which a FETI
+/// preconditioner acts (projected PCG). The operator A must agree with G's null space: for
+/// δ ∈ Ker G, A δ differs from the unprojected operator only by a vector in Im Gᵀ.
+pub trait Coarse {
+    /// The projector for W = Im Π, Π the inner system's projection: `free` marks this rank's
+    /// free components; `slides` lists (first component, unit tangent t) of the pairs that move
+    /// along t only. `None` when G Π Gᵀ is singular.
+    fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn CoarseProjector + 'a>>;
+}
+
+/// One restriction of a [`Coarse`] space.
+pub trait CoarseProjector {
+    /// x ← x − Gᵀ(GΠGᵀ)⁻¹G x: for x ∈ W, Π of the result is x's orthogonal projection onto
+    /// Ker G ∩ W.
+    fn apply(&self, x: &mut [f64]);
 }
 
 /// A counter of A-products for the implementations of [`Operator`].

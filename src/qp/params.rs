@@ -151,12 +151,20 @@ pub struct Tssn {
     /// The forcing exponent θ (θ > 1: superlinear).
     pub forcing: f64,
     pub inner_floor: f64,
+    /// A sliding pair whose cᵢ exceeds this multiple of σ_max(A) is held at its tangent point
+    /// for the step (σᵢ = 0, the paper's symmetrized MSSN for that pair): a large cᵢ is a stiff
+    /// spring the FETI preconditioner knows nothing of. Infinite (`inf`): the exact Newton
+    /// step. Default 0.5 (cᵢρ ≤ 0.86 at the default ρ).
+    pub slide_cap: f64,
+    /// The safeguard fires when q at the Newton start rose above the last accepted start's at
+    /// this many starts in a row (1, the default: at every rise, the monotone rule).
+    pub patience: usize,
 }
 
 impl Default for Tssn {
     fn default() -> Self {
         let Inexact { rtol, inner_floor, .. } = Inexact::default();
-        Tssn { rtol, forcing: 1.0, inner_floor }
+        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 1 }
     }
 }
 
@@ -303,6 +311,12 @@ impl Params {
             MethodParams::Tssn(m) => {
                 fraction("rtol", m.rtol)?;
                 positive("forcing", m.forcing)?;
+                if m.patience == 0 {
+                    return Err(Invalid { key: "patience", msg: "must be ≥ 1, got 0".into() });
+                }
+                if !(m.slide_cap > 0.0) {
+                    return Err(Invalid { key: "slide_cap", msg: format!("must be > 0 (inf: never), got {}", m.slide_cap) });
+                }
                 floor(m.inner_floor)
             }
             MethodParams::Mpgp(m) => positive("gamma", m.gamma),

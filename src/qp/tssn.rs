@@ -33,10 +33,13 @@
 //! the recurrence) need not lie in Λ; the test `‖r̃_ρ‖ ≤ ε‖b‖` is made there and confirmed at
 //! P_Λ(x) with a fresh product, which is the result.
 //!
-//! **Safeguard.** q at the starts x⁰ (in Λ, exact gradient) should decrease. If q(x⁰_{k+1})
-//! exceeds the last accepted value, the step is undone and a GIMSSN step (projected gradient,
-//! then CGMfeas; monotone for ρ < 2/σ_max) is taken from the last accepted start instead
-//! ([`StepKind::Safeguard`]). Newton steps are [`StepKind::Tangent`].
+//! **Safeguard** (non-monotone). q at the starts x⁰ (in Λ, exact gradient) should decrease,
+//! not necessarily at every step: a semi-smooth Newton step that changes the sets may raise q
+//! once and recover. When q(x⁰) exceeds the last accepted value at [`Tssn::patience`] starts in
+//! a row (1: at once), the step is undone and a GIMSSN step (projected gradient, then CGMfeas;
+//! monotone for ρ < 2/σ_max) is taken from the last accepted start instead
+//! ([`StepKind::Safeguard`]); a start that rose and was let through is not accepted as the
+//! reference. Newton steps are [`StepKind::Tangent`].
 
 use super::driver::{Driver, Monitor, Setup, SIGMA_SAFETY};
 use super::gimssn;
@@ -63,8 +66,9 @@ struct System {
 }
 
 impl System {
-    /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere).
-    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, x0: &mut [f64]) -> System {
+    /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere);
+    /// sliding pairs with cᵢ > `cap` stay at x (no σᵢ).
+    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, cap: f64, x0: &mut [f64]) -> System {
         let n = x.len();
         let y: Vec<f64> = (0..n).map(|i| x[i] - rho * r[i]).collect();
         let sets = set.active_sets(x, r, rho);
@@ -85,7 +89,7 @@ impl System {
                     x0[k] = f.point[0];
                     x0[k + 1] = f.point[1];
                     let c = f.curvature * f.distance / rho;
-                    if c.is_finite() {
+                    if c.is_finite() && c <= cap {
                         slides.push(Slide { k, t: f.tangent, c });
                     }
                 }
@@ -140,6 +144,8 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
     let (mut x0, mut g0) = (vec![0.0; n], vec![0.0; n]);
     // the last accepted start (in Λ, exact gradient) and its q
     let (mut base, mut base_r, mut base_q) = (x.clone(), r.clone(), f64::INFINITY);
+    // Newton starts in a row whose q exceeded the last accepted one
+    let mut strikes = 0;
     let (mut z, mut rz) = (vec![0.0; n], vec![0.0; n]);
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
@@ -150,14 +156,16 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
             }
         }
         drv.budget(k, err)?;
-        let sys = System::new(set, &x, &r, rho, &mut x0);
+        let sys = System::new(set, &x, &r, rho, p.slide_cap * drv.st.sigma, &mut x0);
         drv.residual(&x0, &mut g0);
         let q0 = drv.q(&x0, &g0);
         if !q0.is_finite() {
             return Err(QpError::NotFinite { what: "q at the Newton start", outer: k });
         }
         let tol = p.rtol * (err / err0).powf(p.forcing);
-        if q0 > base_q + 1e-12 * base_q.abs() {
+        let rises = q0 > base_q + 1e-12 * base_q.abs();
+        strikes = if rises { strikes + 1 } else { 0 };
+        if rises && strikes >= p.patience {
             // the safeguard: a GIMSSN step from the last accepted start
             // GIMSSN's descent needs ρ < 2/σ_max
             let rho_g = rho.min(1.9 / (SIGMA_SAFETY * drv.st.sigma));
@@ -167,20 +175,31 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
             base.copy_from_slice(&x);
             base_r.copy_from_slice(&r);
             base_q = drv.q(&x, &r);
+            strikes = 0;
             err = drv.err(&x, &r, &mut rt);
             let step = drv.newton(StepKind::Safeguard, err, tol, base_q, &sys.sets, g.inner);
             drv.record(step);
             continue;
         }
-        base.copy_from_slice(&x0);
-        base_r.copy_from_slice(&g0);
-        base_q = q0;
+        if !rises {
+            base.copy_from_slice(&x0);
+            base_r.copy_from_slice(&g0);
+            base_q = q0;
+        }
         // CG on the subspace from x⁰ (σ = 0 there)
         x.copy_from_slice(&x0);
         r.copy_from_slice(&g0);
+        let coarse = match qp.coarse {
+            Some(g) => {
+                let slides: Vec<(usize, [f64; 2])> = sys.slides.iter().map(|s| (s.k, s.t)).collect();
+                Some(g.restrict(&sys.sets.free, &slides).ok_or(QpError::SingularCoarse { outer: k })?)
+            }
+            None => None,
+        };
         let opts = Pcg {
             system: &sys,
             preconditioner: qp.preconditioner.map(|m| (m, rho)),
+            coarse: coarse.as_deref(),
             coefficients: Coefficients::Standard,
             feasible: false,
             max_iter: c.max_inner,

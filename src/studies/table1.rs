@@ -68,7 +68,7 @@ impl Column {
         }
         let column = Column { method, preset };
         // on the dual that takes one most widely, so that only the method can refuse
-        if preconditioner(method, column.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true }).is_err() {
+        if preconditioner(method, column.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true }).is_err() {
             return Err(format!("{name} takes no preconditioner (only tssn: tssn:lumped, tssn:dirichlet)"));
         }
         Ok(column)

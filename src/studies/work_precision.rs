@@ -261,8 +261,8 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
             for &solver in &args.solvers {
                 let Solver::Dual(c) = solver else { continue };
                 let t0 = Instant::now();
-                let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true })?;
-                prob.dual.set_preconditioner(pc.unwrap_or_default())?;
+                let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true })?;
+                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, crate::pipeline::tfeti::stiffness_weights(&tmodel, &prob.decomposition))?;
                 let pc_s = t0.elapsed().as_secs_f64();
                 let (dual_t, d) = (&prob.dual, &prob.decomposition);
                 let measure = |sol: &QpSolution| {
@@ -279,7 +279,9 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                     (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&set, &li, &ri, bnorm).worst())
                 };
                 let m = prob.dual.preconditioner();
-                let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner));
+                let dk = DualKind::Tfeti { orthogonal: false, contact: true, projected: true };
+                let coarse = crate::pipeline::projected(c.method, dk).then_some(&prob.dual as &dyn crate::qp::Coarse);
+                let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner)).with_coarse(coarse);
                 sweep(&qp, c, base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
             }
             problems.push(problem);

@@ -1,0 +1,187 @@
+//! The FETI preconditioner of the whole TFETI dual (DESIGN §3c): with the scaled
+//! B̃ = (BΔBᵀ)⁻¹BΔ (Δ = diag(Δ_s), Δ_s = μ_min/μ_s the stiffness weighting of subdomain s;
+//! for one material B̃ = (BBᵀ)⁻¹B),
+//!
+//! ```text
+//! M⁻¹ = Σ_s B̃_s S_s B̃_sᵀ = (BΔBᵀ)⁻¹ (Σ_s Δ_s² B_s S_s B_sᵀ) (BΔBᵀ)⁻¹,
+//! ```
+//!
+//! S_s the Schur complement of K_s onto the DOFs its rows of B touch (gluing, Dirichlet and
+//! contact rows; Dirichlet) or K_s's block there (lumped). BΔBᵀ is block-diagonal over groups
+//! of rows that share DOFs ([`Scaling`]); with orthonormal gluing and unit Dirichlet rows most
+//! groups are diagonal, so only the groups around contact nodes (and chain gluing) need a
+//! gather. The solver applies it as P M⁻¹ P with the orthogonal projector of its coarse
+//! space ([`crate::qp::Coarse`]).
+
+use super::constraints::Constraints;
+use super::distribution::Distribution;
+use crate::comm::Comm;
+use crate::error::{Error, Result};
+
+/// (BΔBᵀ)⁻¹ over the groups of rows that share DOFs, Δ = diag(Δ_s) the subdomains' weights:
+/// a group whose block is diagonal (one row, or orthonormal rows) is a scale per row, applied
+/// locally; the others (around contact nodes, chain gluing) are held whole by every rank (B is
+/// replicated) and applied to gathered values.
+pub struct Scaling {
+    /// Per subdomain, Δ_s.
+    pub weight: Vec<f64>,
+    /// 1/(BΔBᵀ)_rr for the rows of diagonal groups (0 for a zero row), every row.
+    diag: Vec<f64>,
+    /// Global rows of the other groups, ascending.
+    rows: Vec<usize>,
+    /// Per such group: positions in `rows` and the dense inverse (row-major).
+    groups: Vec<(Vec<usize>, Vec<f64>)>,
+}
+
+impl Scaling {
+    /// The groups of BΔBᵀ from the constraint rows of every subdomain; `weight[s]` = Δ_s.
+    pub fn new(cons: &Constraints, weight: Vec<f64>) -> Result<Scaling> {
+        let n = cons.layout.dim();
+        // rows sharing a DOF: BΔBᵀ entries and union-find
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        let mut entries: Vec<(usize, usize, f64)> = Vec::new();
+        for (rows, &w) in cons.rows.iter().zip(&weight) {
+            let mut by_dof: std::collections::BTreeMap<usize, Vec<(usize, f64)>> = Default::default();
+            for &(r, j, c) in rows.iter().filter(|x| x.2 != 0.0) {
+                by_dof.entry(j).or_default().push((r, c));
+            }
+            for list in by_dof.values() {
+                for &(r1, c1) in list {
+                    for &(r2, c2) in list {
+                        entries.push((r1, r2, w * c1 * c2));
+                    }
+                    let (a, b) = (find(&mut parent, r1), find(&mut parent, list[0].0));
+                    parent[a] = b;
+                }
+            }
+        }
+        let mut members: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for r in 0..n {
+            let root = find(&mut parent, r);
+            members.entry(root).or_default().push(r);
+        }
+        let mut block: std::collections::HashMap<(usize, usize), f64> = Default::default();
+        for (a, b, v) in entries {
+            *block.entry((a, b)).or_insert(0.0) += v;
+        }
+        let mut diag = vec![0.0; n];
+        let mut dense: Vec<(Vec<usize>, Vec<f64>)> = Vec::new();
+        for rows in members.into_values() {
+            let k = rows.len();
+            let m: Vec<f64> = (0..k * k).map(|p| block.get(&(rows[p / k], rows[p % k])).copied().unwrap_or(0.0)).collect();
+            let scale = m.iter().map(|v| v.abs()).fold(0.0, f64::max);
+            if (0..k * k).all(|p| p / k == p % k || m[p].abs() <= 1e-14 * scale) {
+                // a zero row (a contact row on held DOFs only) keeps 0: M is zero there too
+                for (a, &r) in rows.iter().enumerate() {
+                    diag[r] = if m[a * k + a] > 0.0 { 1.0 / m[a * k + a] } else { 0.0 };
+                }
+                continue;
+            }
+            let inv = inverse(&m, k).ok_or_else(|| Error::numerical("the FETI preconditioner's scaling", format!("BBᵀ is singular on the rows {rows:?}: B lacks full row rank")))?;
+            dense.push((rows, inv));
+        }
+        let mut all: Vec<usize> = dense.iter().flat_map(|g| g.0.iter().copied()).collect();
+        all.sort_unstable();
+        let groups = dense.into_iter().map(|(rows, inv)| (rows.iter().map(|r| all.binary_search(r).expect("listed")).collect(), inv)).collect();
+        Ok(Scaling { weight, diag, rows: all, groups })
+    }
+
+    /// x ← (BΔBᵀ)⁻¹ x on owned vectors: diagonal groups in place; the rows of the others are
+    /// gathered on every rank (one contributor per entry: exact), multiplied, and each rank
+    /// keeps its own.
+    pub fn apply<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
+        let mut buf = vec![0.0; self.rows.len()];
+        let mut mine = Vec::new();
+        for (i, &r) in dist.owned.iter().enumerate() {
+            match self.rows.binary_search(&r) {
+                Ok(p) => {
+                    buf[p] = x[i];
+                    mine.push((i, p));
+                }
+                Err(_) => x[i] *= self.diag[r],
+            }
+        }
+        if self.rows.is_empty() {
+            return;
+        }
+        dist.reduce(&mut buf);
+        let mut out = vec![0.0; buf.len()];
+        for (pos, inv) in &self.groups {
+            let k = pos.len();
+            for (a, &pa) in pos.iter().enumerate() {
+                out[pa] = pos.iter().enumerate().map(|(b, &pb)| inv[a * k + b] * buf[pb]).sum();
+            }
+        }
+        for (i, p) in mine {
+            x[i] = out[p];
+        }
+    }
+}
+
+/// The inverse of a small symmetric positive definite matrix (row-major k × k); `None` when it
+/// is not positive definite.
+fn inverse(m: &[f64], k: usize) -> Option<Vec<f64>> {
+    let a = faer::Mat::<f64>::from_fn(k, k, |i, j| m[i * k + j]);
+    use faer::linalg::solvers::DenseSolveCore;
+    let inv = a.llt(faer::Side::Lower).ok()?.inverse();
+    Some((0..k * k).map(|p| inv[(p / k, p % k)]).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::feti::decomposition::decompose;
+
+    /// (BΔBᵀ)⁻¹ as applied equals the dense inverse of BΔBᵀ on the seed scene with contact
+    /// (non-trivial groups at the contact nodes, prescribed DOFs among them), for unit and
+    /// contrasting weights; so B̃ = (BΔBᵀ)⁻¹BΔ is a left inverse of Bᵀ.
+    #[test]
+    fn scaling_inverts_b_delta_bt() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+        let ls = crate::scene::load(&path, &["mesh.n=4".to_string()]).unwrap();
+        let model = crate::model::build(&ls).unwrap();
+        let d = decompose(&model.mesh, 2).unwrap();
+        let cons = super::super::constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+        let comm = crate::comm::SerialComm;
+        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
+        let n = cons.layout.dim();
+        for weight in [vec![1.0; d.subdomains.len()], d.subdomains.iter().map(|s| if s.body == 0 { 1.0 } else { 1e-3 }).collect()] {
+            let sc = Scaling::new(&cons, weight.clone()).unwrap();
+            assert!(!sc.rows.is_empty(), "contact rows make non-trivial groups");
+            // dense BΔBᵀ
+            let mut m = vec![0.0; n * n];
+            for (rows, &w) in cons.rows.iter().zip(&weight) {
+                for &(a, ja, ca) in rows {
+                    for &(b, jb, cb) in rows {
+                        if ja == jb {
+                            m[a * n + b] += w * ca * cb;
+                        }
+                    }
+                }
+            }
+            let mut s = 3u64;
+            let x: Vec<f64> = (0..n).map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            }).collect();
+            let mut y = x.clone();
+            sc.apply(&dist, &mut y);
+            // BΔBᵀ y = x (zero rows: y = 0 there)
+            for i in 0..n {
+                let v: f64 = (0..n).map(|j| m[i * n + j] * y[j]).sum();
+                if m[i * n + i] == 0.0 {
+                    assert_eq!(y[i], 0.0);
+                } else {
+                    assert!((v - x[i]).abs() < 1e-9, "row {i}: {v} vs {}", x[i]);
+                }
+            }
+        }
+    }
+}
