@@ -446,12 +446,15 @@ fn one_two_three_ranks_give_identical_fields() {
 }
 
 /// TFETI with distributed dual vectors: 4 subdomains per body over 1, 2, 3 ranks, with
-/// friction and with the symmetrized solver; each rank reads the parallel HDF5 file back.
+/// friction, with the symmetrized solver and with TSSN's projected CG and the FETI Dirichlet
+/// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step); each rank reads the
+/// parallel HDF5 file back.
 #[test]
 fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
-    for (name, method) in [("tfeti-ssn", "ssn-bicgstab"), ("tfeti-gimssn", "gimssn")] {
+    for (name, method, pc) in [("tfeti-ssn", "ssn-bicgstab", "none"), ("tfeti-gimssn", "gimssn", "none"), ("tfeti-tssn-dirichlet", "tssn", "dirichlet")] {
         let m = format!("solver.method=\"{method}\"");
-        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, "output.verify=true"]);
+        let p = format!("solver.preconditioner=\"{pc}\"");
+        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, "output.verify=true"]);
         for (n, (stdout, _)) in runs.iter().enumerate() {
             assert!(stdout.contains(&format!("values on {} ranks match the fields in memory", n + 1)), "{stdout}");
         }

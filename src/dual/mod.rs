@@ -36,31 +36,6 @@ pub struct Recovered {
     pub feasibility: f64,
 }
 
-/// Per row of B (as indexed by `entries`, `nrows` of them): the diagonal stiffness
-/// Σ c²·K_jj the piece's entries put there, and 1 where the piece touches the row.
-pub fn row_stiffness(entries: &[(usize, usize, f64)], k: &crate::linalg::sparse::SymCsc, nrows: usize) -> (Vec<f64>, Vec<f64>) {
-    let (mut s, mut touched) = (vec![0.0; nrows], vec![0.0; nrows]);
-    for &(r, j, c) in entries {
-        let kjj = k.position(j, j).map_or(0.0, |p| k.values[p]);
-        s[r] += c * c * kjj.abs();
-        touched[r] = 1.0;
-    }
-    (s, touched)
-}
-
-/// The entries scaled by D_p given the totals over all pieces of [`row_stiffness`] (at the same
-/// row indices): the weight of row r is (total − own)/(total·(count − 1)), or 1 for a row of
-/// this piece alone.
-pub fn scaled_entries(entries: &[(usize, usize, f64)], own: &[f64], total: &[f64], count: &[f64]) -> Vec<(usize, usize, f64)> {
-    entries
-        .iter()
-        .map(|&(r, j, c)| {
-            let w = if count[r] > 1.5 && total[r] > 0.0 { (total[r] - own[r]) / (total[r] * (count[r] - 1.0)) } else { 1.0 };
-            (r, j, c * w)
-        })
-        .collect()
-}
-
 /// The entries (row of B, local DOF, coefficient) of B acting on one piece (a body or a
 /// subdomain): z = B_pᵀx on the piece's `ndof` DOFs.
 pub fn scatter_rows(rows: &[(usize, usize, f64)], x: &[f64], ndof: usize) -> Vec<f64> {

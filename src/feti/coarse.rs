@@ -186,38 +186,15 @@ impl Coarse {
         self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
     }
 
-    /// The columns of G per row from `first` on: (coarse index, value).
-    fn columns(&self, first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
-        let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
-        for (s, (rows, g)) in self.blocks.iter().enumerate() {
-            let len = rows.len();
-            for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= first) {
-                for k in 0..NR {
-                    by_row[row - first].push((NR * s + k, g[k * len + p]));
-                }
-            }
-        }
-        by_row
-    }
-
     fn pattern(&self, dim: usize) -> &Pattern {
         self.pattern.get_or_init(|| {
-            let by_row = self.columns(0, dim);
+            let by_row = columns(&self.blocks, 0, dim);
             let nc = self.dim();
-            let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
-            for (r, list) in by_row.iter().enumerate() {
-                let w = if r >= self.e_start { 1.0 } else { 0.0 };
-                for &(i, x) in list {
-                    for &(j, y) in list {
-                        if i >= j {
-                            *cols[j].entry(i).or_insert(0.0) += w * x * y;
-                        }
-                    }
-                }
-            }
+            // the contact rows enter the pattern with weight 0
+            let cols = gram(&by_row, nc, |r| if r >= self.e_start { 1.0 } else { 0.0 });
             let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
-            for (j, col) in cols.iter().enumerate() {
-                cols_push(&mut c, j, col);
+            for col in &cols {
+                cols_push(&mut c, col);
             }
             let contact = by_row[..self.e_start].to_vec();
             Pattern { c, contact }
@@ -294,6 +271,23 @@ impl Coarse {
 
 /// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
 fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
+    let nc = NR * blocks.len();
+    let cols = gram(&columns(blocks, first, dim), nc, |_| 1.0);
+    let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
+    for (j, col) in cols.iter().enumerate() {
+        if !col.contains_key(&j) {
+            return Err(singular(d, j / NR, mesh));
+        }
+        cols_push(&mut c, col);
+    }
+    let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
+        Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
+    })?;
+    Ok((chol, c.nnz()))
+}
+
+/// The columns of G per row from `first` on: (coarse index, value).
+fn columns(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
     let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
     for (s, (rows, g)) in blocks.iter().enumerate() {
         let len = rows.len();
@@ -303,36 +297,27 @@ fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d:
             }
         }
     }
-    let nc = NR * blocks.len();
+    by_row
+}
+
+/// Σ_r w(r) g_r g_rᵀ over the rows' G columns `by_row`: the lower triangle by columns.
+fn gram(by_row: &[Vec<(usize, f64)>], nc: usize, w: impl Fn(usize) -> f64) -> Vec<std::collections::BTreeMap<usize, f64>> {
     let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
-    for list in &by_row {
+    for (r, list) in by_row.iter().enumerate() {
+        let wr = w(r);
         for &(i, x) in list {
             for &(j, y) in list {
                 if i >= j {
-                    *cols[j].entry(i).or_insert(0.0) += x * y;
+                    *cols[j].entry(i).or_insert(0.0) += wr * x * y;
                 }
             }
         }
     }
-    let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
-    for (j, col) in cols.iter().enumerate() {
-        if !col.contains_key(&j) {
-            return Err(singular(d, j / NR, mesh));
-        }
-        for (&i, &v) in col {
-            c.row_idx.push(i);
-            c.values.push(v);
-        }
-        c.col_ptr.push(c.row_idx.len());
-    }
-    let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
-        Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
-    })?;
-    Ok((chol, c.nnz()))
+    cols
 }
 
-/// Appends column j (lower triangle, the diagonal first) to `c`.
-fn cols_push(c: &mut SymCsc, _j: usize, col: &std::collections::BTreeMap<usize, f64>) {
+/// Appends a column (lower triangle, the diagonal first) to `c`.
+fn cols_push(c: &mut SymCsc, col: &std::collections::BTreeMap<usize, f64>) {
     for (&i, &v) in col {
         c.row_idx.push(i);
         c.values.push(v);
@@ -351,8 +336,7 @@ fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::feti::decomposition::decompose;
-    use crate::feti::{constraints, subdomain_loads};
+    use crate::feti::subdomain_loads;
 
     fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -364,11 +348,7 @@ mod tests {
     /// rows are all rows).
     #[test]
     fn projector_identities() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-        let ls = crate::scene::load(&path, &["mesh.n=5".to_string()]).unwrap();
-        let model = crate::model::build(&ls).unwrap();
-        let d = decompose(&model.mesh, 3).unwrap();
-        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+        let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
         let c = Coarse::new(&model.mesh, &d, &cons, &loads, true).unwrap();
         let comm = crate::comm::SerialComm;
@@ -420,11 +400,7 @@ mod tests {
     /// Π(x − Gᵀ(GΠGᵀ)⁻¹Gx) lies in Ker G ∩ W and is idempotent.
     #[test]
     fn restricted_projector_maps_into_ker_g_on_w() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-        let ls = crate::scene::load(&path, &["mesh.n=5".to_string()]).unwrap();
-        let model = crate::model::build(&ls).unwrap();
-        let d = decompose(&model.mesh, 3).unwrap();
-        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+        let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
         let c = Coarse::new(&model.mesh, &d, &cons, &loads, false).unwrap();
         let comm = crate::comm::SerialComm;

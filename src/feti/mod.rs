@@ -1,7 +1,9 @@
 //! Total FETI (DESIGN §2): every body split into floating subdomains (the METIS partition,
 //! [`decomposition`]; [`subdomain`]: K_s, R_s, K_s⁺), the constraint rows B = [B_I; B_E] and c
 //! ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors
-//! ([`coarse`]), and the dual operator on which the QP solvers run unchanged ([`dual`]). It is a
+//! ([`coarse`]; also the inner solves' coarse space restricted to a Newton step), the dual
+//! operator on which the QP solvers run unchanged ([`dual`]) and the FETI preconditioner of the
+//! whole dual ([`precond`]). It is a
 //! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
 //! feasible multipliers, and `DualProblem::recover` of [`dual::TfetiDual`] maps the solution back to λ, α and u.
 
@@ -38,4 +40,16 @@ pub fn assign_ranks(d: &Decomposition, ranks: usize) -> Vec<usize> {
         load[r] += d.subdomains[s].nodes.len();
     }
     owner
+}
+
+/// The seed scene at N = `n`, `parts` subdomains per body, and its constraint rows (orthonormal
+/// gluing): the fixture of the TFETI unit tests.
+#[cfg(test)]
+pub(crate) fn seed_fixture(n: usize, parts: usize) -> (crate::model::Model, decomposition::Decomposition, constraints::Constraints) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+    let ls = crate::scene::load(&path, &[format!("mesh.n={n}")]).unwrap();
+    let model = crate::model::build(&ls).unwrap();
+    let d = decomposition::decompose(&model.mesh, parts).unwrap();
+    let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+    (model, d, cons)
 }

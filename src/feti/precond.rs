@@ -137,18 +137,13 @@ fn inverse(m: &[f64], k: usize) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::feti::decomposition::decompose;
 
     /// (BΔBᵀ)⁻¹ as applied equals the dense inverse of BΔBᵀ on the seed scene with contact
     /// (non-trivial groups at the contact nodes, prescribed DOFs among them), for unit and
     /// contrasting weights; so B̃ = (BΔBᵀ)⁻¹BΔ is a left inverse of Bᵀ.
     #[test]
     fn scaling_inverts_b_delta_bt() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-        let ls = crate::scene::load(&path, &["mesh.n=4".to_string()]).unwrap();
-        let model = crate::model::build(&ls).unwrap();
-        let d = decompose(&model.mesh, 2).unwrap();
-        let cons = super::super::constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+        let (_, d, cons) = crate::feti::seed_fixture(4, 2);
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();

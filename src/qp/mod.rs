@@ -3,8 +3,9 @@
 //!
 //! The problem ([`Qp`]) is `min q(λ) = ½ λᵀAλ − λᵀb` over a product `Λ = Π_i Λ_i` of small
 //! closed convex blocks ([`sets`]; their product and the multiplier layout in [`lambda`]),
-//! with A seen only through [`Operator`] (its reductions through [`Space`]) and an optional
-//! [`Preconditioner`] ([`operator`]). The solvers — the symmetrized semi-smooth Newton family
+//! with A seen only through [`Operator`] (its reductions through [`Space`]), an optional
+//! [`Preconditioner`] and an optional [`Coarse`] space G δ = 0 for the inner corrections
+//! ([`operator`]). The solvers — the symmetrized semi-smooth Newton family
 //! ([`gimssn`]: GIMSSN, IMSSN, MSSN), SSN with BiCGSTAB ([`ssn`]), TSSN ([`tssn`]), MPGP
 //! ([`mpgp`]) and plain CG for Λ = Rⁿ ([`cg`]) — each read their own settings ([`params`]),
 //! share one outer loop ([`driver`]: stop test `‖r̃_ρ(λ)‖ ≤ ε‖b‖`, budgets, [`Info`], the
