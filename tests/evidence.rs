@@ -122,7 +122,7 @@ fn stability_dir(name: &str) -> std::path::PathBuf {
     let dir = tmpdir(name);
     let scenes = dir.join("scenes");
     std::fs::create_dir_all(&scenes).unwrap();
-    let seed = std::fs::read_to_string(root().join("run/seed.toml")).unwrap().replace("n = 16", "n = 5").replace("eps = 1e-6", "eps = 1e-8");
+    let seed = std::fs::read_to_string(root().join("run/seed.toml")).unwrap().replace("n = 16", "n = 5");
     std::fs::write(scenes.join("a_fine.toml"), &seed).unwrap();
     std::fs::write(scenes.join("b_short.toml"), seed.replace("eps = 1e-8", "eps = 1e-8\nmax_outer = 2")).unwrap();
     dir

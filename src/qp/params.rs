@@ -94,7 +94,7 @@ pub struct Common {
 
 impl Default for Common {
     fn default() -> Self {
-        Common { eps: 1e-6, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 30, sigma_estimate: SigmaEstimate::Power, max_products: usize::MAX, sigma: None }
+        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 30, sigma_estimate: SigmaEstimate::Power, max_products: usize::MAX, sigma: None }
     }
 }
 
