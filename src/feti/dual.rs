@@ -88,7 +88,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             self.precond = None;
             return Ok(());
         }
-        let scaling = Scaling::new(cons, weight)?;
+        let scaling = Scaling::new(cons, weight, &self.dist.owned)?;
         let mut pieces = Vec::with_capacity(self.subs.len());
         for s in &self.subs {
             let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();

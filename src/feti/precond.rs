@@ -25,17 +25,20 @@ use crate::error::{Error, Result};
 pub struct Scaling {
     /// Per subdomain, Δ_s.
     pub weight: Vec<f64>,
-    /// 1/(BΔBᵀ)_rr for the rows of diagonal groups (0 for a zero row), every row.
+    /// Per owned row: 1/(BΔBᵀ)_rr for the rows of diagonal groups (0 for a zero row).
     diag: Vec<f64>,
     /// Global rows of the other groups, ascending.
     rows: Vec<usize>,
+    /// The owned rows among them: (owned index, position in `rows`).
+    mine: Vec<(usize, usize)>,
     /// Per such group: positions in `rows` and the dense inverse (row-major).
     groups: Vec<(Vec<usize>, Vec<f64>)>,
 }
 
 impl Scaling {
-    /// The groups of BΔBᵀ from the constraint rows of every subdomain; `weight[s]` = Δ_s.
-    pub fn new(cons: &Constraints, weight: Vec<f64>) -> Result<Scaling> {
+    /// The groups of BΔBᵀ from the constraint rows of every subdomain; `weight[s]` = Δ_s;
+    /// `owned`: this rank's rows (global, as in its dual vectors).
+    pub fn new(cons: &Constraints, weight: Vec<f64>, owned: &[usize]) -> Result<Scaling> {
         let n = cons.layout.dim();
         // rows sharing a DOF: BΔBᵀ entries and union-find
         let mut parent: Vec<usize> = (0..n).collect();
@@ -90,7 +93,9 @@ impl Scaling {
         let mut all: Vec<usize> = dense.iter().flat_map(|g| g.0.iter().copied()).collect();
         all.sort_unstable();
         let groups = dense.into_iter().map(|(rows, inv)| (rows.iter().map(|r| all.binary_search(r).expect("listed")).collect(), inv)).collect();
-        Ok(Scaling { weight, diag, rows: all, groups })
+        let mine = owned.iter().enumerate().filter_map(|(i, r)| all.binary_search(r).ok().map(|p| (i, p))).collect();
+        let diag = owned.iter().map(|&r| diag[r]).collect();
+        Ok(Scaling { weight, diag, rows: all, mine, groups })
     }
 
     /// x ← (BΔBᵀ)⁻¹ x on owned vectors: diagonal groups in place; the rows of the others are
@@ -98,16 +103,11 @@ impl Scaling {
     /// keeps its own.
     pub fn apply<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
         let mut buf = vec![0.0; self.rows.len()];
-        let mut mine = Vec::new();
-        for (i, &r) in dist.owned.iter().enumerate() {
-            match self.rows.binary_search(&r) {
-                Ok(p) => {
-                    buf[p] = x[i];
-                    mine.push((i, p));
-                }
-                Err(_) => x[i] *= self.diag[r],
-            }
+        for &(i, p) in &self.mine {
+            buf[p] = x[i];
         }
+        // the rows of dense groups have diag 0 and are written back below
+        x.iter_mut().zip(&self.diag).for_each(|(v, d)| *v *= d);
         if self.rows.is_empty() {
             return;
         }
@@ -119,7 +119,7 @@ impl Scaling {
                 out[pa] = pos.iter().enumerate().map(|(b, &pb)| inv[a * k + b] * buf[pb]).sum();
             }
         }
-        for (i, p) in mine {
+        for &(i, p) in &self.mine {
             x[i] = out[p];
         }
     }
@@ -148,7 +148,7 @@ mod tests {
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();
         for weight in [vec![1.0; d.subdomains.len()], d.subdomains.iter().map(|s| if s.body == 0 { 1.0 } else { 1e-3 }).collect()] {
-            let sc = Scaling::new(&cons, weight.clone()).unwrap();
+            let sc = Scaling::new(&cons, weight.clone(), &dist.owned).unwrap();
             assert!(!sc.rows.is_empty(), "contact rows make non-trivial groups");
             // dense BΔBᵀ
             let mut m = vec![0.0; n * n];
