@@ -288,9 +288,8 @@ pub fn projected(method: Method, dual: DualKind) -> bool {
 /// The one place that decides whether the scene's `solver.preconditioner` applies: the FETI
 /// preconditioner acts on every row of the TFETI dual inside the projected CG ([`projected`]).
 /// Anything else is refused with the key named. `auto` (the default) is Dirichlet for the
-/// plain CG of a TFETI scene without contact (standard PCPG: 93 → 29 CG iterations, 1.7× less
-/// time on the seed without contact, README) and none elsewhere: with contact the
-/// preconditioned TSSN wins on Dirichlet-heavy scenes and loses on others (README).
+/// plain CG of a TFETI scene without contact (standard PCPG) and none elsewhere: with contact
+/// the preconditioned TSSN does not win on every scene (both measured in the README).
 pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> Result<Option<Preconditioner>> {
     match kind {
         Preconditioner::None => return Ok(None),
