@@ -162,6 +162,10 @@ enum Cmd {
         scene: PathBuf,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Price the automatic decomposition for a run on this many ranks (default: the ranks
+        /// `check` runs on).
+        #[arg(long)]
+        ranks: Option<usize>,
     },
 }
 
@@ -416,9 +420,12 @@ fn main() -> ExitCode {
         }
         Cmd::Stability { dir, set, out, kkt_factor } => stability(&comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
-        Cmd::Check { scene, set } => {
+        Cmd::Check { scene, set, ranks } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
-            let r = comm.agree(pipeline::run_check(&scene, &set));
+            let r = match ranks {
+                Some(0) => Err(tresca_feti::Error::scene("--ranks", "must be at least 1")),
+                _ => comm.agree(pipeline::run_check(&comm, &scene, &set, ranks.unwrap_or(comm.size()))),
+            };
             r.map(|text| {
                 if comm.is_root() {
                     println!("{text}");

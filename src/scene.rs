@@ -226,10 +226,19 @@ impl Preconditioner {
 /// The `[solver]` table: `method`, the settings every method reads ([`qp::Common`]), the
 /// method's own ([`qp::MethodParams`]: a key the method does not read is an error) and the
 /// FETI preconditioner. Defaults live with the solvers' parameter structs.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SolverSettings {
     pub params: qp::Params,
     pub preconditioner: Preconditioner,
+    /// `method` absent (or `"auto"`): the method is chosen for the dual the scene is solved on
+    /// (`pipeline::resolve_method`); `params` holds the default method's defaults until then.
+    pub auto: bool,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings { params: qp::Params::default(), preconditioner: Preconditioner::Auto, auto: true }
+    }
 }
 
 impl SolverSettings {
@@ -242,10 +251,24 @@ impl SolverSettings {
                 Error::scene(key, e.inner().message().replace('\n', " "))
             })
         }
-        let method: Method = t.remove("method").map_or(Ok(Method::default()), |v| value("method", v))?;
+        let auto = match t.get("method") {
+            None => true,
+            Some(toml::Value::String(m)) => m == "auto",
+            Some(_) => false,
+        };
+        let method: Method = match t.remove("method") {
+            Some(v) if !auto => value("method", v)?,
+            _ => Method::default(),
+        };
         let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::Auto), |v| value("preconditioner", v))?;
         let common_keys = Self::common_keys();
         let (common, own): (toml::Table, toml::Table) = t.into_iter().partition(|(k, _)| common_keys.contains(k));
+        if let (true, Some(key)) = (auto, own.keys().next()) {
+            return Err(Error::scene(
+                format!("solver.{key}"),
+                format!("not a setting every method reads ({}); name the method whose setting it is (solver.method), the automatic choice takes its defaults", common_keys.join(", ")),
+            ));
+        }
         let common: qp::Common = value("", toml::Value::Table(common))?;
         let mut track = serde_path_to_error::Track::new();
         let own = qp::MethodParams::deserialize(method, serde_path_to_error::Deserializer::new(toml::Value::Table(own), &mut track)).map_err(|e| {
@@ -264,7 +287,7 @@ impl SolverSettings {
         })?;
         let params = qp::Params { common, method: own };
         params.validate().map_err(|e| Error::scene(format!("solver.{}", e.key), e.msg))?;
-        Ok(SolverSettings { params, preconditioner })
+        Ok(SolverSettings { params, preconditioner, auto })
     }
 
     /// The keys of [`qp::Common`].
@@ -275,9 +298,10 @@ impl SolverSettings {
     /// The table as [`SolverSettings::from_table`] reads it.
     pub fn to_table(&self) -> toml::Table {
         let mut t = toml::Table::new();
-        t.insert("method".into(), self.params.method().name().into());
-        for part in [toml::Table::try_from(&self.params.common), toml::Table::try_from(&self.params.method)] {
-            t.extend(part.unwrap_or_default());
+        t.insert("method".into(), if self.auto { "auto" } else { self.params.method().name() }.into());
+        t.extend(toml::Table::try_from(&self.params.common).unwrap_or_default());
+        if !self.auto {
+            t.extend(toml::Table::try_from(&self.params.method).unwrap_or_default());
         }
         if self.preconditioner != Preconditioner::Auto {
             t.insert("preconditioner".into(), self.preconditioner.name().into());
@@ -298,7 +322,8 @@ impl Serialize for SolverSettings {
 #[serde(deny_unknown_fields, rename = "Decomposition")]
 pub struct DecompositionSettings {
     /// METIS subdomains per body. 1 is the monolithic dual (Dirichlet eliminated, no gluing,
-    /// no coarse problem) unless `tfeti = true`. Absent: automatic ([`DecompositionSettings::parts`]).
+    /// no coarse problem) unless `tfeti = true`. Absent (with `target_dofs`): chosen by cost
+    /// (`pipeline::plan`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub subdomains: Option<usize>,
     /// Instead of `subdomains`: as many subdomains per body as give about this many DOFs each.
@@ -329,14 +354,6 @@ fn unit() -> f64 {
 }
 
 
-/// The automatic decomposition, chosen by `tresca-feti bench-tfeti` on the seed scene (figures
-/// in the README, TFETI): bodies up to this many DOFs stay whole (the monolithic dual) …
-pub const AUTO_MONOLITHIC_DOFS: usize = 30_000;
-/// … larger ones get at least this many subdomains …
-pub const AUTO_MIN_SUBDOMAINS: usize = 32;
-/// … and no more than about this many DOFs per subdomain.
-pub const AUTO_TARGET_DOFS: usize = 6_500;
-
 impl Default for DecompositionSettings {
     fn default() -> Self {
         DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true }
@@ -349,8 +366,8 @@ impl DecompositionSettings {
         match (self.target_dofs, self.subdomains) {
             (Some(t), _) => dofs.div_ceil(t).max(1),
             (None, Some(s)) => s,
-            (None, None) if dofs <= AUTO_MONOLITHIC_DOFS => 1,
-            (None, None) => dofs.div_ceil(AUTO_TARGET_DOFS).max(AUTO_MIN_SUBDOMAINS),
+            // automatic: fixed by cost before anything is assembled (`pipeline::plan`)
+            (None, None) => 1,
         }
     }
 

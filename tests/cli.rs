@@ -94,7 +94,8 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("preconditioner-gimssn", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"gimssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2"], &["solver.preconditioner", "TSSN"]);
     assert_clean_failure("preconditioner-orthogonal", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projector=\"orthogonal\""], &["solver.preconditioner", "oblique"]);
     assert_clean_failure("preconditioner-unprojected", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projected_cg=false"], &["solver.preconditioner", "projected_cg"]);
-    assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=0"], &["solver.patience"]);
+    assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=-1"], &["solver.patience"]);
+    assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["SSN-BICGSTAB", "no convergence"]);
 }

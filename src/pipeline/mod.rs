@@ -13,6 +13,7 @@
 
 pub mod finish;
 pub mod monitor;
+pub mod plan;
 pub mod report;
 pub mod tfeti;
 
@@ -295,7 +296,8 @@ pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> R
         Preconditioner::None => return Ok(None),
         Preconditioner::Auto => {
             let plain_cg = matches!(dual, DualKind::Tfeti { contact: false, .. });
-            return Ok((plain_cg && projected(method, dual)).then_some(Preconditioner::Dirichlet));
+            let auto = if plain_cg { Preconditioner::Dirichlet } else { Preconditioner::Lumped };
+            return Ok(projected(method, dual).then_some(auto));
         }
         _ => {}
     }
@@ -307,6 +309,19 @@ pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> R
         _ if projected(method, dual) => Ok(Some(kind)),
         DualKind::Tfeti { .. } => refuse(format!("acts in TSSN's CG only (solver.method = \"tssn\"); \"{}\" takes none", method.name())),
     }
+}
+
+/// The automatic method (`solver.method` absent or `"auto"`) for the dual the scene is solved
+/// on: TSSN on TFETI with contact when its CG runs projected (it takes the FETI
+/// preconditioner there), SSN-BiCGSTAB elsewhere (the fastest on the monolithic dual). Both
+/// measured on the benchmark set (README, "The default solver").
+pub fn resolve_method(solver: &mut crate::scene::SolverSettings, dual: DualKind) {
+    if !solver.auto {
+        return;
+    }
+    let tssn = projected(Method::Tssn, dual) && matches!(dual, DualKind::Tfeti { contact: true, .. });
+    solver.params = solver.params.with_method(if tssn { Method::Tssn } else { Method::SsnBicgstab });
+    solver.auto = false;
 }
 
 /// What the contact solve adds to the elastic fields.
@@ -331,6 +346,11 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         Ok(ls)
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
+    let mut ls = ls;
+    let eps = ls.scene.solver.params.common.eps;
+    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, eps))?;
+    let kind = DualKind::of(&ls, &model);
+    resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
     let (sol, outcome) = match &model.pairs {
@@ -340,6 +360,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     };
     let h5 = ls.output_path();
     let mut report = report(comm, &ls, &model, &sol, outcome.as_ref(), &t);
+    report.decomposition_plan = plan;
     let (mut peak_sum, mut peak_max) = ([peak_rss_bytes()], [peak_rss_bytes()]);
     comm.sum_f64(&mut peak_sum);
     comm.max_f64(&mut peak_max);
@@ -462,6 +483,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         timings: t.times(),
         versions: crate::versions(),
         memory: None,
+        decomposition_plan: None,
         output_verified_values: None,
     }
 }
@@ -523,10 +545,22 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
 
 /// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print
 /// (the resolved scene, mesh sizes, DOF counts).
-pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<String> {
+pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], ranks: usize) -> Result<String> {
     use std::fmt::Write;
-    let ls = crate::scene::load(scene_path, overrides)?;
+    let mut ls = crate::scene::load(scene_path, overrides)?;
     let model = model::build(&ls)?;
+    let priced = if plan::automatic(&ls.scene.decomposition) {
+        let cands = plan::price(comm, &model, &ls.scene.decomposition, ls.scene.solver.params.common.eps, ranks)?;
+        match plan::cheapest(&cands) {
+            Some(c) if c.tfeti => ls.scene.decomposition.target_dofs = c.target_dofs,
+            _ => ls.scene.decomposition.subdomains = Some(1),
+        }
+        Some(plan::table(&cands, ranks))
+    } else {
+        None
+    };
+    let kind = DualKind::of(&ls, &model);
+    resolve_method(&mut ls.scene.solver, kind);
     let mesh = &model.mesh;
     let mut s = String::new();
     let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
@@ -586,6 +620,9 @@ pub fn run_check(scene_path: &std::path::Path, overrides: &[String]) -> Result<S
             let iface = sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count();
             let _ = writeln!(s, "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes", mesh.bodies[sd.body].name, sd.elems.len(), sd.nodes.len(), 3 * sd.nodes.len());
         }
+    }
+    if let Some(p) = priced {
+        let _ = write!(s, "{p}");
     }
     let _ = write!(s, "dual: {}", if dec.is_tfeti(&body_dofs(&model)) { "TFETI" } else { "monolithic" });
     Ok(s)

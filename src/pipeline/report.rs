@@ -33,6 +33,9 @@ pub struct Report {
     pub versions: serde_json::Value,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub memory: Option<Memory>,
+    /// The priced decompositions when the scene left `[decomposition]` to the cost model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decomposition_plan: Option<Vec<super::plan::Candidate>>,
     /// Values read back and checked (`output.verify`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_verified_values: Option<u64>,

@@ -36,7 +36,7 @@
 //! **Safeguard** (non-monotone). q at the starts x⁰ (in Λ, exact gradient) should decrease,
 //! not necessarily at every step: a semi-smooth Newton step that changes the sets may raise q
 //! once and recover. When q(x⁰) exceeds the last accepted value at [`Tssn::patience`] starts in
-//! a row (1: at once), the step is undone and a GIMSSN step (projected gradient, then CGMfeas;
+//! a row (1: at once; 0, the default: never), the step is undone and a GIMSSN step (projected gradient, then CGMfeas;
 //! monotone for ρ < 2/σ_max) is taken from the last accepted start instead
 //! ([`StepKind::Safeguard`]); a start that rose and was let through is not accepted as the
 //! reference. Newton steps are [`StepKind::Tangent`].
@@ -165,7 +165,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
         let tol = p.rtol * (err / err0).powf(p.forcing);
         let rises = q0 > base_q + 1e-12 * base_q.abs();
         strikes = if rises { strikes + 1 } else { 0 };
-        if rises && strikes >= p.patience {
+        if rises && p.patience > 0 && strikes >= p.patience {
             // the safeguard: a GIMSSN step from the last accepted start
             // GIMSSN's descent needs ρ < 2/σ_max
             let rho_g = rho.min(1.9 / (SIGMA_SAFETY * drv.st.sigma));
@@ -308,6 +308,9 @@ mod tests {
             let mut p = Params::new(Method::Tssn).with_eps(1e-9);
             p.common.rho_factor = 300.0;
             p.common.max_outer = 2000;
+            if let crate::qp::MethodParams::Tssn(t) = &mut p.method {
+                t.patience = 1;
+            }
             let t = solve(&Qp::new(&a, &b, &set), &zero, &p, &mut Silent).expect("converges with the safeguard");
             fired += t.info.history.iter().filter(|h| h.kind == StepKind::Safeguard).count();
             let k = kkt::residuals(&set, &t.lambda, &t.gradient, Replicated.norm(&b));

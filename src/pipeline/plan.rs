@@ -1,0 +1,255 @@
+//! The decomposition chosen by cost: when a scene leaves `[decomposition]` open, the monolithic
+//! dual and TFETI at a few subdomain counts are priced before anything is assembled — the fill
+//! of every factor (METIS nested dissection and the elimination tree, no numeric work), the
+//! dual's size and its Dirichlet share, the A-products a solve takes and the time of one — and
+//! the cheapest is taken. `tresca-feti check` prints the table.
+//!
+//! Time of a candidate = factorization + nA · t_A with
+//! - t_A = [`SECONDS_PER_NNZ`] · nnz(L) of the busiest rank (the forward and backward solves
+//!   run at the memory bandwidth) + [`SECONDS_PER_ROW`] · dual rows per rank (the Krylov
+//!   vectors, B, the exchange and the coarse projection of TFETI);
+//! - setup = [`SECONDS_PER_FLOP`] · Σ (column count)² + [`SECONDS_PER_DOF`] · DOFs of the
+//!   busiest rank (numeric factorization; assembly, ordering, kernels and rows of B);
+//! - nA with contact: [`PRODUCTS_PER_DIGIT`] · log10(1/ε) for the monolithic dual,
+//!   [`TFETI_PRODUCTS`] times that for TFETI; without contact one solve for the monolithic
+//!   dual, [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε) product-equivalents (PCG with the Dirichlet
+//!   preconditioner) for TFETI.
+//!
+//! The constants were fitted to the benchmark set on the development machine (README, "The
+//! decomposition chosen by cost"); the ranking, not the seconds, is what the choice uses.
+
+use crate::comm::Comm;
+use crate::error::Result;
+use crate::fem::assembly::{node_graph, DofMap};
+use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
+use crate::linalg::ordering::{fill, nested_dissection, Fill};
+use crate::model::Model;
+use crate::scene::DecompositionSettings;
+
+/// Seconds per entry of L per A-product (forward and backward solve).
+pub const SECONDS_PER_NNZ: f64 = 1.0e-9;
+/// Seconds per dual row per A-product, outside the solves.
+pub const SECONDS_PER_ROW: f64 = 0.4e-6;
+/// Seconds per unit of Σ (column count)² in the numeric factorization.
+pub const SECONDS_PER_FLOP: f64 = 3.3e-11;
+/// Seconds per DOF of a rank's pieces before the solve: assembly, ordering, kernels, rows of B.
+pub const SECONDS_PER_DOF: f64 = 1.0e-5;
+/// A-products per digit of ε of a contact solve on the monolithic dual.
+pub const PRODUCTS_PER_DIGIT: f64 = 18.0;
+/// TFETI's A-products with contact as a multiple of the monolithic dual's.
+pub const TFETI_PRODUCTS: f64 = 2.0;
+/// Product-equivalents per digit of ε of TFETI's PCG without contact.
+pub const CG_PRODUCTS_PER_DIGIT: f64 = 8.0;
+/// Candidates with fewer DOFs per subdomain are not priced.
+pub const MIN_SUBDOMAIN_DOFS: usize = 1000;
+/// Subdomain counts priced (on the largest body; the others in proportion).
+pub const SUBDOMAIN_COUNTS: [usize; 8] = [2, 4, 8, 16, 32, 64, 128, 256];
+
+/// One priced decomposition.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Candidate {
+    /// Subdomains of each body (all 1 for the monolithic dual).
+    pub parts: Vec<usize>,
+    pub tfeti: bool,
+    /// DOFs per subdomain asked for (TFETI).
+    pub target_dofs: Option<usize>,
+    /// Σ nnz(L) over all factors.
+    pub nnz_l: f64,
+    /// nnz(L) of the busiest rank.
+    pub nnz_l_rank: f64,
+    /// Dual rows: contact, gluing, Dirichlet.
+    pub contact_rows: usize,
+    pub gluing_rows: usize,
+    pub dirichlet_rows: usize,
+    /// Predicted A-products, seconds per product, setup (assembly to factors) and total seconds.
+    pub n_a: f64,
+    pub t_product: f64,
+    pub t_factor: f64,
+    pub time: f64,
+}
+
+impl Candidate {
+    pub fn label(&self) -> String {
+        if self.tfeti { format!("TFETI {}", self.parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("/")) } else { "monolithic".into() }
+    }
+
+    pub fn dual_rows(&self) -> usize {
+        self.contact_rows + self.gluing_rows + self.dirichlet_rows
+    }
+}
+
+/// Whether the scene leaves the decomposition to the cost model.
+pub fn automatic(dec: &DecompositionSettings) -> bool {
+    dec.subdomains.is_none() && dec.target_dofs.is_none()
+}
+
+/// Prices the monolithic dual (unless `decomposition.tfeti`) and TFETI at the subdomain counts
+/// of [`SUBDOMAIN_COUNTS`] for a run on `ranks` ranks, at tolerance `eps`; ordered as priced.
+/// The fill of the factors is counted by the ranks of `comm` in turn and summed, so every rank
+/// gets the same table.
+pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, eps: f64, ranks: usize) -> Result<Vec<Candidate>> {
+    let mesh = &model.mesh;
+    let ranks = ranks.max(1);
+    let (me, workers) = (comm.rank(), comm.size());
+    let contact = model.pairs.as_ref();
+    let contact_rows = contact.map_or(0, |c| c.len() * if c.has_friction() { 3 } else { 1 });
+    let digits = (1.0 / eps).log10().max(1.0);
+    let mut out = Vec::new();
+    let nb = mesh.bodies.len();
+    let body_dofs: Vec<usize> = mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect();
+    let largest = body_dofs.iter().copied().max().unwrap_or(0);
+    // one fill per piece, counted by rank (piece % ranks) and summed over the ranks
+    let fills = |n: usize, f: &dyn Fn(usize) -> Result<Fill>| -> Result<Vec<Fill>> {
+        let mut v = vec![0.0; 2 * n];
+        let mut failed = Ok(());
+        for i in (me..n).step_by(workers) {
+            match f(i) {
+                Ok(x) => (v[2 * i], v[2 * i + 1]) = (x.nnz_l, x.flops),
+                Err(e) => {
+                    failed = Err(e);
+                    break;
+                }
+            }
+        }
+        // every rank reaches the sum, then all fail together
+        comm.sum_f64(&mut v);
+        comm.agree(failed)?;
+        Ok(v.chunks(2).map(|c| Fill { nnz_l: c[0], flops: c[1] }).collect())
+    };
+    let time = |c: &mut Candidate, flops_rank: f64, dofs_rank: f64, n_a: f64| {
+        c.n_a = n_a;
+        c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
+        c.t_factor = SECONDS_PER_FLOP * flops_rank + SECONDS_PER_DOF * dofs_rank;
+        c.time = c.t_factor + n_a * c.t_product;
+    };
+    if !dec.tfeti {
+        let f = fills(nb, &|b| {
+            let body = &mesh.bodies[b];
+            let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+            let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
+            let (xadj, adj) = node_graph(&mesh.hexes, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
+            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
+        })?;
+        let mut rank_nnz = vec![0.0; ranks];
+        let mut rank_flops = vec![0.0; ranks];
+        let mut rank_dofs = vec![0.0; ranks];
+        for (b, x) in f.iter().enumerate() {
+            rank_nnz[super::owner(b, ranks)] += x.nnz_l;
+            rank_flops[super::owner(b, ranks)] += x.flops;
+            rank_dofs[super::owner(b, ranks)] += body_dofs[b] as f64;
+        }
+        let mut c = Candidate {
+            parts: vec![1; nb],
+            tfeti: false,
+            target_dofs: None,
+            nnz_l: f.iter().map(|x| x.nnz_l).sum(),
+            nnz_l_rank: max(&rank_nnz),
+            contact_rows,
+            gluing_rows: 0,
+            dirichlet_rows: 0,
+            n_a: 0.0,
+            t_product: 0.0,
+            t_factor: 0.0,
+            time: 0.0,
+        };
+        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits } else { 1.0 };
+        time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
+        out.push(c);
+    }
+    let mut counts: Vec<usize> = SUBDOMAIN_COUNTS.to_vec();
+    if dec.tfeti {
+        counts.insert(0, 1);
+    }
+    for s in counts {
+        let target = largest.div_ceil(s);
+        let parts: Vec<usize> = body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect();
+        if (s > 1 && target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len()) {
+            continue;
+        }
+        let d = comm.agree(decompose_each(mesh, &parts))?;
+        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing);
+        let f = fills(d.subdomains.len(), &|s| {
+            let sd = &d.subdomains[s];
+            let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
+            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &vec![3; sd.nodes.len()]))
+        })?;
+        let owner = assign_ranks(&d, ranks);
+        let mut rank_nnz = vec![0.0; ranks];
+        let mut rank_flops = vec![0.0; ranks];
+        let mut rank_dofs = vec![0.0; ranks];
+        for (s, x) in f.iter().enumerate() {
+            rank_nnz[owner[s]] += x.nnz_l;
+            rank_flops[owner[s]] += x.flops;
+            rank_dofs[owner[s]] += 3.0 * d.subdomains[s].nodes.len() as f64;
+        }
+        let mut c = Candidate {
+            parts,
+            tfeti: true,
+            target_dofs: Some(target),
+            nnz_l: f.iter().map(|x| x.nnz_l).sum(),
+            nnz_l_rank: max(&rank_nnz),
+            contact_rows,
+            gluing_rows: cons.gluing_rows,
+            dirichlet_rows: cons.dirichlet_rows,
+            n_a: 0.0,
+            t_product: 0.0,
+            t_factor: 0.0,
+            time: 0.0,
+        };
+        let n_a = if contact.is_some() { TFETI_PRODUCTS * PRODUCTS_PER_DIGIT * digits } else { CG_PRODUCTS_PER_DIGIT * digits };
+        time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
+        out.push(c);
+    }
+    Ok(out)
+}
+
+fn max(v: &[f64]) -> f64 {
+    v.iter().copied().fold(0.0, f64::max)
+}
+
+/// The cheapest candidate.
+pub fn cheapest(cands: &[Candidate]) -> Option<&Candidate> {
+    cands.iter().min_by(|a, b| a.time.total_cmp(&b.time))
+}
+
+/// Fixes an automatic decomposition to the cheapest candidate (`subdomains = 1` for the
+/// monolithic dual, `target_dofs` for TFETI) and returns the priced table; `None` when the
+/// scene set the decomposition itself.
+pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, eps: f64) -> Result<Option<Vec<Candidate>>> {
+    if !automatic(dec) {
+        return Ok(None);
+    }
+    let cands = price(comm, model, dec, eps, comm.size())?;
+    match cheapest(&cands) {
+        Some(c) if c.tfeti => dec.target_dofs = c.target_dofs,
+        _ => dec.subdomains = Some(1),
+    }
+    Ok(Some(cands))
+}
+
+/// The table `check` prints.
+pub fn table(cands: &[Candidate], ranks: usize) -> String {
+    use std::fmt::Write;
+    let best = cheapest(cands).map(Candidate::label);
+    let mut s = format!("decomposition by cost ({ranks} rank{}):\n", if ranks == 1 { "" } else { "s" });
+    let _ = writeln!(s, "  {:<16} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}", "candidate", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s");
+    for c in cands {
+        let dual = c.dual_rows();
+        let _ = writeln!(
+            s,
+            "  {:<16} {:>9} {:>11.3e} {:>11.3e} {:>9} {:>6.1} {:>7.0} {:>9.2} {:>9.2} {:>9.2}{}",
+            c.label(),
+            c.target_dofs.map_or("-".into(), |t| t.to_string()),
+            c.nnz_l,
+            c.nnz_l_rank,
+            dual,
+            100.0 * c.dirichlet_rows as f64 / dual.max(1) as f64,
+            c.n_a,
+            1e3 * c.t_product,
+            c.t_factor,
+            c.time,
+            if Some(c.label()) == best { "  ← chosen" } else { "" }
+        );
+    }
+    s
+}
