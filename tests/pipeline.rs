@@ -151,6 +151,13 @@ fn written_file_reads_back_as_computed() {
     let stored = scene::parse(&attr("scene"), "stored", &[]).unwrap();
     let mut expect = scene::load(&scene_path, &sets.map(String::from)).unwrap().scene;
     expect.output.path = Some(h5.clone()); // --out is part of the resolved scene
+    // so are the automatic choices: the decomposition by cost (this small seed: monolithic)
+    // and the method for that dual
+    assert!(expect.solver.auto && expect.decomposition.subdomains.is_none());
+    assert!(!stored.solver.auto && stored.decomposition.subdomains == Some(1));
+    expect.decomposition.subdomains = Some(1);
+    tresca_feti::pipeline::resolve_method(&mut expect.solver, tresca_feti::pipeline::DualKind::Monolithic);
+    assert_eq!(stored.solver.params.method(), tresca_feti::qp::Method::SsnBicgstab);
     assert_eq!(stored.to_toml(), expect.to_toml());
     let versions: serde_json::Value = serde_json::from_str(&attr("versions")).unwrap();
     assert_eq!(versions["tresca-feti"], env!("CARGO_PKG_VERSION"));

@@ -347,8 +347,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
     let mut ls = ls;
-    let eps = ls.scene.solver.params.common.eps;
-    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, eps))?;
+    let common = ls.scene.solver.params.common.clone();
+    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common))?;
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
@@ -550,7 +550,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let mut ls = crate::scene::load(scene_path, overrides)?;
     let model = model::build(&ls)?;
     let priced = if plan::automatic(&ls.scene.decomposition) {
-        let cands = plan::price(comm, &model, &ls.scene.decomposition, ls.scene.solver.params.common.eps, ranks)?;
+        let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks)?;
         match plan::cheapest(&cands) {
             Some(c) if c.tfeti => ls.scene.decomposition.target_dofs = c.target_dofs,
             _ => ls.scene.decomposition.subdomains = Some(1),

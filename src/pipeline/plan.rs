@@ -11,9 +11,10 @@
 //! - setup = [`SECONDS_PER_FLOP`] · Σ (column count)² + [`SECONDS_PER_DOF`] · DOFs of the
 //!   busiest rank (numeric factorization; assembly, ordering, kernels and rows of B);
 //! - nA with contact: [`PRODUCTS_PER_DIGIT`] · log10(1/ε) for the monolithic dual,
-//!   [`TFETI_PRODUCTS`] times that for TFETI; without contact one solve for the monolithic
-//!   dual, [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε) product-equivalents (PCG with the Dirichlet
-//!   preconditioner) for TFETI.
+//!   [`TFETI_PRODUCTS`] · (1 + [`TFETI_GROWTH`] · log2 S) times that for TFETI with S
+//!   subdomains on the largest body, plus the σ_max estimate's products; without contact one
+//!   solve for the monolithic dual, [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε)
+//!   product-equivalents (PCG with the Dirichlet preconditioner) for TFETI.
 //!
 //! The constants were fitted to the benchmark set on the development machine (README, "The
 //! decomposition chosen by cost"); the ranking, not the seconds, is what the choice uses.
@@ -24,24 +25,29 @@ use crate::fem::assembly::{node_graph, DofMap};
 use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
 use crate::linalg::ordering::{fill, nested_dissection, Fill};
 use crate::model::Model;
+use crate::qp::Common;
 use crate::scene::DecompositionSettings;
 
 /// Seconds per entry of L per A-product (forward and backward solve).
-pub const SECONDS_PER_NNZ: f64 = 1.0e-9;
+pub const SECONDS_PER_NNZ: f64 = 1.05e-9;
 /// Seconds per dual row per A-product, outside the solves.
-pub const SECONDS_PER_ROW: f64 = 0.4e-6;
+pub const SECONDS_PER_ROW: f64 = 0.5e-6;
 /// Seconds per unit of Σ (column count)² in the numeric factorization.
-pub const SECONDS_PER_FLOP: f64 = 3.3e-11;
+pub const SECONDS_PER_FLOP: f64 = 2.5e-11;
 /// Seconds per DOF of a rank's pieces before the solve: assembly, ordering, kernels, rows of B.
 pub const SECONDS_PER_DOF: f64 = 1.0e-5;
 /// A-products per digit of ε of a contact solve on the monolithic dual.
 pub const PRODUCTS_PER_DIGIT: f64 = 18.0;
-/// TFETI's A-products with contact as a multiple of the monolithic dual's.
-pub const TFETI_PRODUCTS: f64 = 2.0;
+/// TFETI's A-products with contact as a multiple of the monolithic dual's, at one subdomain …
+pub const TFETI_PRODUCTS: f64 = 1.45;
+/// … growing by this fraction per doubling of the subdomains of the largest body.
+pub const TFETI_GROWTH: f64 = 0.04;
 /// Product-equivalents per digit of ε of TFETI's PCG without contact.
 pub const CG_PRODUCTS_PER_DIGIT: f64 = 8.0;
 /// Candidates with fewer DOFs per subdomain are not priced.
 pub const MIN_SUBDOMAIN_DOFS: usize = 1000;
+/// Most subdomains whose fill is counted per candidate (the others scaled from them).
+pub const SAMPLED: usize = 16;
 /// Subdomain counts priced (on the largest body; the others in proportion).
 pub const SUBDOMAIN_COUNTS: [usize; 8] = [2, 4, 8, 16, 32, 64, 128, 256];
 
@@ -84,16 +90,20 @@ pub fn automatic(dec: &DecompositionSettings) -> bool {
 }
 
 /// Prices the monolithic dual (unless `decomposition.tfeti`) and TFETI at the subdomain counts
-/// of [`SUBDOMAIN_COUNTS`] for a run on `ranks` ranks, at tolerance `eps`; ordered as priced.
+/// of [`SUBDOMAIN_COUNTS`] for a run on `ranks` ranks with the solver settings `solver`;
+/// ordered as priced.
 /// The fill of the factors is counted by the ranks of `comm` in turn and summed, so every rank
 /// gets the same table.
-pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, eps: f64, ranks: usize) -> Result<Vec<Candidate>> {
+pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solver: &Common, ranks: usize) -> Result<Vec<Candidate>> {
+    let eps = solver.eps;
     let mesh = &model.mesh;
     let ranks = ranks.max(1);
     let (me, workers) = (comm.rank(), comm.size());
     let contact = model.pairs.as_ref();
     let contact_rows = contact.map_or(0, |c| c.len() * if c.has_friction() { 3 } else { 1 });
     let digits = (1.0 / eps).log10().max(1.0);
+    // the σ_max estimate's products (none when σ is given)
+    let power = if solver.sigma.is_some() { 0.0 } else { solver.power_iterations as f64 };
     let mut out = Vec::new();
     let nb = mesh.bodies.len();
     let body_dofs: Vec<usize> = mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect();
@@ -152,7 +162,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, eps:
             t_factor: 0.0,
             time: 0.0,
         };
-        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits } else { 1.0 };
+        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
         time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
         out.push(c);
     }
@@ -168,11 +178,28 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, eps:
         }
         let d = comm.agree(decompose_each(mesh, &parts))?;
         let cons = constraints::build(&d, &model.constraints, contact, dec.gluing);
-        let f = fills(d.subdomains.len(), &|s| {
-            let sd = &d.subdomains[s];
+        // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the others
+        // scaled from it by their node count (nested dissection of 3-D pieces: nnz(L) ~ n^4/3,
+        // work ~ n²)
+        let ns = d.subdomains.len();
+        let stride = ns.div_ceil((ns / 4).clamp(2, SAMPLED).min(ns));
+        let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
+        let counted = fills(sampled.len(), &|i| {
+            let sd = &d.subdomains[sampled[i]];
             let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
             Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &vec![3; sd.nodes.len()]))
         })?;
+        let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
+        let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
+        for (&s, x) in sampled.iter().zip(&counted) {
+            (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
+        }
+        let f: Vec<Fill> = (0..ns)
+            .map(|s| match sampled.binary_search(&s) {
+                Ok(i) => counted[i],
+                Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
+            })
+            .collect();
         let owner = assign_ranks(&d, ranks);
         let mut rank_nnz = vec![0.0; ranks];
         let mut rank_flops = vec![0.0; ranks];
@@ -196,7 +223,8 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, eps:
             t_factor: 0.0,
             time: 0.0,
         };
-        let n_a = if contact.is_some() { TFETI_PRODUCTS * PRODUCTS_PER_DIGIT * digits } else { CG_PRODUCTS_PER_DIGIT * digits };
+        let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
+        let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
         time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
         out.push(c);
     }
@@ -215,11 +243,11 @@ pub fn cheapest(cands: &[Candidate]) -> Option<&Candidate> {
 /// Fixes an automatic decomposition to the cheapest candidate (`subdomains = 1` for the
 /// monolithic dual, `target_dofs` for TFETI) and returns the priced table; `None` when the
 /// scene set the decomposition itself.
-pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, eps: f64) -> Result<Option<Vec<Candidate>>> {
+pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, solver: &Common) -> Result<Option<Vec<Candidate>>> {
     if !automatic(dec) {
         return Ok(None);
     }
-    let cands = price(comm, model, dec, eps, comm.size())?;
+    let cands = price(comm, model, dec, solver, comm.size())?;
     match cheapest(&cands) {
         Some(c) if c.tfeti => dec.target_dofs = c.target_dofs,
         _ => dec.subdomains = Some(1),
@@ -252,4 +280,47 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::comm::SerialComm;
+
+    #[test]
+    fn the_counted_fill_is_what_the_factors_store() {
+        // seed N = 12: the monolithic candidate's count against the factors the solve builds
+        let (model, _, _) = crate::feti::seed_fixture(12, 1);
+        let dec = DecompositionSettings::default();
+        let cands = price(&SerialComm, &model, &dec, &Common::default(), 1).unwrap();
+        let mono = &cands[0];
+        assert!(!mono.tfeti);
+        let bodies = super::super::assemble_and_factorize(&SerialComm, &model, crate::scene::OrderingKind::Metis, &mut Default::default()).unwrap();
+        let stored: usize = bodies.iter().map(|b| b.chol.nnz_l()).sum();
+        let ratio = stored as f64 / mono.nnz_l;
+        assert!((1.0..1.5).contains(&ratio), "stored {stored} against counted {}", mono.nnz_l);
+        // TFETI candidates: rows as the decomposition builds them, more subdomains less fill
+        let tfeti: Vec<&Candidate> = cands.iter().filter(|c| c.tfeti).collect();
+        assert!(!tfeti.is_empty());
+        for w in tfeti.windows(2) {
+            assert!(w[1].parts[0] > w[0].parts[0] && w[1].nnz_l < w[0].nnz_l && w[1].gluing_rows > w[0].gluing_rows);
+        }
+        let (_, d, cons) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
+        assert_eq!((tfeti[0].gluing_rows, tfeti[0].dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
+        assert_eq!(d.subdomains.len(), 2 * tfeti[0].parts[0]);
+    }
+
+    #[test]
+    fn an_automatic_decomposition_is_fixed_to_the_cheapest() {
+        let (model, _, _) = crate::feti::seed_fixture(8, 1);
+        let mut dec = DecompositionSettings::default();
+        let cands = resolve(&SerialComm, &model, &mut dec, &Common::default()).unwrap().expect("automatic");
+        let best = cheapest(&cands).unwrap();
+        assert!(cands.iter().all(|c| c.time >= best.time));
+        assert_eq!((dec.subdomains, dec.target_dofs), if best.tfeti { (None, best.target_dofs) } else { (Some(1), None) });
+        // a scene that sets the decomposition is left alone
+        let mut set = DecompositionSettings { subdomains: Some(4), ..Default::default() };
+        assert!(resolve(&SerialComm, &model, &mut set, &Common::default()).unwrap().is_none());
+        assert_eq!(set.subdomains, Some(4));
+    }
 }
