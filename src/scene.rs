@@ -257,7 +257,10 @@ impl SolverSettings {
             Some(_) => false,
         };
         let method: Method = match t.remove("method") {
-            Some(v) if !auto => value("method", v)?,
+            Some(v) if !auto => value("method", v).map_err(|e| match e {
+                Error::Scene { key, msg } => Error::Scene { key, msg: format!("{msg}, or `auto` (the default)") },
+                e => e,
+            })?,
             _ => Method::default(),
         };
         let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::Auto), |v| value("preconditioner", v))?;
