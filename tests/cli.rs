@@ -97,7 +97,7 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=-1"], &["solver.patience"]);
     assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
-    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["SSN-BICGSTAB", "no convergence"]);
+    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["TSSN", "no convergence"]);
 }
 
 const GMSH: &str = include_str!("../run/gmsh_blocks.toml");
@@ -345,7 +345,7 @@ fn solve_shows_phases_and_iterations_live_unless_quiet() {
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     let at = |needle: &str| text.find(needle).unwrap_or_else(|| panic!("no `{needle}` in {text}"));
-    assert!(at("] iterate") < at("‖r̃‖/‖b‖") && at("‖r̃‖/‖b‖") < at("] recover") && at("] recover") < at("solver ssn-bicgstab:"), "{text}");
+    assert!(at("] iterate") < at("‖r̃‖/‖b‖") && at("‖r̃‖/‖b‖") < at("] recover") && at("] recover") < at("solver tssn:"), "{text}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
     let outer = report["solver"]["outer_iterations"].as_u64().unwrap() as usize;
     let lines = text.lines().filter(|l| l.split_whitespace().count() == 8 && l.split_whitespace().all(|w| w.parse::<f64>().is_ok())).count();

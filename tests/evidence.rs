@@ -28,14 +28,14 @@ fn work_precision_measures_every_row_against_the_reference() {
     let path = dir.join("wp.csv");
     let o = Command::new(BIN)
         .args(["work-precision", "--scene", root().join("run/seed.toml").to_str().unwrap(), "--sizes", "5", "--eps", "1e-3,1e-6,1e-9"])
-        .args(["--clarabel-eps", "1e-4,1e-9", "--solvers", "gimssn,ssn-bicgstab,mpgp,clarabel", "--csv", path.to_str().unwrap()])
+        .args(["--clarabel-eps", "1e-4,1e-9", "--solvers", "gimssn,ssn-bicgstab,tssn,mpgp,clarabel", "--csv", path.to_str().unwrap()])
         .output()
         .unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(out.contains("err(u) ≤ 1e-6") && out.contains("ssn-bicgstab (default)"), "{out}");
+    assert!(out.contains("err(u) ≤ 1e-6") && out.contains("tssn (default)"), "{out}");
     let rows = csv(&path);
-    assert_eq!(rows.len(), 3 * 3 + 2, "{rows:?}");
+    assert_eq!(rows.len(), 4 * 3 + 2, "{rows:?}");
     for solver in ["gimssn", "ssn-bicgstab", "mpgp"] {
         let r: Vec<_> = rows.iter().filter(|r| r["solver"] == solver).collect();
         assert!(r.iter().all(|r| r["status"] == "ok"), "{solver}: {r:?}");
@@ -143,7 +143,7 @@ fn stability_tells_converged_stopped_and_wrong_apart() {
     assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.starts_with("stability suite: "), "{out}");
     assert!(line_of(&out, "a_fine").ends_with("converged"), "{out}");
-    assert!(line_of(&out, "b_short").contains("stopped: SSN-BICGSTAB: no convergence in 2 outer iterations"), "{out}");
+    assert!(line_of(&out, "b_short").contains("stopped: TSSN: no convergence in 2 outer iterations"), "{out}");
     assert!(out.contains("2 scenes: 1 converged, 1 stopped with a reason, 0 wrong"), "{out}");
     assert!(dir.join("out/a_fine.h5").exists() && !dir.join("out/b_short.h5").exists());
     let rows = csv(&dir.join("out/stability.csv"));

@@ -157,7 +157,7 @@ fn written_file_reads_back_as_computed() {
     assert!(!stored.solver.auto && stored.decomposition.subdomains == Some(1));
     expect.decomposition.subdomains = Some(1);
     tresca_feti::pipeline::resolve_method(&mut expect.solver, tresca_feti::pipeline::DualKind::Monolithic);
-    assert_eq!(stored.solver.params.method(), tresca_feti::qp::Method::SsnBicgstab);
+    assert_eq!(stored.solver.params.method(), tresca_feti::qp::Method::Tssn);
     assert_eq!(stored.to_toml(), expect.to_toml());
     let versions: serde_json::Value = serde_json::from_str(&attr("versions")).unwrap();
     assert_eq!(versions["tresca-feti"], env!("CARGO_PKG_VERSION"));

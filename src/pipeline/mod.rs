@@ -312,15 +312,16 @@ pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> R
 }
 
 /// The automatic method (`solver.method` absent or `"auto"`) for the dual the scene is solved
-/// on: TSSN on TFETI with contact when its CG runs projected (it takes the FETI
-/// preconditioner there), SSN-BiCGSTAB elsewhere (the fastest on the monolithic dual). Both
-/// measured on the benchmark set (README, "The default solver").
+/// on: TSSN (with the FETI preconditioner where its CG runs projected, [`preconditioner`]),
+/// except under SMALSE-M's orthogonal projector, whose inner solves stay SSN-BiCGSTAB.
+/// Measured on the benchmark set and the stability suite (README, "The default solver and
+/// decomposition").
 pub fn resolve_method(solver: &mut crate::scene::SolverSettings, dual: DualKind) {
     if !solver.auto {
         return;
     }
-    let tssn = projected(Method::Tssn, dual) && matches!(dual, DualKind::Tfeti { contact: true, .. });
-    solver.params = solver.params.with_method(if tssn { Method::Tssn } else { Method::SsnBicgstab });
+    let smalse = matches!(dual, DualKind::Tfeti { orthogonal: true, .. });
+    solver.params = solver.params.with_method(if smalse { Method::SsnBicgstab } else { Method::Tssn });
     solver.auto = false;
 }
 

@@ -233,7 +233,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let dofs = 3 * model.mesh.nodes.len();
         for &s in &args.subdomains {
             if s == 0 {
-                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: base.method() };
+                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: default_method(&ls, DualKind::Monolithic) };
                 on_problem(&problem);
                 let measure = |sol: &QpSolution| {
                     let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &u_ref);
@@ -255,7 +255,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
             let mut tt = Timings::default();
             let mut prob = setup(comm, &tls, &tmodel, &mut tt)?;
             let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
-            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: base.method() };
+            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: default_method(&tls, DualKind::of(&tls, &tmodel)) };
             on_problem(&problem);
             let ni = set.layout.dim();
             for &solver in &args.solvers {
@@ -443,4 +443,11 @@ pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<
         .map_err(io)?;
     }
     crate::output::write_atomically(path, &f)
+}
+
+/// The method a `solve` of the scene takes on that dual (`pipeline::resolve_method`).
+fn default_method(ls: &crate::scene::LoadedScene, kind: DualKind) -> Method {
+    let mut solver = ls.scene.solver.clone();
+    crate::pipeline::resolve_method(&mut solver, kind);
+    solver.params.method()
 }
