@@ -208,8 +208,10 @@ pub enum Preconditioner {
     None,
     /// K_s's block on the DOFs the rows touch.
     Lumped,
-    /// The Schur complement of K_s onto those DOFs.
+    /// The Schur complement of K_s onto those DOFs, applied through a K_ii solve.
     Dirichlet,
+    /// The same Schur complement held as a dense matrix (from a partial factorization).
+    DirichletDense,
 }
 
 impl Preconditioner {
@@ -219,6 +221,7 @@ impl Preconditioner {
             Preconditioner::None => "none",
             Preconditioner::Lumped => "lumped",
             Preconditioner::Dirichlet => "dirichlet",
+            Preconditioner::DirichletDense => "dirichlet-dense",
         }
     }
 }

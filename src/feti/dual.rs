@@ -15,7 +15,7 @@ use super::subdomain::{SubdomainSystem, NR};
 use crate::comm::Comm;
 use crate::dual::{DualProblem, Recovered};
 use crate::error::{Error, Result};
-use crate::linalg::schur::Schur;
+use crate::linalg::schur::{Form, Schur};
 use super::precond::Scaling;
 use crate::qp::{self, Layout, Operator, Preconditioner, ProductCounter};
 use crate::scene::Preconditioner as PreconditionerKind;
@@ -84,15 +84,20 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// factorizes each subdomain's K_ii (the DOFs its rows of B do not touch).
     /// `weight[s]` = Δ_s, the stiffness weighting of every subdomain.
     pub fn set_preconditioner(&mut self, kind: PreconditionerKind, cons: &Constraints, weight: Vec<f64>) -> Result<()> {
-        if !matches!(kind, PreconditionerKind::Lumped | PreconditionerKind::Dirichlet) {
-            self.precond = None;
-            return Ok(());
-        }
+        let form = match kind {
+            PreconditionerKind::Lumped => Form::Lumped,
+            PreconditionerKind::Dirichlet => Form::MatrixFree,
+            PreconditionerKind::DirichletDense => Form::Dense,
+            PreconditionerKind::None | PreconditionerKind::Auto => {
+                self.precond = None;
+                return Ok(());
+            }
+        };
         let scaling = Scaling::new(cons, weight, &self.dist.owned)?;
         let mut pieces = Vec::with_capacity(self.subs.len());
         for s in &self.subs {
             let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();
-            let schur = Schur::new(&s.sys.k, &touched, kind == PreconditionerKind::Dirichlet)
+            let schur = Schur::new(&s.sys.k, &touched, form)
                 .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
             pieces.push(schur);
         }

@@ -1,12 +1,32 @@
 //! The Schur complement `S = K_bb − K_bi K_ii⁻¹ K_ib` of a symmetric stiffness K onto a set of
-//! boundary DOFs b (those a piece's rows of B touch), applied matrix-free — the local part of
-//! the FETI Dirichlet preconditioner — and its cheap stand-in K_bb (the lumped preconditioner).
+//! boundary DOFs b (those a piece's rows of B touch) — the local part of the FETI Dirichlet
+//! preconditioner — applied matrix-free (a K_ii solve per application) or held as an explicit
+//! dense matrix from a partial factorization (b ordered last: the trailing block of the
+//! Cholesky factor of K + αI_b gives S + αI), and its cheap stand-in K_bb (lumped).
 //! K may be singular (a floating TFETI subdomain); K_ii must be positive definite, which holds
 //! once the boundary DOFs hold the piece in place.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::{Mat, Par, Side};
+
 use super::cholesky::{Cholesky, Ordering};
 use super::sparse::SymCsc;
-use crate::error::Result;
+use crate::error::{Error, Result};
+
+/// How S is represented.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Form {
+    /// K_bb (the lumped preconditioner).
+    Lumped,
+    /// S applied through a K_ii solve.
+    MatrixFree,
+    /// S as a dense matrix on the boundary DOFs.
+    Dense,
+}
 
 /// S (Dirichlet) or K_bb (lumped) of one piece.
 pub struct Schur {
@@ -15,14 +35,17 @@ pub struct Schur {
     interior: Vec<usize>,
     /// Boundary DOFs, ascending.
     pub boundary: Vec<usize>,
-    /// K_ii's factor; `None`: lumped (S ≈ K_bb).
+    /// K_ii's factor; `None`: lumped (S ≈ K_bb) or dense.
     chol: Option<Cholesky>,
+    /// S on the boundary DOFs (in the order of `boundary`), when explicit.
+    dense: Option<Mat<f64>>,
 }
 
 impl Schur {
-    /// The operator of K (lower triangle) onto the DOFs `boundary` (any order, no repeats);
-    /// `dirichlet`: factorize K_ii for the exact Schur complement, else K_bb only.
-    pub fn new(k: &SymCsc, boundary: &[usize], dirichlet: bool) -> Result<Schur> {
+    /// The operator of K (lower triangle) onto the DOFs `boundary` (any order, no repeats) in
+    /// the given form.
+    pub fn new(k: &SymCsc, boundary: &[usize], form: Form) -> Result<Schur> {
+        let dirichlet = form == Form::MatrixFree;
         let n = k.n;
         let mut boundary = boundary.to_vec();
         boundary.sort_unstable();
@@ -60,11 +83,26 @@ impl Schur {
         } else {
             None
         };
-        Ok(Schur { k: k.clone(), interior, boundary, chol })
+        let dense = if form == Form::Dense { Some(dense_schur(k, &interior, &boundary)?) } else { None };
+        Ok(Schur { k: k.clone(), interior, boundary, chol, dense })
+    }
+
+    /// Values held: K's lower triangle, and S's n_b² when dense.
+    pub fn stored(&self) -> usize {
+        self.k.nnz() + self.dense.as_ref().map_or(0, |d| d.nrows() * d.ncols())
     }
 
     /// x ← S x for x zero off the boundary (the result is zero off the boundary too).
     pub fn apply_in_place(&self, x: &mut [f64]) {
+        if let Some(s) = &self.dense {
+            let xb = Mat::from_fn(self.boundary.len(), 1, |i, _| x[self.boundary[i]]);
+            let yb = s * &xb;
+            x.fill(0.0);
+            for (i, &d) in self.boundary.iter().enumerate() {
+                x[d] = yb[(i, 0)];
+            }
+            return;
+        }
         let y = self.k.mul(x);
         x.fill(0.0);
         for &d in &self.boundary {
@@ -93,6 +131,90 @@ impl Schur {
     }
 }
 
+/// S = K_bb − K_bi K_ii⁻¹ K_ib as a dense matrix (rows and columns in the order of `boundary`)
+/// from one sparse factorization of K̂ = K + αI_b with the interior DOFs first (AMD order of
+/// K_ii) and the boundary DOFs last: K̂'s factor ends in the block L_bb with L_bb L_bbᵀ = S + αI
+/// (α = the largest diagonal entry of K_bb, which makes K̂ positive definite for a floating
+/// piece too); the supernodal factor is read block by block.
+fn dense_schur(k: &SymCsc, interior: &[usize], boundary: &[usize]) -> Result<Mat<f64>> {
+    let fail = |r: String| Error::numerical("dense Schur complement", r);
+    let n = k.n;
+    let nb = boundary.len();
+    let ni = n - nb;
+    // the interior's fill-reducing order: AMD of K_ii
+    let interior_dofs: Vec<usize> = (0..n).filter(|&d| interior[d] != usize::MAX).collect();
+    let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+    for &j in &interior_dofs {
+        for p in k.col_ptr[j]..k.col_ptr[j + 1] {
+            if interior[k.row_idx[p]] != usize::MAX {
+                row_idx.push(interior[k.row_idx[p]]);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let kii = SymCsc { n: ni, values: vec![0.0; row_idx.len()], col_ptr, row_idx };
+    let mut fwd: Vec<usize> = if ni > 0 {
+        let sym = factorize_symbolic_cholesky(kii.as_faer().symbolic(), Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
+            .map_err(|e| fail(format!("ordering K_ii: {e:?}")))?;
+        match sym.perm() {
+            Some(p) => p.arrays().0.iter().map(|&i| interior_dofs[i]).collect(),
+            None => interior_dofs.clone(),
+        }
+    } else {
+        vec![]
+    };
+    fwd.extend_from_slice(boundary);
+    let mut inv = vec![0; n];
+    for (new, &old) in fwd.iter().enumerate() {
+        inv[old] = new;
+    }
+    let mut kh = k.clone();
+    let alpha = boundary.iter().filter_map(|&d| k.position(d, d).map(|p| k.values[p].abs())).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+    for &d in boundary {
+        let p = kh.position(d, d).ok_or_else(|| fail(format!("no diagonal entry at DOF {d}")))?;
+        kh.values[p] += alpha;
+    }
+    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL, ..Default::default() };
+    let sym = factorize_symbolic_cholesky(kh.as_faer().symbolic(), Side::Lower, SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, n)), params)
+        .map_err(|e| fail(format!("symbolic analysis: {e:?}")))?;
+    let par = Par::Seq;
+    let mut values = vec![0.0; sym.len_val()];
+    let mut mem = MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default())).map_err(|_| fail("out of memory".into()))?;
+    sym.factorize_numeric_llt(&mut values, kh.as_faer(), Side::Lower, LltRegularization::default(), par, MemStack::new(&mut mem), Default::default())
+        .map_err(|e| fail(format!("K + αI_b is not positive definite ({e:?}); is the piece held by its boundary DOFs?")))?;
+    let SymbolicCholeskyRaw::Supernodal(sn) = sym.raw() else {
+        return Err(fail("faer did not build a supernodal factor".into()));
+    };
+    let mut l = Mat::<f64>::zeros(nb, nb);
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let (rptr, vptr, rows) = (sn.col_ptr_for_row_idx(), sn.col_ptr_for_val(), sn.row_idx());
+    for s in 0..sn.n_supernodes() {
+        let (b0, e0) = (begin[s], end[s]);
+        if e0 <= ni {
+            continue;
+        }
+        let ncols = e0 - b0;
+        let pattern = &rows[rptr[s]..rptr[s + 1]];
+        let nrows = ncols + pattern.len();
+        let block = &values[vptr[s]..vptr[s + 1]];
+        for jc in 0..ncols {
+            let c = b0 + jc;
+            if c < ni {
+                continue;
+            }
+            for r in jc..nrows {
+                let row = if r < ncols { b0 + r } else { pattern[r - ncols] };
+                l[(row - ni, c - ni)] = block[r + jc * nrows];
+            }
+        }
+    }
+    let mut s = &l * l.transpose();
+    for i in 0..nb {
+        s[(i, i)] -= alpha;
+    }
+    Ok(s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -102,7 +224,7 @@ mod tests {
         // S = ((K⁻¹)_bb)⁻¹: S (K⁻¹ e_b)_b = e_b for a unit vector on the boundary
         let k = crate::linalg::cholesky::tests::laplace(7);
         let boundary = [0, 3, 6];
-        let s = Schur::new(&k, &boundary, true).unwrap();
+        let s = Schur::new(&k, &boundary, Form::MatrixFree).unwrap();
         let chol = Cholesky::factorize(&k, Ordering::Amd).unwrap();
         for &e in &boundary {
             let mut kinv_e = vec![0.0; 7];
@@ -119,10 +241,35 @@ mod tests {
             }
         }
         // lumped: K_bb
-        let l = Schur::new(&k, &boundary, false).unwrap();
+        let l = Schur::new(&k, &boundary, Form::Lumped).unwrap();
         let mut x = vec![0.0; 7];
         x[3] = 1.0;
         l.apply_in_place(&mut x);
         assert_eq!(x, vec![0.0, 0.0, 0.0, 3.0, 0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn the_dense_schur_complement_is_the_matrix_free_one() {
+        // a singular K (floating: the 1-D Laplacian without its identity shift) and a regular one
+        for shift in [0.0, 1.0] {
+            let mut k = crate::linalg::cholesky::tests::laplace(40);
+            for j in 0..k.n {
+                let p = k.position(j, j).unwrap();
+                // diagonal 2 + shift inside, 1 + shift at the ends: singular for shift 0
+                k.values[p] = if j == 0 || j + 1 == k.n { 1.0 } else { 2.0 } + shift;
+            }
+            let boundary = [0, 7, 8, 20, 39];
+            let mf = Schur::new(&k, &boundary, Form::MatrixFree).unwrap();
+            let de = Schur::new(&k, &boundary, Form::Dense).unwrap();
+            for &e in &boundary {
+                let mut x = vec![0.0; 40];
+                x[e] = 1.0;
+                let mut y = x.clone();
+                mf.apply_in_place(&mut x);
+                de.apply_in_place(&mut y);
+                let d = x.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                assert!(d < 1e-12, "shift {shift}, column {e}: differ by {d:e}");
+            }
+        }
     }
 }
