@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 /// How S is represented.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Form {
-    /// K_bb (the lumped preconditioner).
+    /// K_bb (the lumped preconditioner), held on the boundary DOFs alone.
     Lumped,
     /// S applied through a K_ii solve.
     MatrixFree,
@@ -39,6 +39,8 @@ pub struct Schur {
     chol: Option<Cholesky>,
     /// S on the boundary DOFs (in the order of `boundary`), when explicit.
     dense: Option<Mat<f64>>,
+    /// K_bb (lower triangle, in the order of `boundary`), when lumped.
+    kbb: Option<SymCsc>,
 }
 
 impl Schur {
@@ -84,16 +86,39 @@ impl Schur {
             None
         };
         let dense = if form == Form::Dense { Some(dense_schur(k, &interior, &boundary)?) } else { None };
-        Ok(Schur { k: k.clone(), interior, boundary, chol, dense })
+        let kbb = (form == Form::Lumped).then(|| {
+            // K's lower-triangle entries with both indices on the boundary, renumbered
+            let mut at = vec![usize::MAX; n];
+            for (i, &d) in boundary.iter().enumerate() {
+                at[d] = i;
+            }
+            let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+            for &j in &boundary {
+                for p in k.col_ptr[j]..k.col_ptr[j + 1] {
+                    if at[k.row_idx[p]] != usize::MAX {
+                        row_idx.push(at[k.row_idx[p]]);
+                        values.push(k.values[p]);
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+            SymCsc { n: boundary.len(), col_ptr, row_idx, values }
+        });
+        Ok(Schur { k: k.clone(), interior, boundary, chol, dense, kbb })
     }
 
-    /// Values held: K's lower triangle, and S's n_b² when dense.
-    pub fn stored(&self) -> usize {
-        self.k.nnz() + self.dense.as_ref().map_or(0, |d| d.nrows() * d.ncols())
-    }
 
     /// x ← S x for x zero off the boundary (the result is zero off the boundary too).
     pub fn apply_in_place(&self, x: &mut [f64]) {
+        if let Some(kbb) = &self.kbb {
+            let xb: Vec<f64> = self.boundary.iter().map(|&d| x[d]).collect();
+            let yb = kbb.mul(&xb);
+            x.fill(0.0);
+            for (&d, y) in self.boundary.iter().zip(yb) {
+                x[d] = y;
+            }
+            return;
+        }
         if let Some(s) = &self.dense {
             let xb = Mat::from_fn(self.boundary.len(), 1, |i, _| x[self.boundary[i]]);
             let yb = s * &xb;

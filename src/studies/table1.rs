@@ -99,8 +99,10 @@ impl Column {
         let mut p = if base.method() == self.method { base.clone() } else { base.with_method(self.method) };
         p.common.eps = eps;
         if self.preset == Preset::Paper {
-            // ρ = 1/σ_est for SSN, 1.9/σ_est for the others
+            // ρ = 1/σ_est for SSN, 1.9/σ_est for the others; σ_est by 30 power iterations
             p.common.rho_factor = if self.method == Method::SsnBicgstab { 1.0 } else { 1.9 } * qp::SIGMA_SAFETY;
+            p.common.sigma_estimate = qp::SigmaEstimate::Power;
+            p.common.power_iterations = 30;
             match &mut p.method {
                 MethodParams::SsnBicgstab(m) => {
                     m.inner_tol = Some(1e-6);
