@@ -65,44 +65,18 @@ impl Schur {
             }
         }
         let chol = if dirichlet && ni > 0 {
-            // K_ii: the lower triangle's entries with both indices interior (order kept)
-            let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-            for j in 0..n {
-                if interior[j] == usize::MAX {
-                    continue;
-                }
-                for p in k.col_ptr[j]..k.col_ptr[j + 1] {
-                    let i = k.row_idx[p];
-                    if interior[i] != usize::MAX {
-                        row_idx.push(interior[i]);
-                        values.push(k.values[p]);
-                    }
-                }
-                col_ptr.push(row_idx.len());
-            }
-            let kii = SymCsc { n: ni, col_ptr, row_idx, values };
+            let kii = k.principal(&interior);
             Some(Cholesky::factorize(&kii, Ordering::Amd)?)
         } else {
             None
         };
         let dense = if form == Form::Dense { Some(dense_schur(k, &interior, &boundary)?) } else { None };
         let kbb = (form == Form::Lumped).then(|| {
-            // K's lower-triangle entries with both indices on the boundary, renumbered
             let mut at = vec![usize::MAX; n];
             for (i, &d) in boundary.iter().enumerate() {
                 at[d] = i;
             }
-            let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-            for &j in &boundary {
-                for p in k.col_ptr[j]..k.col_ptr[j + 1] {
-                    if at[k.row_idx[p]] != usize::MAX {
-                        row_idx.push(at[k.row_idx[p]]);
-                        values.push(k.values[p]);
-                    }
-                }
-                col_ptr.push(row_idx.len());
-            }
-            SymCsc { n: boundary.len(), col_ptr, row_idx, values }
+            k.principal(&at)
         });
         Ok(Schur { k: k.clone(), interior, boundary, chol, dense, kbb })
     }
@@ -168,16 +142,7 @@ fn dense_schur(k: &SymCsc, interior: &[usize], boundary: &[usize]) -> Result<Mat
     let ni = n - nb;
     // the interior's fill-reducing order: AMD of K_ii
     let interior_dofs: Vec<usize> = (0..n).filter(|&d| interior[d] != usize::MAX).collect();
-    let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
-    for &j in &interior_dofs {
-        for p in k.col_ptr[j]..k.col_ptr[j + 1] {
-            if interior[k.row_idx[p]] != usize::MAX {
-                row_idx.push(interior[k.row_idx[p]]);
-            }
-        }
-        col_ptr.push(row_idx.len());
-    }
-    let kii = SymCsc { n: ni, values: vec![0.0; row_idx.len()], col_ptr, row_idx };
+    let kii = k.principal(interior);
     let mut fwd: Vec<usize> = if ni > 0 {
         let sym = factorize_symbolic_cholesky(kii.as_faer().symbolic(), Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
             .map_err(|e| fail(format!("ordering K_ii: {e:?}")))?;

@@ -56,6 +56,22 @@ impl SymCsc {
         y
     }
 
+    /// The principal submatrix on the unknowns d with `at[d] != usize::MAX`, renumbered to
+    /// `at[d]` (which must grow with d).
+    pub fn principal(&self, at: &[usize]) -> SymCsc {
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+        for j in (0..self.n).filter(|&j| at[j] != usize::MAX) {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                if at[self.row_idx[p]] != usize::MAX {
+                    row_idx.push(at[self.row_idx[p]]);
+                    values.push(self.values[p]);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        SymCsc { n: col_ptr.len() - 1, col_ptr, row_idx, values }
+    }
+
     /// Largest absolute entry.
     pub fn max_abs(&self) -> f64 {
         self.values.iter().fold(0.0, |a, v| a.max(v.abs()))
