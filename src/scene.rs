@@ -193,6 +193,29 @@ pub enum Friction {
     /// Orthotropic Tresca: slip bounds g1 along `direction` (projected onto the contact plane),
     /// g2 across it.
     Orthotropic { g1: f64, g2: f64, direction: [f64; 3] },
+    /// Coulomb: ‖λτ,ᵢ‖ ≤ μ λν,ᵢ (`mu`), or orthotropic with `mu1` along `direction` and `mu2`
+    /// across it; solved as a fixed point on the slip bounds (`qp::coulomb`).
+    Coulomb {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mu: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mu1: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mu2: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        direction: Option<[f64; 3]>,
+    },
+}
+
+impl Friction {
+    /// The direction the pair's first tangent follows, when the law has one.
+    pub fn direction(&self) -> Option<[f64; 3]> {
+        match *self {
+            Friction::Orthotropic { direction, .. } => Some(direction),
+            Friction::Coulomb { direction, .. } => direction,
+            _ => None,
+        }
+    }
 }
 
 pub use crate::qp::{CgStop, Method};
@@ -702,6 +725,23 @@ impl Scene {
                     finite(k("friction.direction"), direction)?;
                     if direction.iter().all(|&v| v == 0.0) {
                         return Err(Error::scene(k("friction.direction"), "must be a non-zero vector"));
+                    }
+                }
+                Friction::Coulomb { mu, mu1, mu2, direction } => {
+                    let coef = |name: &str, v: f64| {
+                        if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(Error::scene(k(&format!("friction.{name}")), format!("friction coefficient must be finite and ≥ 0, got {v}"))) }
+                    };
+                    match (mu, mu1, mu2, direction) {
+                        (Some(m), None, None, None) => coef("mu", *m)?,
+                        (None, Some(a), Some(b), Some(d)) => {
+                            coef("mu1", *a)?;
+                            coef("mu2", *b)?;
+                            finite(k("friction.direction"), d)?;
+                            if d.iter().all(|&v| v == 0.0) {
+                                return Err(Error::scene(k("friction.direction"), "must be a non-zero vector"));
+                            }
+                        }
+                        _ => return Err(Error::scene(k("friction"), "coulomb takes either mu, or mu1, mu2 and direction")),
                     }
                 }
             }

@@ -70,7 +70,7 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
     assert_clean_failure("floating", &seed_with("face = \"lower.xmin\"", "face = \"upper.xmin\""), &off, &["lower", "floats"]);
-    assert_clean_failure("bad-friction", &seed_with("type = \"tresca\"", "type = \"coulomb\""), &off, &["friction", "coulomb"]);
+    assert_clean_failure("bad-friction", &seed_with("type = \"tresca\"", "type = \"glue\""), &off, &["friction", "glue"]);
     assert_clean_failure("bad-field", SEED, &["--set", "output.fields=[\"stress\"]"], &["output.fields[0]", "stress"]);
     // meshes
     let gmsh_body = |file: &str| {
@@ -95,6 +95,8 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("preconditioner-orthogonal", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projector=\"orthogonal\""], &["solver.preconditioner", "oblique"]);
     assert_clean_failure("preconditioner-unprojected", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projected_cg=false"], &["solver.preconditioner", "projected_cg"]);
     assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=-1"], &["solver.patience"]);
+    assert_clean_failure("coulomb-mixed", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3, mu1=0.2}"], &["contact.pair[0].friction", "mu1"]);
+    assert_clean_failure("coulomb-negative", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=-1.0}"], &["contact.pair[0].friction.mu"]);
     assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["TSSN", "no convergence"]);

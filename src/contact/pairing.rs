@@ -23,6 +23,7 @@ use std::collections::HashMap;
 use crate::error::{Error, Result};
 use crate::fem::element::quad4_nodal_areas;
 use crate::mesh::{Face, Mesh};
+use crate::qp::coulomb::Coefficient;
 use crate::qp::sets::{Disc, Ellipse, TangentSet};
 use crate::qp::Lambda;
 use crate::scene::{ContactPair, Friction};
@@ -53,6 +54,8 @@ pub struct Contact {
     pub bound: Vec<SlipBound>,
     /// Index of the scene's `[[contact.pair]]` entry each pair comes from.
     pub entry: Vec<usize>,
+    /// The Coulomb coefficient of each pair ([`Coefficient::Fixed`]: its bound is `bound`).
+    pub coulomb: Vec<Coefficient>,
 }
 
 impl Contact {
@@ -67,7 +70,17 @@ impl Contact {
 
     /// Whether any pair carries friction (i.e. tangential multipliers exist).
     pub fn has_friction(&self) -> bool {
-        self.bound.iter().any(|b| *b != SlipBound::None)
+        self.bound.iter().any(|b| *b != SlipBound::None) || self.is_coulomb()
+    }
+
+    /// Whether any pair follows Coulomb's law (the slip bounds depend on λν).
+    pub fn is_coulomb(&self) -> bool {
+        self.coulomb.iter().any(|c| *c != Coefficient::Fixed)
+    }
+
+    /// The Coulomb coefficients of the pairs `pairs` (a rank's part).
+    pub fn coefficients(&self, pairs: &[usize]) -> Vec<Coefficient> {
+        pairs.iter().map(|&i| self.coulomb[i]).collect()
     }
 
     /// Λ of these pairs: a half-line per normal multiplier and, with friction, the slip bound's
@@ -241,13 +254,10 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                     ),
                 ));
             }
-            let dir = match p.friction {
-                Friction::Orthotropic { direction, .. } => direction,
-                _ => [1.0, 0.0, 0.0],
-            };
-            let t1 = match (tangent(n, dir), &p.friction) {
+            let dir = p.friction.direction().unwrap_or([1.0, 0.0, 0.0]);
+            let t1 = match (tangent(n, dir), p.friction.direction()) {
                 (Some(t), _) => t,
-                (None, Friction::Orthotropic { .. }) => {
+                (None, Some(_)) => {
                     return Err(Error::scene(format!("{key}.friction.direction"), format!("is normal to the contact face {}", slave.name)));
                 }
                 (None, _) => tangent(n, [0.0, 1.0, 0.0]).expect("x and y cannot both be normal"),
@@ -264,6 +274,14 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                 Friction::None => SlipBound::None,
                 Friction::Tresca { g } => SlipBound::Disc(g * w),
                 Friction::Orthotropic { g1, g2, .. } => SlipBound::Ellipse(g1 * w, g2 * w),
+                // the bound follows λν: zero until the fixed point sets it
+                Friction::Coulomb { mu1: Some(_), .. } => SlipBound::Ellipse(0.0, 0.0),
+                Friction::Coulomb { .. } => SlipBound::Disc(0.0),
+            });
+            c.coulomb.push(match p.friction {
+                Friction::Coulomb { mu: Some(m), .. } => Coefficient::Isotropic(m),
+                Friction::Coulomb { mu1: Some(a), mu2: Some(b), .. } => Coefficient::Orthotropic(a, b),
+                _ => Coefficient::Fixed,
             });
             c.entry.push(k);
         }

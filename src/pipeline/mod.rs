@@ -233,15 +233,22 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
 /// QP (phase `iterate`), recover u (phase `recover`), then stresses and gather as for elasticity.
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
-    let s = &ls.scene.solver;
+    let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
     let (dual, b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
     let set = contact.constraint_set();
     let name = s.params.method().name();
     let mut monitor = t.monitor();
-    let sol = t.phase(comm, "iterate", || {
-        qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &s.params, &mut monitor).map_err(|e| Error::solver(name.to_uppercase(), e))
+    let (sol, set) = t.phase(comm, "iterate", || {
+        let zero = vec![0.0; dual.dim()];
+        let r = if contact.is_coulomb() {
+            qp::coulomb::solve(dual.space(), &set, &contact.coulomb, &zero, &s.params, &Default::default(), |set_k, x, p| qp::solve(&Qp::new(&dual, &b, set_k), x, p, &mut monitor))
+                .map(|(sol, set_k, _)| (sol, set_k))
+        } else {
+            qp::solve(&Qp::new(&dual, &b, &set), &zero, &s.params, &mut monitor).map(|sol| (sol, set.clone()))
+        };
+        r.map_err(|e| Error::solver(name.to_uppercase(), e))
     })?;
     let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
     let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
@@ -323,6 +330,14 @@ pub fn resolve_method(solver: &mut crate::scene::SolverSettings, dual: DualKind)
     let smalse = matches!(dual, DualKind::Tfeti { orthogonal: true, .. });
     solver.params = solver.params.with_method(if smalse { Method::SsnBicgstab } else { Method::Tssn });
     solver.auto = false;
+}
+
+/// The scene's solver settings with the automatic method resolved for its dual (what
+/// [`run_solve`] writes into the scene; here for callers of the phases themselves).
+pub fn solver_for(ls: &LoadedScene, model: &Model) -> crate::scene::SolverSettings {
+    let mut s = ls.scene.solver.clone();
+    resolve_method(&mut s, DualKind::of(ls, model));
+    s
 }
 
 /// What the contact solve adds to the elastic fields.
@@ -419,13 +434,15 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         title: ls.scene.title.clone(),
         ranks: comm.size(),
         mpi: comm.library(),
-        problem: match (outcome.is_some(), sol.tfeti.is_some()) {
-            (true, false) => "contact with Tresca friction (monolithic dual)",
-            (true, true) => "contact with Tresca friction (TFETI dual)",
-            (false, false) => "linear elasticity (no contact)",
-            (false, true) => "linear elasticity (no contact, TFETI dual)",
-        }
-        .into(),
+        problem: {
+            let law = if model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) { "Coulomb" } else { "Tresca" };
+            match (outcome.is_some(), sol.tfeti.is_some()) {
+                (true, false) => format!("contact with {law} friction (monolithic dual)"),
+                (true, true) => format!("contact with {law} friction (TFETI dual)"),
+                (false, false) => "linear elasticity (no contact)".into(),
+                (false, true) => "linear elasticity (no contact, TFETI dual)".into(),
+            }
+        },
         tfeti: sol.tfeti.as_ref().map(|f| TfetiReport {
             subdomains_per_body: (0..mesh.bodies.len()).map(|b| f.subdomains.iter().filter(|s| s.piece.body == b).count()).collect(),
             gluing: dec.gluing,

@@ -142,7 +142,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, orthogonal))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
-    let s = &ls.scene.solver;
+    let s = &super::solver_for(ls, model);
     if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
         t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, stiffness_weights(model, &d)))?;
     }
@@ -167,7 +167,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let dec = &ls.scene.decomposition;
     let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
-    let s = &ls.scene.solver;
+    let s = &super::solver_for(ls, model);
     let TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
@@ -179,9 +179,25 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         let qp = Qp::new(&dual, &b, &set)
             .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
             .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
+        let coulomb = contact.filter(|c| c.is_coulomb());
         let r = match (orthogonal, contact.is_some()) {
+            (true, _) if coulomb.is_some() => {
+                return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
+            }
             (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
-            (false, true) => qp::solve(&qp, &y0, params, &mut monitor).map(|s| (s, None)),
+            (false, true) => match coulomb {
+                Some(c) => {
+                    let mu = c.coefficients(&dual.dist.pairs);
+                    qp::coulomb::solve(dual.space(), &set, &mu, &y0, params, &Default::default(), |set_k, x, p| {
+                        let qp = Qp::new(&dual, &b, set_k)
+                            .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
+                            .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
+                        qp::solve(&qp, x, p, &mut monitor)
+                    })
+                    .map(|(s, _, _)| (s, None))
+                }
+                None => qp::solve(&qp, &y0, params, &mut monitor).map(|s| (s, None)),
+            },
             (false, false) => qp::cg::solve(&qp, &y0, &params.common, &mut monitor).map(|s| (s, None)),
         };
         r.map_err(|e| Error::solver(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e))
@@ -213,6 +229,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         // gradient on the I rows), whole on every rank
         let ni = set_i.layout.dim();
         let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
+        // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+        let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
         let bnorm = dual.space().norm(&b);
         let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm);
         let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);

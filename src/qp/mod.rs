@@ -13,6 +13,7 @@
 //! [`kkt`] measures how well a result satisfies the optimality conditions.
 
 pub mod cg;
+pub mod coulomb;
 pub mod driver;
 pub mod gimssn;
 pub mod kkt;
@@ -127,8 +128,15 @@ pub struct Info {
     #[serde(rename = "final_relative_reduced_gradient")]
     pub err: f64,
     pub q: f64,
+    /// Steps of the Coulomb fixed point (each a Tresca solve; 0: not Coulomb).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub fixed_point_iterations: usize,
     /// Every outer step.
     pub history: Vec<Step>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Why a solve failed.
@@ -144,6 +152,8 @@ pub enum QpError {
     SingularCoarse { outer: usize },
     #[error("non-finite value (NaN or infinity) in {what} at outer iteration {outer}")]
     NotFinite { what: &'static str, outer: usize },
+    #[error("the Coulomb fixed point did not converge in {iterations} steps (λν changed by {change:.3e} relative in the last, ε = {eps:.1e}); large μ can make the solution non-unique")]
+    FixedPoint { iterations: usize, change: f64, eps: f64 },
 }
 
 /// The result of a QP solve.

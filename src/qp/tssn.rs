@@ -216,20 +216,20 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::qp::sets::{Disc, Ellipse, TangentSet};
     use crate::qp::{kkt, solve, Method, Params, ProductCounter, Replicated, Silent};
 
     /// A dense SPD A = QᵀQ + shift·I (Q random), counting its products.
-    struct Dense {
+    pub(crate) struct Dense {
         n: usize,
         a: Vec<f64>,
         counter: ProductCounter,
     }
 
     impl Dense {
-        fn random(n: usize, shift: f64, seed: &mut u64) -> Dense {
+        pub(crate) fn random(n: usize, shift: f64, seed: &mut u64) -> Dense {
             let q: Vec<f64> = (0..n * n).map(|_| lcg(seed)).collect();
             let mut a = vec![0.0; n * n];
             for i in 0..n {
@@ -260,7 +260,7 @@ mod tests {
         }
     }
 
-    fn lcg(seed: &mut u64) -> f64 {
+    pub(crate) fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }

@@ -1,0 +1,164 @@
+//! Coulomb friction as a fixed point on the slip bounds: each step solves the Tresca problem
+//! whose tangential sets are the pairs' friction cones cut at the current normal multipliers
+//! (gᵢ = μᵢ·λν,ᵢ), warm-started from the last λ (σ_max measured once), to a tolerance tied to
+//! the last change of λν; it stops when λν — hence every bound — changed by at most ε relative
+//! and the last solve ran at ε. The solve of one Tresca problem is the caller's (any method,
+//! any dual), so this layer knows nothing of meshes or FETI.
+
+use super::lambda::Lambda;
+use super::operator::Space;
+use super::params::Params;
+use super::sets::{Disc, Ellipse, TangentSet};
+use super::{Info, QpError, QpSolution};
+
+/// Settings of the fixed point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedPoint {
+    /// Fixed-point steps at most.
+    pub max_iterations: usize,
+    /// A step's tolerance: max(ε, inner_factor · the last relative change of λν).
+    pub inner_factor: f64,
+}
+
+impl Default for FixedPoint {
+    fn default() -> Self {
+        FixedPoint { max_iterations: 100, inner_factor: 0.1 }
+    }
+}
+
+/// The friction coefficient of one pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Coefficient {
+    /// Not a Coulomb pair: its tangential set stays as given.
+    Fixed,
+    /// Isotropic: ‖λτ,ᵢ‖ ≤ μ λν,ᵢ.
+    Isotropic(f64),
+    /// Orthotropic in the pair's frame: (λ₁/μ₁)² + (λ₂/μ₂)² ≤ λν,ᵢ².
+    Orthotropic(f64, f64),
+}
+
+/// `set` with the tangential set of every Coulomb pair k cut at λν,k = x\[k\] (negative values
+/// count as 0: the point set).
+pub fn bounds(set: &Lambda, mu: &[Coefficient], x: &[f64]) -> Lambda {
+    let mut out = set.clone();
+    for (k, (t, c)) in out.tangent.iter_mut().zip(mu).enumerate() {
+        let ln = x[set.layout.normal(k)].max(0.0);
+        match *c {
+            Coefficient::Fixed => {}
+            Coefficient::Isotropic(m) => *t = TangentSet::Disc(Disc::new(m * ln)),
+            Coefficient::Orthotropic(a, b) => *t = TangentSet::Ellipse(Ellipse::new(a * ln, b * ln)),
+        }
+    }
+    out
+}
+
+/// Counters of the fixed point beside the summed ones of its Tresca solves.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FixedPointInfo {
+    pub iterations: usize,
+    /// Relative change of λν in the last step.
+    pub change: f64,
+}
+
+/// Solves the Coulomb problem on the pairs of `set` (`mu` per pair, in the set's order) from
+/// `x0` to ε = `params.common.eps`: `solve_one(Λ_k, x, params)` solves the Tresca problem over
+/// Λ_k from x. Returns the last solution (its `info` sums every step's counters, the history
+/// concatenated), the Λ it satisfies and the fixed point's counters.
+pub fn solve<S: Space>(
+    space: &S,
+    set: &Lambda,
+    mu: &[Coefficient],
+    x0: &[f64],
+    params: &Params,
+    fp: &FixedPoint,
+    mut solve_one: impl FnMut(&Lambda, &[f64], &Params) -> Result<QpSolution, QpError>,
+) -> Result<(QpSolution, Lambda, FixedPointInfo), QpError> {
+    let eps = params.common.eps;
+    let m = set.layout.m;
+    let normals = |x: &[f64]| {
+        let mut v = vec![0.0; x.len()];
+        v[..m].copy_from_slice(&x[..m]);
+        v
+    };
+    let mut p = params.clone();
+    let mut x = x0.to_vec();
+    let mut change = 1.0f64;
+    let mut total = Info::default();
+    let mut current = bounds(set, mu, &x);
+    for it in 1..=fp.max_iterations {
+        p.common.eps = (fp.inner_factor * change).max(eps);
+        let sol = solve_one(&current, &x, &p)?;
+        let n_a_before = total.n_a;
+        total.iterations += sol.info.iterations;
+        total.n_a += sol.info.n_a;
+        total.n_a_power += sol.info.n_a_power;
+        total.inner_iterations += sol.info.inner_iterations;
+        total.preconditioner_applications += sol.info.preconditioner_applications;
+        total.history.extend(sol.info.history.iter().cloned().map(|mut s| {
+            s.n_a += n_a_before;
+            s
+        }));
+        (total.sigma_est, total.rho, total.err, total.q) = (sol.info.sigma_est, sol.info.rho, sol.info.err, sol.info.q);
+        // σ_max does not depend on Λ: measured once
+        p.common.sigma.get_or_insert(sol.info.sigma_est);
+        let (old, new) = (normals(&x), normals(&sol.lambda));
+        let diff: Vec<f64> = new.iter().zip(&old).map(|(a, b)| a - b).collect();
+        change = space.norm(&diff) / space.norm(&new).max(f64::MIN_POSITIVE);
+        if !change.is_finite() {
+            return Err(QpError::NotFinite { what: "the Coulomb fixed point's normal multipliers", outer: it });
+        }
+        x.copy_from_slice(&sol.lambda);
+        if change <= eps && p.common.eps <= eps {
+            total.fixed_point_iterations = it;
+            let info = FixedPointInfo { iterations: it, change };
+            return Ok((QpSolution { info: total, ..sol }, current, info));
+        }
+        current = bounds(set, mu, &x);
+    }
+    Err(QpError::FixedPoint { iterations: fp.max_iterations, change, eps })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::tssn::tests::{lcg, Dense};
+    use crate::qp::{kkt, Method, Qp, Replicated, Silent};
+
+    #[test]
+    fn the_fixed_point_is_a_tresca_solution_with_its_own_bounds() {
+        let m = 10;
+        let n = 3 * m;
+        let mut seed = 7u64;
+        let a = Dense::random(n, 1.0, &mut seed);
+        // pressing loads (b_ν > 0) with tangential pushes
+        let b: Vec<f64> = (0..n).map(|i| if i < m { 2.0 + lcg(&mut seed) } else { 3.0 * lcg(&mut seed) }).collect();
+        let set = Lambda::new(m, Some(vec![TangentSet::Disc(Disc::new(0.0)); m]));
+        let mu = vec![Coefficient::Isotropic(0.3); m];
+        let p = crate::qp::Params::new(Method::Tssn).with_eps(1e-10);
+        let (sol, fixed, info) = solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| {
+            crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent)
+        })
+        .expect("the fixed point converges");
+        assert!(info.iterations > 1 && info.change <= 1e-10, "{info:?}");
+        // the bounds it satisfies are μ times its own normals (to ε)
+        for k in 0..m {
+            let TangentSet::Disc(d) = fixed.tangent[k] else { panic!("a disc") };
+            let want = 0.3 * sol.lambda[k].max(0.0);
+            assert!((d.radius - want).abs() <= 1e-8 * (1.0 + want), "pair {k}: bound {} vs μλν {want}", d.radius);
+        }
+        // a Tresca solve with those bounds from zero gives the same λ
+        let t = crate::qp::solve(&Qp::new(&a, &b, &fixed), &vec![0.0; n], &p, &mut Silent).unwrap();
+        let d = t.lambda.iter().zip(&sol.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-7, "Tresca with the fixed point's bounds differs by {d:e}");
+        let k = kkt::residuals(&fixed, &sol.lambda, &sol.gradient, Replicated.norm(&b));
+        assert!(k.worst() <= 1e-8, "KKT {k:?}");
+        // some pair slides on its cone
+        let on_cone = (0..m)
+            .filter(|&k| {
+                let (l1, l2) = (sol.lambda[m + 2 * k], sol.lambda[m + 2 * k + 1]);
+                sol.lambda[k] > 1e-6 && ((l1 * l1 + l2 * l2).sqrt() - 0.3 * sol.lambda[k]).abs() <= 1e-6 * (1.0 + sol.lambda[k])
+            })
+            .count();
+        assert!(on_cone > 0, "no pair on its friction cone");
+    }
+}
