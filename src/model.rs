@@ -44,7 +44,18 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let mut mesh = Mesh::default();
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
-            (Some(bx), _) => boxgen::generate(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3])),
+            (Some(bx), _) => {
+                let mut geom = boxgen::generate(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]));
+                if let Some(c) = &bx.cylinder {
+                    // the curved side moves out by the bulge, the nodes between in proportion
+                    let (lo, hi) = (bx.min[2], bx.max[2]);
+                    for p in &mut geom.nodes {
+                        let b = bx.bulge(p[0]);
+                        p[2] += if c.side == "zmin" { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
+                    }
+                }
+                geom
+            }
             (_, Some(g)) => {
                 let path = ls.dir().join(&g.file);
                 let mut geom = gmsh::read(&path, g.volume.as_deref())?;

@@ -91,6 +91,28 @@ pub struct BoxDef {
     /// Nodes per direction; defaults to `[mesh.n; 3]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub nodes: Option<[usize; 3]>,
+    /// Bends the `zmin` or `zmax` side into a cylinder (axis along y through the side's centre
+    /// line, bulging outward); the nodes between follow linearly so the opposite side stays flat.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<Cylinder>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cylinder {
+    /// `zmin` or `zmax`.
+    pub side: String,
+    pub radius: f64,
+}
+
+impl BoxDef {
+    /// How far the curved side lies outside the flat box at x: √(r² − (x − x_c)²) − √(r² − h²)
+    /// (h the half-width in x): the full sagitta on the centre line, 0 at the edges.
+    pub fn bulge(&self, x: f64) -> f64 {
+        let Some(c) = &self.cylinder else { return 0.0 };
+        let (xc, h, r) = (0.5 * (self.min[0] + self.max[0]), 0.5 * (self.max[0] - self.min[0]), c.radius);
+        (r * r - (x - xc) * (x - xc)).max(0.0).sqrt() - (r * r - h * h).max(0.0).sqrt()
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -654,6 +676,18 @@ impl Scene {
                 (Some(bx), None) => {
                     finite(k("box.min"), &bx.min)?;
                     finite(k("box.max"), &bx.max)?;
+                    if let Some(c) = &bx.cylinder {
+                        if c.side != "zmin" && c.side != "zmax" {
+                            return Err(Error::scene(k("box.cylinder.side"), format!("must be \"zmin\" or \"zmax\", got \"{}\"", c.side)));
+                        }
+                        let (h, t) = (0.5 * (bx.max[0] - bx.min[0]), bx.max[2] - bx.min[2]);
+                        if !(c.radius.is_finite() && c.radius >= h) {
+                            return Err(Error::scene(k("box.cylinder.radius"), format!("must be finite and at least the half-width {h} of the box in x, got {}", c.radius)));
+                        }
+                        if bx.bulge(0.5 * (bx.min[0] + bx.max[0])) >= t {
+                            return Err(Error::scene(k("box.cylinder.radius"), format!("the curved side would bulge more than the box's height {t}")));
+                        }
+                    }
                     if (0..3).any(|d| bx.max[d] <= bx.min[d]) {
                         return Err(Error::scene(k("box"), "max must exceed min in every direction"));
                     }

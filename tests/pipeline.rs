@@ -204,3 +204,29 @@ fn the_report_and_the_solver_history_read_back_typed() {
     assert_eq!(history.iter().map(|h| h.inner).sum::<usize>(), sv.info.inner_iterations);
     assert!(history.last().unwrap().err <= 1e-6);
 }
+
+#[test]
+fn a_curved_face_pairs_as_slave_and_as_master() {
+    // the cylindrical punch on the flat block, once with the curved side as the slave face and
+    // once as the master: the same pairs, the same contact force (opposite on the other body),
+    // the same displacements
+    let dir = tmpdir("curved");
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/bench/cylinder_on_flat.toml");
+    let text = std::fs::read_to_string(&base).unwrap();
+    let swapped = text.replace("slave = \"upper.zmin\"", "slave = \"X\"").replace("master = \"lower.zmax\"", "master = \"upper.zmin\"").replace("slave = \"X\"", "slave = \"lower.zmax\"");
+    assert_ne!(text, swapped);
+    let other = dir.join("swapped.toml");
+    std::fs::write(&other, swapped).unwrap();
+    let a = solve(&base, &[], &dir.join("a.h5"));
+    let b = solve(&other, &[], &dir.join("b.h5"));
+    let (ca, cb) = (a.report.contact.as_ref().unwrap(), b.report.contact.as_ref().unwrap());
+    assert_eq!((ca.pairs, ca.open, ca.stick, ca.slip), (cb.pairs, cb.open, cb.stick, cb.slip));
+    assert!(ca.open < ca.pairs && ca.pairs == 17 * 3, "{ca:?}");
+    for d in 0..3 {
+        assert!((ca.total_force_on_slave[d] + cb.total_force_on_slave[d]).abs() <= 1e-8 * ca.total_force_on_slave[2].abs(), "{ca:?} {cb:?}");
+    }
+    assert!(ca.total_force_on_slave[2] > 0.0);
+    let du = a.solution.displacement.iter().zip(&b.solution.displacement).flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs())).fold(0.0, f64::max);
+    assert!(du <= 1e-9, "displacements differ by {du:e}");
+}
+

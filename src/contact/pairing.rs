@@ -2,9 +2,11 @@
 //!
 //! For each `[[contact.pair]]`, every node of the slave face is matched with the master node that
 //! has the same position in the contact plane (distance measured after projecting out the slave
-//! normal, within `tolerance`); the distance along the normal is the initial gap dᵢ ≥ 0. The
-//! frame of pair i is the slave face's outward unit normal nᵢ (averaged over the quads around the
-//! node, area-weighted; exact for planar faces) and tangents t₁ᵢ (the orthotropic `direction`,
+//! normal, within `tolerance`; failing that, the master node whose normal line passes through
+//! the slave node, so a curved slave face pairs with a flat master); the distance along the
+//! normal is the initial gap dᵢ ≥ 0. The frame of pair i is the slave face's outward unit normal
+//! nᵢ (averaged over the quads around the node, area-weighted; exact for planar faces), or minus
+//! the master's where the master's normal line made the match; tangents t₁ᵢ (the orthotropic `direction`,
 //! else the global x axis — y if x is nearly normal — projected into the plane), t₂ᵢ = t₁ᵢ × nᵢ.
 //! With u_s, u_m the displacements of the slave and master node, pair i contributes
 //!
@@ -198,25 +200,37 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             grid.entry(cell(mesh.nodes[v])).or_default().push(v);
         }
         let mut used = HashMap::new();
+        // off the line along `dir` through x, the distance of y
+        let off = |x: [f64; 3], y: [f64; 3], dir: [f64; 3]| {
+            let d = sub(y, x);
+            let t = sub(d, dir.map(|v| v * dot(d, dir)));
+            dot(t, t).sqrt()
+        };
         for &s in &snodes {
             let xs = mesh.nodes[s];
-            let n = normals[&s];
             let cs = cell(xs);
-            let mut best: Option<(f64, usize)> = None;
+            // the master node on the slave node's normal line; failing that, the master node
+            // whose normal line passes through the slave node (a curved slave face against a
+            // flatter master: the frame then follows the master face)
+            let mut best: [Option<(f64, usize)>; 2] = [None, None];
             for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
                         for &m in grid.get(&[cs[0] + dx, cs[1] + dy, cs[2] + dz]).into_iter().flatten() {
-                            let dxm = sub(mesh.nodes[m], xs);
-                            let t = sub(dxm, n.map(|v| v * dot(dxm, n)));
-                            let dist = dot(t, t).sqrt();
-                            if dist <= tol && best.is_none_or(|b| dist < b.0) {
-                                best = Some((dist, m));
+                            for (b, dist) in best.iter_mut().zip([off(xs, mesh.nodes[m], normals[&s]), off(mesh.nodes[m], xs, mnormals[&m])]) {
+                                if dist <= tol && b.is_none_or(|b| dist < b.0) {
+                                    *b = Some((dist, m));
+                                }
                             }
                         }
                     }
                 }
             }
+            let (n, best) = match best {
+                [Some(b), _] => (normals[&s], Some(b)),
+                [None, Some(b)] => (mnormals[&b.1].map(|v| -v), Some(b)),
+                _ => (normals[&s], None),
+            };
             let Some((_, m)) = best else {
                 return Err(Error::scene(
                     key,
