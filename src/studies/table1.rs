@@ -188,6 +188,10 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut each: impl FnMut(&Cell), mut prog
         let ls = comm.agree(crate::scene::load(&args.scene, &sets))?;
         let model = comm.agree(crate::model::build(&ls))?;
         let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "table1 needs a scene with contact"))?;
+        if contact.is_coulomb() {
+            // its rows time one QP solve per tolerance; Coulomb's fixed point runs in `solve`
+            return Err(Error::scene("contact.pair.friction", "table1 times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)"));
+        }
         let mut t = Timings::default();
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);

@@ -208,6 +208,10 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let ls = crate::scene::load(&args.scene, &sets)?;
         let model = crate::model::build(&ls)?;
         let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "work-precision needs a scene with contact"))?;
+        if contact.is_coulomb() {
+            // its rows time one QP solve per tolerance; Coulomb's fixed point runs in `solve`
+            return Err(Error::scene("contact.pair.friction", "work-precision times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)"));
+        }
         let mut t = Timings::default();
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
         let factorize_s: f64 = t.phases.iter().map(|p| p.1).sum();
