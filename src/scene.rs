@@ -487,6 +487,12 @@ pub struct OutputSettings {
     /// it has in memory, bit for bit (phase `verify`).
     #[serde(default)]
     pub verify: bool,
+    /// Also write the solved dual problem of a Coulomb scene on the monolithic dual — the
+    /// Delassus matrix W = B K⁻¹ Bᵀ, q = −b, μ per contact, our r = λ and u = W r + q, per
+    /// contact in the order (normal, t₁, t₂) — to this HDF5 file, for other solvers
+    /// (`run/peer/siconos_check.py`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub export_dual: Option<PathBuf>,
 }
 
 fn default_fields() -> Vec<String> {
@@ -495,7 +501,7 @@ fn default_fields() -> Vec<String> {
 
 impl Default for OutputSettings {
     fn default() -> Self {
-        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false }
+        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false, export_dual: None }
     }
 }
 

@@ -97,6 +97,8 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=-1"], &["solver.patience"]);
     assert_clean_failure("coulomb-mixed", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3, mu1=0.2}"], &["contact.pair[0].friction", "mu1"]);
     assert_clean_failure("coulomb-negative", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=-1.0}"], &["contact.pair[0].friction.mu"]);
+    assert_clean_failure("export-tresca", SEED, &["--set", "mesh.n=3", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "Coulomb"]);
+    assert_clean_failure("export-tfeti", SEED, &["--set", "mesh.n=3", "--set", "decomposition.subdomains=2", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3}", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "TFETI"]);
     assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["TSSN", "no convergence"]);

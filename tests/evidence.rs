@@ -167,3 +167,22 @@ fn stability_tells_converged_stopped_and_wrong_apart() {
 fn line_of(out: &str, name: &str) -> String {
     out.lines().find(|l| l.starts_with(name)).unwrap_or_else(|| panic!("{out}")).to_string()
 }
+
+#[test]
+fn siconos_solves_the_exported_coulomb_problem_to_our_solution() {
+    // the peer check: tresca-feti exports the Coulomb problem it solved on the monolithic dual
+    // (W = B K⁻¹ Bᵀ, q, μ per contact, its r); Siconos' fc3d NSGS solves it from zero and must
+    // land on tresca-feti's r (partial slip: some pairs stick, some slide)
+    let dir = tmpdir("siconos");
+    let dual = dir.join("dual.h5");
+    let o = Command::new(BIN)
+        .args(["solve", root().join("run/stress/coulomb_partial_slip.toml").to_str().unwrap(), "--quiet", "--out", dir.join("r.h5").to_str().unwrap()])
+        .args(["--set", "mesh.n=6", "--set", "solver.eps=1e-12", "--set", &format!("output.export_dual=\"{}\"", dual.display())])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/siconos_check.py")).arg(&dual).arg("1e-9").output().expect("python3 (run/install-deps installs python3-siconos)");
+    let out = String::from_utf8_lossy(&check.stdout);
+    assert!(check.status.success(), "{out}{}", String::from_utf8_lossy(&check.stderr));
+    assert!(out.contains("in contact") && out.contains("max|r_siconos - r_tresca_feti|"), "{out}");
+}

@@ -63,6 +63,23 @@ pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Re
     })
 }
 
+/// Writes named f64 arrays (each with its shape) to a new serial HDF5 file; a partly written
+/// file is removed.
+pub fn write_arrays(path: &Path, arrays: &[(&str, Vec<usize>, &[f64])]) -> Result<()> {
+    let shown = path.display().to_string();
+    let result = (|| -> std::result::Result<(), ::hdf5::Error> {
+        let file = ::hdf5::File::create(path)?;
+        for (name, shape, v) in arrays {
+            file.new_dataset::<f64>().shape(shape.clone()).create(*name)?.write_raw(v)?;
+        }
+        Ok(())
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(path);
+        Error::output(&shown, e.to_string())
+    })
+}
+
 /// Reads a file written by [`write`] back.
 ///
 /// Fields and attributes come back in creation order when the file tracks it (files written

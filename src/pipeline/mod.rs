@@ -251,6 +251,9 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         r.map_err(|e| Error::solver(name.to_uppercase(), e))
     })?;
     let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
+    if let Some(path) = &ls.scene.output.export_dual {
+        t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
+    }
     let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
     let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
     let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
@@ -259,6 +262,42 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let state = contact_state(contact, &set, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
     let kkt = qp::kkt::residuals(&set, &rec.lambda, &rec.gap, bnorm);
     Ok((solution, ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt }))
+}
+
+/// `output.export_dual`: the Coulomb problem on the monolithic dual in the local form of the
+/// frictional-contact literature, u = W r + q with per contact (normal, t₁, t₂): W = A (by
+/// 3m products), q = −b, μ, our r = λ and u = W r + q; rank 0 writes.
+fn export_dual<C: Comm>(comm: &C, dual: &MonolithicDual<'_, C>, b: &[f64], contact: &crate::contact::pairing::Contact, lambda: &[f64], path: &std::path::Path) -> Result<()> {
+    use crate::qp::coulomb::Coefficient;
+    let m = contact.len();
+    let mu: Vec<f64> = contact
+        .coulomb
+        .iter()
+        .map(|c| match *c {
+            Coefficient::Isotropic(mu) => Ok(mu),
+            _ => Err(Error::scene("output.export_dual", "exports isotropic Coulomb friction on every pair (friction = { type = \"coulomb\", mu })")),
+        })
+        .collect::<Result<_>>()?;
+    let layout = qp::Layout::contact(m, true);
+    let idx = |k: usize| -> usize { let (a, i) = (k / 3, k % 3); if i == 0 { layout.normal(a) } else { layout.tangent(a, i - 1) } };
+    let n = 3 * m;
+    let mut w = vec![0.0; n * n];
+    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
+    for j in 0..n {
+        e[idx(j)] = 1.0;
+        dual.apply(&e, &mut col);
+        e[idx(j)] = 0.0;
+        for i in 0..n {
+            w[i * n + j] = col[idx(i)];
+        }
+    }
+    let q: Vec<f64> = (0..n).map(|k| -b[idx(k)]).collect();
+    let r: Vec<f64> = (0..n).map(|k| lambda[idx(k)]).collect();
+    let u: Vec<f64> = (0..n).map(|i| q[i] + (0..n).map(|j| w[i * n + j] * r[j]).sum::<f64>()).collect();
+    if comm.is_root() {
+        crate::output::hdf5::write_arrays(path, &[("W", vec![n, n], &w), ("q", vec![n], &q), ("mu", vec![m], &mu), ("r", vec![n], &r), ("u", vec![n], &u)])?;
+    }
+    Ok(())
 }
 
 /// Which dual problem a scene is solved on.
@@ -369,6 +408,18 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
+    if ls.scene.output.export_dual.is_some() {
+        let why = if tfeti {
+            Some("exports the monolithic dual; this scene is solved by TFETI (set decomposition.subdomains = 1)")
+        } else if !model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) {
+            Some("exports a Coulomb problem; the scene has no Coulomb pair")
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            return Err(Error::scene("output.export_dual", why));
+        }
+    }
     let (sol, outcome) = match &model.pairs {
         _ if tfeti => tfeti::solve(comm, &ls, &model, &mut t)?,
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
