@@ -61,11 +61,16 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
         if s.is_outside(&[f64::MIN_POSITIVE, f64::MIN_POSITIVE]) {
             continue; // the point set {0}: every r̄τ is admissible
         }
+        // a set shrunk to a point admits every r̄τ: a tiny one (a Coulomb cone cut at a λν of
+        // round-off size) is that far from it
+        let mut far = [0.0; 2];
+        s.project(&[1e300, 1e300], &mut far);
+        let size = far[0].hypot(far[1]) / lscale;
         let stick = g[0].hypot(g[1]) / bnorm;
         // the nearest boundary point: px itself if λ̄τ is outside, else the boundary point
         // along the ray from 0 through λ̄τ (exact for a disc, a bound for an ellipse)
         if px == [0.0, 0.0] {
-            k.friction_law = k.friction_law.max(stick);
+            k.friction_law = k.friction_law.max(stick.min(size));
             continue;
         }
         let on = if s.is_outside(&x) {
@@ -80,7 +85,7 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
         let along = (g[0] * t[0] + g[1] * t[1]).abs();
         let outward = (g[0] * n[0] + g[1] * n[1]).max(0.0);
         let slip = dist.max(along.max(outward) / bnorm);
-        k.friction_law = k.friction_law.max(stick.min(slip));
+        k.friction_law = k.friction_law.max(stick.min(slip).min(size));
     }
     k
 }
@@ -115,5 +120,19 @@ mod tests {
         // on the bound but slipping against the friction force, or sideways
         assert!(residuals(&s, &[1.0, 1.0, 0.0], &[0.0, 0.3, 0.0], 1.0).friction_law > 0.2);
         assert!(residuals(&s, &[1.0, 1.0, 0.0], &[0.0, 0.0, 0.3], 1.0).friction_law > 0.2);
+    }
+
+    #[test]
+    fn a_cone_cut_at_round_off_is_as_far_from_admissible_as_its_size() {
+        // a Coulomb pair with λν = 1e-14 (an open pair left at round-off): its disc has radius
+        // μλν; any slip is admissible up to that size, while a real disc keeps the full residual
+        let tiny = Lambda::new(2, Some(vec![TangentSet::Disc(Disc::new(3e-15)), TangentSet::Disc(Disc::new(1.0))]));
+        // pair 0: λτ inside its tiny disc, slipping sideways; pair 1 exact (sliding along +x)
+        let k = residuals(&tiny, &[1e-14, 2.0, 1e-15, 0.0, 1.0, 0.0], &[0.5, 0.0, 0.0, 0.3, -0.3, 0.0], 1.0);
+        assert!(k.friction_law <= 2e-15, "{k:?}");
+        // the same slip at a disc of radius 0.5 is a violation
+        let half = Lambda::new(2, Some(vec![TangentSet::Disc(Disc::new(0.5)), TangentSet::Disc(Disc::new(1.0))]));
+        let k = residuals(&half, &[1e-14, 2.0, 1e-15, 0.0, 1.0, 0.0], &[0.5, 0.0, 0.0, 0.3, -0.3, 0.0], 1.0);
+        assert!(k.friction_law > 0.2, "{k:?}");
     }
 }
