@@ -186,3 +186,25 @@ fn siconos_solves_the_exported_coulomb_problem_to_our_solution() {
     assert!(check.status.success(), "{out}{}", String::from_utf8_lossy(&check.stderr));
     assert!(out.contains("in contact") && out.contains("max|r_siconos - r_tresca_feti|"), "{out}");
 }
+
+#[test]
+fn work_precision_has_coulomb_rows() {
+    // every solve of a Coulomb scene (the reference too) is the fixed point; the error follows ε
+    let dir = tmpdir("wp_coulomb");
+    let path = dir.join("wp.csv");
+    let scene = root().join("run/stress/coulomb_partial_slip.toml");
+    let o = Command::new(BIN)
+        .args(["work-precision", "--scene", scene.to_str().unwrap(), "--sizes", "6", "--subdomains", "0,2", "--eps", "1e-5,1e-9", "--solvers", "tssn", "--csv", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv(&path);
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    for r in &rows {
+        let eps = num(r, "eps");
+        assert!(r["status"] == "ok" && num(r, "err_u") <= 100.0 * eps && num(r, "kkt") <= 10.0 * eps, "{r:?}");
+    }
+    // Clarabel's SOCP is the Tresca problem: refused for a Coulomb scene
+    let o = Command::new(BIN).args(["work-precision", "--scene", scene.to_str().unwrap(), "--sizes", "4", "--solvers", "tssn,clarabel"]).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--solvers"));
+}

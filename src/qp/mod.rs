@@ -55,6 +55,23 @@ impl<'a, A: Operator> Qp<'a, A> {
     pub fn with_preconditioner(self, m: Option<&'a dyn Preconditioner>) -> Self {
         Qp { preconditioner: m, ..self }
     }
+
+    /// The same QP over another Λ.
+    pub fn with_set<'b>(&self, set: &'b Lambda) -> Qp<'b, A>
+    where
+        'a: 'b,
+    {
+        Qp { a: self.a, b: self.b, set, preconditioner: self.preconditioner, coarse: self.coarse }
+    }
+}
+
+/// Solves the QP, or — with Coulomb coefficients per pair of its Λ — the Coulomb problem by the
+/// fixed point of [`coulomb::solve`] (default settings) from `lambda0`.
+pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[coulomb::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    match coulomb {
+        Some(mu) => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),
+        None => solve(qp, lambda0, p, monitor),
+    }
 }
 
 impl Method {

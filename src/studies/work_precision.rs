@@ -21,6 +21,7 @@ use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::pipeline::tfeti::setup;
+use crate::qp::coulomb::Coefficient;
 use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
 use crate::qp::{self, kkt, Lambda, Method, Operator, Params, Preconditioner, Qp, QpSolution, Silent, Space};
 use crate::scene::Projector;
@@ -157,7 +158,7 @@ fn blank(n: usize, subdomains: usize, solver: Solver, setup_s: f64) -> Point {
 /// One dual solver's ε sweep (loose → tight) on the operator `a`; the sweep stops once a solve
 /// fails or takes longer than `max_seconds`.
 #[allow(clippy::too_many_arguments)]
-fn sweep<A: Operator>(qp: &Qp<'_, A>, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
+fn sweep<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[Coefficient]>, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
     let zero = vec![0.0; qp.a.dim()];
     let mut stop = false;
     for &e in eps {
@@ -167,7 +168,7 @@ fn sweep<A: Operator>(qp: &Qp<'_, A>, column: Column, base: &Params, args: &Args
             p.common.max_outer = usize::MAX;
             p.common.max_products = args.max_products;
             let t0 = Instant::now();
-            let r = qp::solve(qp, &zero, &p, &mut Silent);
+            let r = qp::solve_friction(qp, coulomb, &zero, &p, &mut Silent);
             pt.solve_s = t0.elapsed().as_secs_f64();
             match r {
                 Ok(sol) => {
@@ -208,9 +209,10 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let ls = crate::scene::load(&args.scene, &sets)?;
         let model = crate::model::build(&ls)?;
         let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "work-precision needs a scene with contact"))?;
-        if contact.is_coulomb() {
-            // its rows time one QP solve per tolerance; Coulomb's fixed point runs in `solve`
-            return Err(Error::scene("contact.pair.friction", "work-precision times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)"));
+        // Coulomb: every solve (the reference too) is the fixed point on the slip bounds
+        let coulomb = contact.is_coulomb().then(|| contact.coulomb.clone());
+        if coulomb.is_some() && args.solvers.contains(&Solver::Clarabel) {
+            return Err(Error::scene("--solvers", "clarabel solves the Tresca SOCP: leave it out for a Coulomb scene"));
         }
         let mut t = Timings::default();
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
@@ -225,7 +227,12 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         p.common.eps = args.reference_eps;
         p.common.max_outer = 10_000;
         let what = format!("the reference solve (SSN-BiCGSTAB, ε = {:.0e}) at N = {n}", args.reference_eps);
-        let reference = qp::solve(&qp_mono, &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
+        let reference = qp::solve_friction(&qp_mono, coulomb.as_deref(), &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
+        // the cones the KKT residuals are taken against: cut at each solution's λν (Coulomb)
+        let cones = |set: &crate::qp::Lambda, l: &[f64]| match &coulomb {
+            Some(mu) => crate::qp::coulomb::bounds(set, mu, l),
+            None => set.clone(),
+        };
         let u_ref = dual.recover(&reference.lambda).u;
         // the reference per mesh node, for the subdomains' copies
         let mut u_nodes = vec![[0.0; 3]; model.mesh.nodes.len()];
@@ -241,13 +248,13 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                 on_problem(&problem);
                 let measure = |sol: &QpSolution| {
                     let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &u_ref);
-                    (e_u, lambda_error(&sol.lambda, &reference.lambda), kkt::residuals(&set, &sol.lambda, &sol.gradient, bnorm).worst())
+                    (e_u, lambda_error(&sol.lambda, &reference.lambda), kkt::residuals(&cones(&set, &sol.lambda), &sol.lambda, &sol.gradient, bnorm).worst())
                 };
                 for &solver in &args.solvers {
                     match solver {
                         // the monolithic dual has no preconditioner
                         Solver::Dual(c) if preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err() => {}
-                        Solver::Dual(c) => sweep(&qp_mono, c, base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
+                        Solver::Dual(c) => sweep(&qp_mono, coulomb.as_deref(), c, base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
                         Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, factorize_s), &mut on_point, &mut points)?,
                     }
                 }
@@ -280,13 +287,14 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                         }
                     }
                     let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
-                    (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&set, &li, &ri, bnorm).worst())
+                    (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&cones(&set, &li), &li, &ri, bnorm).worst())
                 };
                 let m = prob.dual.preconditioner();
                 let dk = DualKind::Tfeti { orthogonal: false, contact: true, projected: true };
                 let coarse = crate::pipeline::projected(c.method, dk).then_some(&prob.dual as &dyn crate::qp::Coarse);
                 let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner)).with_coarse(coarse);
-                sweep(&qp, c, base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
+                let mu = coulomb.as_ref().map(|_| contact.coefficients(&prob.dual.dist.pairs));
+                sweep(&qp, mu.as_deref(), c, base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
             }
             problems.push(problem);
         }
