@@ -99,6 +99,9 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("coulomb-negative", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=-1.0}"], &["contact.pair[0].friction.mu"]);
     assert_clean_failure("export-tresca", SEED, &["--set", "mesh.n=3", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "Coulomb"]);
     assert_clean_failure("export-tfeti", SEED, &["--set", "mesh.n=3", "--set", "decomposition.subdomains=2", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3}", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "TFETI"]);
+    assert_clean_failure("cylinder-side", SEED, &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"ymin\", radius=4.0}"], &["body[0].box.cylinder.side"]);
+    assert_clean_failure("cylinder-radius", SEED, &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"zmin\", radius=0.5}"], &["body[0].box.cylinder.radius"]);
+    assert_clean_failure("coulomb-empty", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\"}"], &["contact.pair[0].friction", "mu"]);
     assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
     assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["TSSN", "no convergence"]);
