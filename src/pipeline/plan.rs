@@ -4,7 +4,7 @@
 //! dual's size and its Dirichlet share, the A-products a solve takes and the time of one — and
 //! the cheapest is taken. `tresca-feti check` prints the table.
 //!
-//! Time of a candidate = factorization + nA · t_A with
+//! Time of a candidate = setup + (nA + σ-estimate products) · t_A with
 //! - t_A = [`SECONDS_PER_NNZ`] · nnz(L) of the busiest rank (the forward and backward solves
 //!   run at the memory bandwidth) + [`SECONDS_PER_ROW`] · dual rows per rank (the Krylov
 //!   vectors, B, the exchange and the coarse projection of TFETI);

@@ -62,9 +62,8 @@ pub enum CgStop {
 pub enum SigmaEstimate {
     /// The power method from a fixed start vector.
     Power,
-    /// Lanczos from the same vector: the largest Ritz value (the default: 10 steps take at most
-    /// the products of 30 power iterations plus the solve on every scene of the benchmark set,
-    /// README).
+    /// Lanczos from the same vector: the largest Ritz value (the default, 10 steps: chosen on
+    /// the benchmark set, README).
     #[default]
     Lanczos,
 }
@@ -160,8 +159,7 @@ pub struct Tssn {
     pub slide_cap: f64,
     /// The safeguard fires when q at the Newton start rose above the last accepted start's at
     /// this many starts in a row (1: at every rise, the monotone rule); 0, the default: never
-    /// (on the benchmark set the safeguard's GIMSSN steps stalled the thin plate and never
-    /// helped elsewhere, README).
+    /// (chosen on the benchmark set, README).
     pub patience: usize,
 }
 
