@@ -30,24 +30,27 @@ pub enum Form {
 
 /// S (Dirichlet) or K_bb (lumped) of one piece.
 pub struct Schur {
-    k: SymCsc,
     /// Interior DOF of each DOF (`usize::MAX` for boundary DOFs).
     interior: Vec<usize>,
     /// Boundary DOFs, ascending.
     pub boundary: Vec<usize>,
-    /// K_ii's factor; `None`: lumped (S ≈ K_bb) or dense.
-    chol: Option<Cholesky>,
-    /// S on the boundary DOFs (in the order of `boundary`), when explicit.
-    dense: Option<Mat<f64>>,
-    /// K_bb (lower triangle, in the order of `boundary`), when lumped.
-    kbb: Option<SymCsc>,
+    op: Op,
+}
+
+/// What a [`Form`] keeps.
+enum Op {
+    /// K_bb (lower triangle, in the order of `boundary`).
+    Lumped(SymCsc),
+    /// K and K_ii's factor (`None` when every DOF is on the boundary).
+    MatrixFree(SymCsc, Option<Cholesky>),
+    /// S on the boundary DOFs, in the order of `boundary`.
+    Dense(Mat<f64>),
 }
 
 impl Schur {
     /// The operator of K (lower triangle) onto the DOFs `boundary` (any order, no repeats) in
     /// the given form.
     pub fn new(k: &SymCsc, boundary: &[usize], form: Form) -> Result<Schur> {
-        let dirichlet = form == Form::MatrixFree;
         let n = k.n;
         let mut boundary = boundary.to_vec();
         boundary.sort_unstable();
@@ -64,50 +67,52 @@ impl Schur {
                 ni += 1;
             }
         }
-        let chol = if dirichlet && ni > 0 {
-            let kii = k.principal(&interior);
-            Some(Cholesky::factorize(&kii, Ordering::Amd)?)
-        } else {
-            None
-        };
-        let dense = if form == Form::Dense { Some(dense_schur(k, &interior, &boundary)?) } else { None };
-        let kbb = (form == Form::Lumped).then(|| {
-            let mut at = vec![usize::MAX; n];
-            for (i, &d) in boundary.iter().enumerate() {
-                at[d] = i;
+        let op = match form {
+            Form::Lumped => {
+                let mut at = vec![usize::MAX; n];
+                for (i, &d) in boundary.iter().enumerate() {
+                    at[d] = i;
+                }
+                Op::Lumped(k.principal(&at))
             }
-            k.principal(&at)
-        });
-        Ok(Schur { k: k.clone(), interior, boundary, chol, dense, kbb })
+            Form::MatrixFree => {
+                let chol = if ni > 0 { Some(Cholesky::factorize(&k.principal(&interior), Ordering::Amd)?) } else { None };
+                Op::MatrixFree(k.clone(), chol)
+            }
+            Form::Dense => Op::Dense(dense_schur(k, &interior, &boundary)?),
+        };
+        Ok(Schur { interior, boundary, op })
     }
-
 
     /// x ← S x for x zero off the boundary (the result is zero off the boundary too).
     pub fn apply_in_place(&self, x: &mut [f64]) {
-        if let Some(kbb) = &self.kbb {
-            let xb: Vec<f64> = self.boundary.iter().map(|&d| x[d]).collect();
-            let yb = kbb.mul(&xb);
-            x.fill(0.0);
-            for (&d, y) in self.boundary.iter().zip(yb) {
-                x[d] = y;
+        let (k, chol) = match &self.op {
+            Op::Lumped(kbb) => {
+                let xb: Vec<f64> = self.boundary.iter().map(|&d| x[d]).collect();
+                let yb = kbb.mul(&xb);
+                x.fill(0.0);
+                for (&d, y) in self.boundary.iter().zip(yb) {
+                    x[d] = y;
+                }
+                return;
             }
-            return;
-        }
-        if let Some(s) = &self.dense {
-            let xb = Mat::from_fn(self.boundary.len(), 1, |i, _| x[self.boundary[i]]);
-            let yb = s * &xb;
-            x.fill(0.0);
-            for (i, &d) in self.boundary.iter().enumerate() {
-                x[d] = yb[(i, 0)];
+            Op::Dense(s) => {
+                let xb = Mat::from_fn(self.boundary.len(), 1, |i, _| x[self.boundary[i]]);
+                let yb = s * &xb;
+                x.fill(0.0);
+                for (i, &d) in self.boundary.iter().enumerate() {
+                    x[d] = yb[(i, 0)];
+                }
+                return;
             }
-            return;
-        }
-        let y = self.k.mul(x);
+            Op::MatrixFree(k, chol) => (k, chol),
+        };
+        let y = k.mul(x);
         x.fill(0.0);
         for &d in &self.boundary {
             x[d] = y[d];
         }
-        if let Some(chol) = &self.chol {
+        if let Some(chol) = chol {
             // w = K_ii⁻¹ (K x)_i, then subtract (K w)_b
             let mut t = vec![0.0; chol.n()];
             for (d, &i) in self.interior.iter().enumerate() {
@@ -116,13 +121,13 @@ impl Schur {
                 }
             }
             chol.solve_in_place(&mut t);
-            let mut w = vec![0.0; self.k.n];
+            let mut w = vec![0.0; k.n];
             for (d, &i) in self.interior.iter().enumerate() {
                 if i != usize::MAX {
                     w[d] = t[i];
                 }
             }
-            let kw = self.k.mul(&w);
+            let kw = k.mul(&w);
             for &d in &self.boundary {
                 x[d] -= kw[d];
             }

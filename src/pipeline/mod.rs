@@ -240,16 +240,15 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let set = contact.constraint_set();
     let name = s.params.method().name();
     let mut monitor = t.monitor();
-    let (sol, set) = t.phase(comm, "iterate", || {
-        let zero = vec![0.0; dual.dim()];
-        let r = if contact.is_coulomb() {
-            qp::coulomb::solve(dual.space(), &set, &contact.coulomb, &zero, &s.params, &Default::default(), |set_k, x, p| qp::solve(&Qp::new(&dual, &b, set_k), x, p, &mut monitor))
-                .map(|(sol, set_k, _)| (sol, set_k))
-        } else {
-            qp::solve(&Qp::new(&dual, &b, &set), &zero, &s.params, &mut monitor).map(|sol| (sol, set.clone()))
-        };
-        r.map_err(|e| Error::solver(name.to_uppercase(), e))
+    let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
+    let sol = t.phase(comm, "iterate", || {
+        qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &vec![0.0; dual.dim()], &s.params, &mut monitor).map_err(|e| Error::solver(name.to_uppercase(), e))
     })?;
+    // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+    let set = match coulomb {
+        Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
+        None => set,
+    };
     let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
     if let Some(path) = &ls.scene.output.export_dual {
         t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;

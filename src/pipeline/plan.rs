@@ -126,11 +126,31 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         comm.agree(failed)?;
         Ok(v.chunks(2).map(|c| Fill { nnz_l: c[0], flops: c[1] }).collect())
     };
-    let time = |c: &mut Candidate, flops_rank: f64, dofs_rank: f64, n_a: f64| {
-        c.n_a = n_a;
+    // a candidate from its pieces' fills, ranks and DOFs, its rows of B and its nA
+    #[allow(clippy::too_many_arguments)]
+    let candidate = |parts: Vec<usize>, target_dofs: Option<usize>, f: &[Fill], rank_of: &dyn Fn(usize) -> usize, dofs_of: &dyn Fn(usize) -> f64, rows: (usize, usize), n_a: f64| {
+        let (mut nnz, mut flops, mut dofs) = (vec![0.0; ranks], vec![0.0; ranks], vec![0.0; ranks]);
+        for (i, x) in f.iter().enumerate() {
+            let r = rank_of(i);
+            (nnz[r], flops[r], dofs[r]) = (nnz[r] + x.nnz_l, flops[r] + x.flops, dofs[r] + dofs_of(i));
+        }
+        let mut c = Candidate {
+            parts,
+            tfeti: target_dofs.is_some(),
+            target_dofs,
+            nnz_l: f.iter().map(|x| x.nnz_l).sum(),
+            nnz_l_rank: max(&nnz),
+            contact_rows,
+            gluing_rows: rows.0,
+            dirichlet_rows: rows.1,
+            n_a,
+            t_product: 0.0,
+            t_factor: SECONDS_PER_FLOP * max(&flops) + SECONDS_PER_DOF * max(&dofs),
+            time: 0.0,
+        };
         c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
-        c.t_factor = SECONDS_PER_FLOP * flops_rank + SECONDS_PER_DOF * dofs_rank;
         c.time = c.t_factor + n_a * c.t_product;
+        c
     };
     if !dec.tfeti {
         let f = fills(nb, &|b| {
@@ -140,31 +160,8 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             let (xadj, adj) = node_graph(&mesh.hexes, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
             Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
         })?;
-        let mut rank_nnz = vec![0.0; ranks];
-        let mut rank_flops = vec![0.0; ranks];
-        let mut rank_dofs = vec![0.0; ranks];
-        for (b, x) in f.iter().enumerate() {
-            rank_nnz[super::owner(b, ranks)] += x.nnz_l;
-            rank_flops[super::owner(b, ranks)] += x.flops;
-            rank_dofs[super::owner(b, ranks)] += body_dofs[b] as f64;
-        }
-        let mut c = Candidate {
-            parts: vec![1; nb],
-            tfeti: false,
-            target_dofs: None,
-            nnz_l: f.iter().map(|x| x.nnz_l).sum(),
-            nnz_l_rank: max(&rank_nnz),
-            contact_rows,
-            gluing_rows: 0,
-            dirichlet_rows: 0,
-            n_a: 0.0,
-            t_product: 0.0,
-            t_factor: 0.0,
-            time: 0.0,
-        };
         let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
-        time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
-        out.push(c);
+        out.push(candidate(vec![1; nb], None, &f, &|b| super::owner(b, ranks), &|b| body_dofs[b] as f64, (0, 0), n_a));
     }
     let mut counts: Vec<usize> = SUBDOMAIN_COUNTS.to_vec();
     if dec.tfeti {
@@ -201,32 +198,10 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             })
             .collect();
         let owner = assign_ranks(&d, ranks);
-        let mut rank_nnz = vec![0.0; ranks];
-        let mut rank_flops = vec![0.0; ranks];
-        let mut rank_dofs = vec![0.0; ranks];
-        for (s, x) in f.iter().enumerate() {
-            rank_nnz[owner[s]] += x.nnz_l;
-            rank_flops[owner[s]] += x.flops;
-            rank_dofs[owner[s]] += 3.0 * d.subdomains[s].nodes.len() as f64;
-        }
-        let mut c = Candidate {
-            parts,
-            tfeti: true,
-            target_dofs: Some(target),
-            nnz_l: f.iter().map(|x| x.nnz_l).sum(),
-            nnz_l_rank: max(&rank_nnz),
-            contact_rows,
-            gluing_rows: cons.gluing_rows,
-            dirichlet_rows: cons.dirichlet_rows,
-            n_a: 0.0,
-            t_product: 0.0,
-            t_factor: 0.0,
-            time: 0.0,
-        };
         let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
         let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
-        time(&mut c, max(&rank_flops), max(&rank_dofs), n_a);
-        out.push(c);
+        let rows = (cons.gluing_rows, cons.dirichlet_rows);
+        out.push(candidate(parts, Some(target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a));
     }
     Ok(out)
 }

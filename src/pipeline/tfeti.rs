@@ -185,19 +185,10 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                 return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
             }
             (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
-            (false, true) => match coulomb {
-                Some(c) => {
-                    let mu = c.coefficients(&dual.dist.pairs);
-                    qp::coulomb::solve(dual.space(), &set, &mu, &y0, params, &Default::default(), |set_k, x, p| {
-                        let qp = Qp::new(&dual, &b, set_k)
-                            .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
-                            .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
-                        qp::solve(&qp, x, p, &mut monitor)
-                    })
-                    .map(|(s, _, _)| (s, None))
-                }
-                None => qp::solve(&qp, &y0, params, &mut monitor).map(|s| (s, None)),
-            },
+            (false, true) => {
+                let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
+                qp::solve_friction(&qp, mu.as_deref(), &y0, params, &mut monitor).map(|s| (s, None))
+            }
             (false, false) => qp::cg::solve(&qp, &y0, &params.common, &mut monitor).map(|s| (s, None)),
         };
         r.map_err(|e| Error::solver(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e))

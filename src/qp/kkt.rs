@@ -39,12 +39,17 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
     let mut lscale = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let mut k = Kkt::default();
     let bnorm = bnorm.max(f64::MIN_POSITIVE);
-    for s in &set.tangent {
-        // the set's size: the projection of a far point lies on its boundary
-        let mut far = [0.0; 2];
-        s.project(&[1e300, 1e300], &mut far);
-        lscale = lscale.max(far[0].hypot(far[1]));
-    }
+    // each set's size: the projection of a far point lies on its boundary
+    let sizes: Vec<f64> = set
+        .tangent
+        .iter()
+        .map(|s| {
+            let mut far = [0.0; 2];
+            s.project(&[1e300, 1e300], &mut far);
+            far[0].hypot(far[1])
+        })
+        .collect();
+    lscale = sizes.iter().fold(lscale, |a, &b| a.max(b));
     let lscale = lscale.max(f64::MIN_POSITIVE);
     for i in 0..m {
         k.penetration = k.penetration.max((-r[i]).max(0.0) / bnorm);
@@ -63,9 +68,7 @@ pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
         }
         // a set shrunk to a point admits every r̄τ: a tiny one (a Coulomb cone cut at a λν of
         // round-off size) is that far from it
-        let mut far = [0.0; 2];
-        s.project(&[1e300, 1e300], &mut far);
-        let size = far[0].hypot(far[1]) / lscale;
+        let size = sizes[i] / lscale;
         let stick = g[0].hypot(g[1]) / bnorm;
         // the nearest boundary point: px itself if λ̄τ is outside, else the boundary point
         // along the ray from 0 through λ̄τ (exact for a disc, a bound for an ellipse)
