@@ -10,12 +10,17 @@
 //! | `/mesh/coordinates` | f64 | nnodes × 3 |
 //! | `/mesh/hexahedra` | i64 | nelems × 8 |
 //! | `/fields/<name>` | f64 or i32 | `len` (ncomp = 1) or `len × ncomp` |
+//! | `/steps/<NNNN>/<name>` | f64 or i32 | as `/fields/<name>` |
 //!
 //! Each field dataset carries a string attribute `center` (`"node"` or `"cell"`). Every entry of
 //! [`OutputData::attributes`] is a variable-length UTF-8 string attribute on the root group.
-//! Datasets are contiguous and uncompressed. The file and the `/fields` group track creation
-//! order, so [`read`] gives fields and attributes back in the order they were written (files
-//! from elsewhere that do not track it come back sorted by name).
+//! `/steps` exists only for a load path ([`OutputData::steps`] non-empty): one group per
+//! [`super::Step`], named by its index from 1 in 4 digits (`0001`, `0002`, …), with a scalar
+//! f64 attribute `time` and the step's fields written like those of `/fields`; `/fields` holds
+//! the final state either way. Datasets are contiguous and uncompressed. The file and every
+//! group it creates track creation order, so [`read`] gives steps, fields and attributes back
+//! in the order they were written (files from elsewhere that do not track it come back sorted
+//! by name).
 //!
 //! [`write`] writes the file in place; [`super::write_all`] gives it a temporary name and
 //! renames it only when every output file succeeded.
@@ -26,22 +31,27 @@ use ::hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
 use ::hdf5::types::{IntSize, TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ::hdf5::{Attribute, Dataset, File, Group, H5Type, IndexType, IterationOrder, Location};
 
-use super::{Center, Field, OutputData, Values};
+use super::{check_step_times, step_name, Center, Field, OutputData, Step, Values};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 
 const MESH: &str = "mesh";
 const FIELDS: &str = "fields";
+const STEPS: &str = "steps";
+const TIME_ATTR: &str = "time";
 const COORDINATES: &str = "coordinates";
 const HEXAHEDRA: &str = "hexahedra";
 const CENTER_ATTR: &str = "center";
 
+/// Distributed fields: field name → the rows this rank holds ([`OutputData::rows`]).
+type Rows = std::collections::BTreeMap<String, Vec<usize>>;
+
 /// Writes `data` to the HDF5 file `path` (replacing it) from this one process; a partly
 /// written file is removed.
 ///
-/// Fails on inconsistent data (a field whose length does not match the node/cell count, a hex
-/// referencing a missing node, an unusable field name, a string with an interior NUL) before
-/// anything is created.
+/// Fails on inconsistent data (a field, in `/fields` or in a step, whose length does not match
+/// the node/cell count, a hex referencing a missing node, an unusable field name, a string with
+/// an interior NUL, step times not finite and increasing) before anything is created.
 pub fn write(path: &Path, data: &OutputData) -> Result<()> {
     write_collective(&crate::comm::SerialComm, path, data)
 }
@@ -97,7 +107,6 @@ pub fn read(path: &Path) -> Result<OutputData> {
 /// Checks everything that would otherwise fail half-way through writing.
 fn validate(data: &OutputData) -> std::result::Result<(), String> {
     let nnodes = data.coordinates.len();
-    let nelems = data.hexahedra.len();
     if let Some((e, hex)) = data
         .hexahedra
         .iter()
@@ -108,8 +117,33 @@ fn validate(data: &OutputData) -> std::result::Result<(), String> {
             "hexahedron {e} references node {hex:?} beyond the {nnodes} nodes"
         ));
     }
+    validate_fields(data, &data.fields, &data.rows)?;
+    check_step_times(&data.steps)?;
+    for (i, step) in data.steps.iter().enumerate() {
+        validate_fields(data, &step.fields, &step.rows).map_err(|m| format!("step {}: {m}", step_name(i)))?;
+    }
     let mut names = std::collections::HashSet::new();
-    for f in &data.fields {
+    for (name, value) in &data.attributes {
+        if name.is_empty() {
+            return Err("empty attribute name".into());
+        }
+        if name.contains('\0') || value.contains('\0') {
+            return Err(format!(
+                "attribute {name:?}: name or value contains a NUL character"
+            ));
+        }
+        if !names.insert(name.as_str()) {
+            return Err(format!("attribute {name:?} appears twice"));
+        }
+    }
+    Ok(())
+}
+
+/// Checks one group's fields against the mesh of `data`: usable unique names, ncomp > 0, rows
+/// on the mesh, and as many values as rows × ncomp.
+fn validate_fields(data: &OutputData, fields: &[Field], rows: &Rows) -> std::result::Result<(), String> {
+    let mut names = std::collections::HashSet::new();
+    for f in fields {
         check_link_name(&f.name).map_err(|m| format!("field {:?}: {m}", f.name))?;
         if !names.insert(f.name.as_str()) {
             return Err(format!("field {:?} appears twice", f.name));
@@ -117,11 +151,8 @@ fn validate(data: &OutputData) -> std::result::Result<(), String> {
         if f.ncomp == 0 {
             return Err(format!("field {:?}: ncomp is 0", f.name));
         }
-        let len = match f.center {
-            Center::Node => nnodes,
-            Center::Cell => nelems,
-        };
-        let expected = match data.rows.get(&f.name) {
+        let len = mesh_len(data, f.center);
+        let expected = match rows.get(&f.name) {
             Some(rows) => {
                 if let Some(r) = rows.iter().find(|&&r| r >= len) {
                     return Err(format!("field {:?}: row {r} beyond the {len} {}s", f.name, center_str(f.center)));
@@ -140,21 +171,15 @@ fn validate(data: &OutputData) -> std::result::Result<(), String> {
             ));
         }
     }
-    let mut names = std::collections::HashSet::new();
-    for (name, value) in &data.attributes {
-        if name.is_empty() {
-            return Err("empty attribute name".into());
-        }
-        if name.contains('\0') || value.contains('\0') {
-            return Err(format!(
-                "attribute {name:?}: name or value contains a NUL character"
-            ));
-        }
-        if !names.insert(name.as_str()) {
-            return Err(format!("attribute {name:?} appears twice"));
-        }
-    }
     Ok(())
+}
+
+/// The number of nodes or cells of the mesh of `data`: the rows of a field centered at `c`.
+fn mesh_len(data: &OutputData, c: Center) -> usize {
+    match c {
+        Center::Node => data.coordinates.len(),
+        Center::Cell => data.hexahedra.len(),
+    }
 }
 
 /// A dataset name must be one link: non-empty, no `/`, not `.`, no NUL.
@@ -232,38 +257,74 @@ fn write_contents(file: &File, data: &OutputData, par: Option<&Par>) -> Result<(
     write_dataset(&mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], None, &hexes, par)?;
     drop(mesh);
 
-    let fields = file
+    let fields = create_group(file, FIELDS)?;
+    write_fields(&fields, data, &data.fields, &data.rows, par)?;
+    drop(fields);
+    if !data.steps.is_empty() {
+        write_steps(file, data, par)?;
+    }
+
+    for (name, value) in &data.attributes {
+        write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m))?;
+    }
+    Ok(())
+}
+
+/// Creates the group `name` in `parent`, tracking the creation order of its links and
+/// attributes (so [`read`] gives them back in that order).
+fn create_group(parent: &Group, name: &str) -> Result<Group> {
+    parent
         .create_group_builder()
         .with_gcpl(|p| {
             p.link_creation_order(LinkCreationOrder::Indexed)
                 .attr_creation_order(AttrCreationOrder::Indexed)
         })
-        .create(FIELDS)
-        .map_err(ctx("creating /fields"))?;
-    for f in &data.fields {
-        let len = match f.center {
-            Center::Node => data.coordinates.len(),
-            Center::Cell => data.hexahedra.len(),
-        };
-        let rows = data.rows.get(&f.name).map(Vec::as_slice);
+        .create(name)
+        .map_err(ctx(format!("creating {}/{name}", parent.name().trim_end_matches('/'))))
+}
+
+/// Writes `fields` into `group`, one dataset each with its `center` attribute: the rows `rows`
+/// of the distributed ones, the replicated ones whole (see [`write_dataset`]).
+fn write_fields(group: &Group, data: &OutputData, fields: &[Field], rows: &Rows, par: Option<&Par>) -> Result<()> {
+    for f in fields {
+        let len = mesh_len(data, f.center);
+        let rows = rows.get(&f.name).map(Vec::as_slice);
         let shape = if f.ncomp == 1 {
             vec![len]
         } else {
             vec![len, f.ncomp]
         };
         let ds = match &f.values {
-            Values::F64(v) => write_dataset(&fields, &f.name, &shape, rows, v, par)?,
-            Values::I32(v) => write_dataset(&fields, &f.name, &shape, rows, v, par)?,
+            Values::F64(v) => write_dataset(group, &f.name, &shape, rows, v, par)?,
+            Values::I32(v) => write_dataset(group, &f.name, &shape, rows, v, par)?,
         };
         write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
-            .map_err(|m| Error::output(String::new(), format!("field {:?}: {m}", f.name)))?;
-    }
-    drop(fields);
-
-    for (name, value) in &data.attributes {
-        write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m))?;
+            .map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name)))?;
     }
     Ok(())
+}
+
+/// Writes `/steps`: one group per step with its `time` attribute and its fields.
+fn write_steps(file: &File, data: &OutputData, par: Option<&Par>) -> Result<()> {
+    let steps = create_group(file, STEPS)?;
+    for (i, step) in data.steps.iter().enumerate() {
+        let group = create_group(&steps, &step_name(i))?;
+        write_time_attr(&group, step.time)?;
+        write_fields(&group, data, &step.fields, &step.rows, par)?;
+    }
+    Ok(())
+}
+
+/// Writes the scalar f64 attribute `time` on a step's group.
+fn write_time_attr(group: &Group, time: f64) -> Result<()> {
+    let what = || format!("attribute {TIME_ATTR:?} of {}", group.name());
+    group
+        .new_attr::<f64>()
+        .shape(())
+        .create(TIME_ATTR)
+        .map_err(|e| ctx(format!("creating {}", what()))(e))?
+        .write_scalar(&time)
+        .map_err(|e| ctx(format!("writing {}", what()))(e))
 }
 
 /// Creates the dataset `name` of the global `shape` (len or len × ncomp) and writes this
@@ -360,8 +421,9 @@ fn write_str_attr(loc: &Location, name: &str, value: &str) -> std::result::Resul
 // reading
 
 /// Reads `path` back and checks that it holds `data` bit for bit: the mesh, this rank's rows
-/// of the distributed fields (`data.rows`) and the other fields whole. Returns the number of
-/// values compared; a difference is an error naming the field and the row.
+/// of the distributed fields (`data.rows`) and the other fields whole, and likewise every
+/// step's time and fields. Returns the number of values compared (each step's time counts
+/// one); a difference is an error naming the step, the field and the row.
 pub fn verify(path: &Path, data: &OutputData) -> Result<usize> {
     let shown = path.display().to_string();
     let back = read(path)?;
@@ -370,11 +432,30 @@ pub fn verify(path: &Path, data: &OutputData) -> Result<usize> {
         return Err(fail("the mesh differs from the one in memory".into()));
     }
     let mut checked = 3 * data.coordinates.len() + 8 * data.hexahedra.len();
-    for f in &data.fields {
-        let g = back.fields.iter().find(|g| g.name == f.name).ok_or_else(|| fail(format!("field {:?} missing", f.name)))?;
+    checked += verify_fields(&data.fields, &data.rows, &back.fields).map_err(fail)?;
+    if back.steps.len() != data.steps.len() {
+        return Err(fail(format!("{} steps, expected {}", back.steps.len(), data.steps.len())));
+    }
+    for (i, (step, got)) in data.steps.iter().zip(&back.steps).enumerate() {
+        let name = step_name(i);
+        if got.time.to_bits() != step.time.to_bits() {
+            return Err(fail(format!("step {name}: time {} instead of {}", got.time, step.time)));
+        }
+        let n = verify_fields(&step.fields, &step.rows, &got.fields).map_err(|m| fail(format!("step {name}: {m}")))?;
+        checked += 1 + n;
+    }
+    Ok(checked)
+}
+
+/// Checks that `back` holds `fields` bit for bit (this rank's rows of the distributed ones, the
+/// others whole); returns the number of values compared.
+fn verify_fields(fields: &[Field], rows: &Rows, back: &[Field]) -> R<usize> {
+    let mut checked = 0;
+    for f in fields {
+        let g = back.iter().find(|g| g.name == f.name).ok_or_else(|| format!("field {:?} missing", f.name))?;
         let n = f.ncomp;
         let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
-        let rows: Vec<usize> = match data.rows.get(&f.name) {
+        let rows: Vec<usize> = match rows.get(&f.name) {
             Some(r) => r.clone(),
             None => (0..values_len(&f.values) / n).collect(),
         };
@@ -385,7 +466,7 @@ pub fn verify(path: &Path, data: &OutputData) -> Result<usize> {
                 _ => false,
             };
             if !ok {
-                return Err(fail(format!("field {:?} differs at row {row}", f.name)));
+                return Err(format!("field {:?} differs at row {row}", f.name));
             }
         }
         checked += rows.len() * n;
@@ -436,12 +517,11 @@ fn read_file(path: &Path) -> R<OutputData> {
         })
         .collect::<R<Vec<_>>>()?;
 
-    let fields_group = file.group(FIELDS).map_err(h5e("opening /fields"))?;
-    let names = link_names(&fields_group).map_err(h5e("listing /fields"))?;
-    let mut fields = Vec::with_capacity(names.len());
-    for name in names {
-        fields.push(read_field(&fields_group, &name).map_err(|m| format!("/fields/{name}: {m}"))?);
-    }
+    let fields = read_fields(&file.group(FIELDS).map_err(h5e("opening /fields"))?)?;
+    let steps = match file.link_exists(STEPS) {
+        true => read_steps(&file.group(STEPS).map_err(h5e("opening /steps"))?)?,
+        false => Vec::new(),
+    };
 
     let root = file.group("/").map_err(h5e("opening /"))?;
     let mut attributes = Vec::new();
@@ -458,7 +538,49 @@ fn read_file(path: &Path) -> R<OutputData> {
         fields,
         attributes,
         rows: Default::default(),
+        steps,
     })
+}
+
+/// Every field dataset in `group`, in creation order (by name where the group does not track
+/// it).
+fn read_fields(group: &Group) -> R<Vec<Field>> {
+    let path = group.name();
+    let names = link_names(group).map_err(h5e(format!("listing {path}")))?;
+    let mut fields = Vec::with_capacity(names.len());
+    for name in names {
+        fields.push(read_field(group, &name).map_err(|m| format!("{path}/{name}: {m}"))?);
+    }
+    Ok(fields)
+}
+
+/// The steps under `/steps`, which must be named `0001`, `0002`, … without a gap.
+fn read_steps(group: &Group) -> R<Vec<Step>> {
+    let mut names = link_names(group).map_err(h5e("listing /steps"))?;
+    // Numeric order whether or not the file tracks creation order (`10000` after `9999`).
+    names.sort_by(|a, b| a.len().cmp(&b.len()).then_with(|| a.cmp(b)));
+    let mut steps = Vec::with_capacity(names.len());
+    for (i, name) in names.iter().enumerate() {
+        if *name != step_name(i) {
+            return Err(format!("/steps/{name}: expected step {} here", step_name(i)));
+        }
+        let step = group.group(name).map_err(h5e(format!("opening /steps/{name}")))?;
+        let time = read_time_attr(&step).map_err(|m| format!("/steps/{name}: attribute \"time\": {m}"))?;
+        steps.push(Step { time, fields: read_fields(&step)?, rows: Default::default() });
+    }
+    Ok(steps)
+}
+
+/// Reads a step's scalar float `time` attribute as f64.
+fn read_time_attr(group: &Group) -> R<f64> {
+    let attr = group.attr(TIME_ATTR).map_err(h5e("opening"))?;
+    if !attr.is_scalar() {
+        return Err(format!("shape {:?}, expected a scalar", attr.shape()));
+    }
+    match attr.dtype().and_then(|t| t.to_descriptor()).map_err(h5e("datatype"))? {
+        TypeDescriptor::Float(_) => attr.read_scalar::<f64>().map_err(h5e("reading")),
+        other => Err(format!("datatype {other:?}, expected a float")),
+    }
 }
 
 /// Link names in creation order, or by name where the group does not track creation order.
@@ -650,18 +772,28 @@ mod tests {
                 ("report".into(), big),
             ],
             rows: Default::default(),
+            steps: Vec::new(),
+        }
+    }
+
+    fn assert_same_fields(a: &[Field], b: &[Field]) {
+        assert_eq!(a.len(), b.len());
+        for (fa, fb) in a.iter().zip(b) {
+            assert_eq!(fa.name, fb.name);
+            assert_eq!(fa.center, fb.center);
+            assert_eq!(fa.ncomp, fb.ncomp);
+            assert_eq!(fa.values, fb.values);
         }
     }
 
     fn assert_same(a: &OutputData, b: &OutputData) {
         assert_eq!(a.coordinates, b.coordinates);
         assert_eq!(a.hexahedra, b.hexahedra);
-        assert_eq!(a.fields.len(), b.fields.len());
-        for (fa, fb) in a.fields.iter().zip(&b.fields) {
-            assert_eq!(fa.name, fb.name);
-            assert_eq!(fa.center, fb.center);
-            assert_eq!(fa.ncomp, fb.ncomp);
-            assert_eq!(fa.values, fb.values);
+        assert_same_fields(&a.fields, &b.fields);
+        assert_eq!(a.steps.len(), b.steps.len());
+        for (sa, sb) in a.steps.iter().zip(&b.steps) {
+            assert_eq!(sa.time.to_bits(), sb.time.to_bits());
+            assert_same_fields(&sa.fields, &sb.fields);
         }
         // Compared piecewise: a failing assert_eq! on a 50 KB string floods the output.
         let names = |d: &OutputData| {
@@ -770,5 +902,136 @@ mod tests {
         let err = read(&junk).unwrap_err().to_string();
         assert!(err.contains("junk.h5") && !err.contains('\n'), "{err}");
         std::fs::remove_file(&junk).unwrap();
+    }
+
+    /// `sample()` on a load path of 3 steps: per step a node vector, a cell scalar and an
+    /// integer cell field, with values that differ from step to step; the last step is the
+    /// final state.
+    fn with_steps() -> OutputData {
+        let mut data = sample();
+        data.steps = [0.25, 0.5, 1.0]
+            .iter()
+            .enumerate()
+            .map(|(k, &time)| {
+                let k = k as f64;
+                Step {
+                    time,
+                    fields: vec![
+                        Field {
+                            name: "displacement".into(),
+                            center: Center::Node,
+                            ncomp: 3,
+                            values: Values::F64((0..36).map(|i| time * (i as f64 * 1.25e-7 - 3.0)).collect()),
+                        },
+                        Field {
+                            name: "von_mises".into(),
+                            center: Center::Cell,
+                            ncomp: 1,
+                            values: Values::F64(vec![k / 3.0, -k * f64::MIN_POSITIVE]),
+                        },
+                        Field {
+                            name: "contact status".into(),
+                            center: Center::Cell,
+                            ncomp: 1,
+                            values: Values::I32(vec![k as i32, -1]),
+                        },
+                    ],
+                    rows: Default::default(),
+                }
+            })
+            .collect();
+        data
+    }
+
+    #[test]
+    fn steps_round_trip_and_verify() {
+        let data = with_steps();
+        let path = tmp("steps.h5");
+        write(&path, &data).unwrap();
+        let back = read(&path).unwrap();
+        assert_same(&data, &back);
+        assert_eq!(back.steps.iter().map(|s| s.time).collect::<Vec<_>>(), [0.25, 0.5, 1.0]);
+        let values: usize = (data.fields.iter().chain(data.steps.iter().flat_map(|s| &s.fields)))
+            .map(|f| values_len(&f.values))
+            .sum();
+        let mesh = 3 * 12 + 8 * 2;
+        assert_eq!(verify(&path, &data).unwrap(), mesh + values + 3);
+
+        // The layout itself: /steps/0002 with its time, datasets carrying `center`.
+        let file = File::open(&path).unwrap();
+        assert_eq!(link_names(&file.group("steps").unwrap()).unwrap(), ["0001", "0002", "0003"]);
+        let step = file.group("steps/0002").unwrap();
+        assert_eq!(step.attr(TIME_ATTR).unwrap().read_scalar::<f64>().unwrap(), 0.5);
+        let ds = step.dataset("displacement").unwrap();
+        assert_eq!(ds.shape(), [12, 3]);
+        assert_eq!(read_str_attr(&ds.attr(CENTER_ATTR).unwrap()).unwrap(), "node");
+        drop((ds, step, file));
+
+        // verify notices a step that differs from the one in memory.
+        let mut other = data.clone();
+        other.steps[2].fields[1].values = Values::F64(vec![2.0 / 3.0, 0.5]);
+        let err = verify(&path, &other).unwrap_err().to_string();
+        assert!(err.contains("step 0003") && err.contains("von_mises") && err.contains("row 1"), "{err}");
+        other.steps[2] = data.steps[2].clone();
+        other.steps[1].time = 0.75;
+        assert!(verify(&path, &other).unwrap_err().to_string().contains("step 0002: time"));
+        other.steps.pop();
+        assert!(verify(&path, &other).unwrap_err().to_string().contains("3 steps, expected 2"));
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn distributed_step_fields_are_written_at_their_rows() {
+        // This process holds the two cells in reverse order, and nodes 11, 0 only of a step
+        // field: the file has every row, at its place (node rows it does not hold stay 0).
+        let mut data = with_steps();
+        let step = &mut data.steps[1];
+        step.fields[1].values = Values::F64(vec![20.0, 10.0]);
+        step.rows.insert("von_mises".into(), vec![1, 0]);
+        step.fields[0].values = Values::F64(vec![11.0, 11.5, 12.0, 0.0, 0.5, 1.0]);
+        step.rows.insert("displacement".into(), vec![11, 0]);
+        let path = tmp("steps_rows.h5");
+        write(&path, &data).unwrap();
+        let back = read(&path).unwrap();
+        assert_eq!(back.steps[1].fields[1].values, Values::F64(vec![10.0, 20.0]));
+        let Values::F64(u) = &back.steps[1].fields[0].values else { panic!("not f64") };
+        assert_eq!((u.len(), &u[..3], &u[33..]), (36, &[0.0, 0.5, 1.0][..], &[11.0, 11.5, 12.0][..]));
+        assert_same_fields(&back.steps[2].fields, &data.steps[2].fields);
+        assert!(verify(&path, &data).is_ok());
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn bad_steps_are_rejected_before_writing() {
+        let path = tmp("bad_steps.h5");
+        let reject = |data: &OutputData, what: &[&str]| {
+            let err = write(&path, data).unwrap_err().to_string();
+            assert!(what.iter().all(|w| err.contains(w)), "{err}");
+            assert!(!path.exists());
+        };
+        let mut data = with_steps();
+        data.steps[1].fields[1].values = Values::F64(vec![1.0; 3]);
+        reject(&data, &["bad_steps.h5", "step 0002", "von_mises", "3 values"]);
+        // Through write_all too: neither a result file nor a temporary one stays behind.
+        let err = crate::output::write_all(&crate::comm::SerialComm, &path, &data, true, None);
+        assert!(err.is_err());
+        let leftovers = ["h5", "xdmf", "h5.tmp", "xdmf.tmp"].map(|e| path.with_extension(e));
+        assert!(leftovers.iter().all(|p| !p.exists()), "{leftovers:?}");
+
+        let mut data = with_steps();
+        data.steps[2].fields[2].name = "von_mises".into();
+        reject(&data, &["step 0003", "appears twice"]);
+        let mut data = with_steps();
+        data.steps[0].fields[0].name = "a/b".into();
+        reject(&data, &["step 0001"]);
+        let mut data = with_steps();
+        data.steps[0].rows.insert("von_mises".into(), vec![0, 2]);
+        reject(&data, &["step 0001", "row 2"]);
+        let mut data = with_steps();
+        data.steps[1].time = f64::NAN;
+        reject(&data, &["step 0002", "not finite"]);
+        let mut data = with_steps();
+        data.steps[2].time = 0.5;
+        reject(&data, &["step 0003", "not after step 0002"]);
     }
 }

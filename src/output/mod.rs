@@ -1,8 +1,9 @@
 //! Results on disk: one HDF5 file with an XDMF sidecar for ParaView, and a JSON report.
 //!
-//! Owns the [`OutputData`] description (mesh + named node/cell fields + string attributes) that
-//! the pipeline fills, and the writers. Files are written under a temporary name and renamed
-//! only when everything succeeded, so a failed run leaves no result file behind.
+//! Owns the [`OutputData`] description (mesh + named node/cell fields + string attributes, and
+//! the [`Step`]s of a load path) that the pipeline fills, and the writers. Files are written
+//! under a temporary name and renamed only when everything succeeded, so a failed run leaves
+//! no result file behind.
 
 pub mod hdf5;
 pub mod xdmf;
@@ -45,6 +46,22 @@ pub struct OutputData {
     /// values the field's `values` are (in this order). A field not listed holds every row
     /// (replicated; under MPI each rank writes one contiguous share).
     pub rows: std::collections::BTreeMap<String, Vec<usize>>,
+    /// The states of a quasi-static load path, in order: `/steps/0001`, `/steps/0002`, … in
+    /// the HDF5 file, a temporal collection in the XDMF sidecar. Empty = one load state: the
+    /// files are exactly as without load paths. `fields` stays the final state either way.
+    pub steps: Vec<Step>,
+}
+
+/// One state of a load path: `/steps/<index as 4 digits, from 1>/<field name>` in the HDF5 file,
+/// attribute `time` (f64) on that group.
+#[derive(Clone, Debug, Default)]
+pub struct Step {
+    /// Pseudo-time of this state (the same on every rank); finite, and strictly increasing
+    /// along [`OutputData::steps`].
+    pub time: f64,
+    pub fields: Vec<Field>,
+    /// Same meaning as OutputData::rows, for this step's fields.
+    pub rows: std::collections::BTreeMap<String, Vec<usize>>,
 }
 
 use std::path::{Path, PathBuf};
@@ -52,7 +69,31 @@ use std::path::{Path, PathBuf};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 
-/// `<path with extension ext>` beside `h5`.
+/// The name of step `index` (from 0) under `/steps`: `0001`, `0002`, … (wider past 9999).
+fn step_name(index: usize) -> String {
+    format!("{:04}", index + 1)
+}
+
+/// Step times must be finite (XDMF writes them as text) and strictly increasing (ParaView
+/// plays the steps in time order and merges equal times).
+fn check_step_times(steps: &[Step]) -> std::result::Result<(), String> {
+    for (i, step) in steps.iter().enumerate() {
+        if !step.time.is_finite() {
+            return Err(format!("step {}: time {} is not finite", step_name(i), step.time));
+        }
+        if i > 0 && step.time <= steps[i - 1].time {
+            return Err(format!(
+                "step {}: time {} is not after step {}'s {}",
+                step_name(i),
+                step.time,
+                step_name(i - 1),
+                steps[i - 1].time
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` through a temporary sibling and a rename, creating the folder: a
 /// failure leaves no half-written file behind.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
@@ -70,6 +111,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     written.map_err(io)
 }
 
+/// `<path with extension ext>` beside `h5`.
 pub fn sibling(h5: &Path, ext: &str) -> PathBuf {
     h5.with_extension(ext)
 }

@@ -2,14 +2,22 @@
 //!
 //! One uniform grid: `Hexahedron` topology from `/mesh/hexahedra`, `XYZ` geometry from
 //! `/mesh/coordinates`, and one `Attribute` per field from `/fields/<name>`: `Scalar` for one
-//! component, `Vector` for 3, `Tensor6` for 6, `Tensor` for 9, `Matrix` otherwise. The heavy
-//! data stays in the HDF5 file, named relative to the XDMF file. Names are XML-escaped, so the
-//! output is well-formed whatever the field names are.
+//! component, `Vector` for 3, `Tensor6` for 6, `Tensor` for 9, `Matrix` otherwise.
+//!
+//! A load path ([`OutputData::steps`] non-empty) is instead one temporal collection,
+//! `<Grid Name="load path" GridType="Collection" CollectionType="Temporal">`, that ParaView
+//! plays as an animation: one uniform grid per step (`step 0001`, …) with its `<Time
+//! Value="…"/>`, the same topology and geometry (repeated), and one `Attribute` per step field
+//! from `/steps/<NNNN>/<name>`. The final state's `/fields` are not listed then (the last step
+//! is that state).
+//!
+//! The heavy data stays in the HDF5 file, named relative to the XDMF file. Names are
+//! XML-escaped, so the output is well-formed whatever the field names are.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{Center, OutputData, Values};
+use super::{check_step_times, step_name, Center, Field, OutputData, Values};
 use crate::error::{Error, Result};
 
 /// Writes the XDMF description of `data` to `xdmf_path`; `h5_file_name` is the HDF5 file
@@ -30,8 +38,6 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
         ));
     }
     let h5 = escape(h5)?;
-    let nnodes = data.coordinates.len();
-    let nelems = data.hexahedra.len();
     let mut s = String::new();
     // Writing into a String cannot fail: the fmt::Results below are ignored on purpose.
     let _ = writeln!(s, r#"<?xml version="1.0" encoding="utf-8"?>"#);
@@ -40,31 +46,63 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
         r#"<Xdmf xmlns:xi="http://www.w3.org/2001/XInclude" Version="3.0">"#
     );
     let _ = writeln!(s, "  <Domain>");
-    let _ = writeln!(s, r#"    <Grid Name="mesh" GridType="Uniform">"#);
+    if data.steps.is_empty() {
+        let _ = writeln!(s, r#"    <Grid Name="mesh" GridType="Uniform">"#);
+        mesh(&mut s, 6, &h5, data);
+        attributes(&mut s, 6, &h5, "/fields", data, &data.fields, &data.rows)?;
+        let _ = writeln!(s, "    </Grid>");
+    } else {
+        check_step_times(&data.steps)?;
+        let _ = writeln!(
+            s,
+            r#"    <Grid Name="load path" GridType="Collection" CollectionType="Temporal">"#
+        );
+        for (i, step) in data.steps.iter().enumerate() {
+            let name = step_name(i);
+            let _ = writeln!(s, r#"      <Grid Name="step {name}" GridType="Uniform">"#);
+            // Debug formatting: the shortest text that reads back as the same f64.
+            let _ = writeln!(s, r#"        <Time Value="{:?}"/>"#, step.time);
+            mesh(&mut s, 8, &h5, data);
+            attributes(&mut s, 8, &h5, &format!("/steps/{name}"), data, &step.fields, &step.rows)
+                .map_err(|m| format!("step {name}: {m}"))?;
+            let _ = writeln!(s, "      </Grid>");
+        }
+        let _ = writeln!(s, "    </Grid>");
+    }
+    let _ = writeln!(s, "  </Domain>");
+    let _ = writeln!(s, "</Xdmf>");
+    Ok(s)
+}
+
+/// The `Topology` and `Geometry` of a grid, indented by `indent` spaces.
+fn mesh(s: &mut String, indent: usize, h5: &str, data: &OutputData) {
+    let nnodes = data.coordinates.len();
+    let nelems = data.hexahedra.len();
+    let pad = " ".repeat(indent);
     let _ = writeln!(
         s,
-        r#"      <Topology TopologyType="Hexahedron" NumberOfElements="{nelems}">"#
+        r#"{pad}<Topology TopologyType="Hexahedron" NumberOfElements="{nelems}">"#
     );
-    data_item(
-        &mut s,
-        &format!("{nelems} 8"),
-        "Int",
-        8,
-        &h5,
-        "/mesh/hexahedra",
-    );
-    let _ = writeln!(s, "      </Topology>");
-    let _ = writeln!(s, r#"      <Geometry GeometryType="XYZ">"#);
-    data_item(
-        &mut s,
-        &format!("{nnodes} 3"),
-        "Float",
-        8,
-        &h5,
-        "/mesh/coordinates",
-    );
-    let _ = writeln!(s, "      </Geometry>");
-    for f in &data.fields {
+    data_item(s, indent + 2, &format!("{nelems} 8"), "Int", 8, h5, "/mesh/hexahedra");
+    let _ = writeln!(s, "{pad}</Topology>");
+    let _ = writeln!(s, r#"{pad}<Geometry GeometryType="XYZ">"#);
+    data_item(s, indent + 2, &format!("{nnodes} 3"), "Float", 8, h5, "/mesh/coordinates");
+    let _ = writeln!(s, "{pad}</Geometry>");
+}
+
+/// One `Attribute` per field of `fields`, read from `<group>/<name>` (`group` needs no
+/// escaping), indented by `indent` spaces; `rows` as [`OutputData::rows`] for these fields.
+fn attributes(
+    s: &mut String,
+    indent: usize,
+    h5: &str,
+    group: &str,
+    data: &OutputData,
+    fields: &[Field],
+    rows: &std::collections::BTreeMap<String, Vec<usize>>,
+) -> std::result::Result<(), String> {
+    let pad = " ".repeat(indent);
+    for f in fields {
         let (number_type, precision, nvalues) = match &f.values {
             Values::F64(v) => ("Float", 8, v.len()),
             Values::I32(v) => ("Int", 4, v.len()),
@@ -76,11 +114,11 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
             ));
         }
         let (center, expected) = match f.center {
-            Center::Node => ("Node", nnodes),
-            Center::Cell => ("Cell", nelems),
+            Center::Node => ("Node", data.coordinates.len()),
+            Center::Cell => ("Cell", data.hexahedra.len()),
         };
         // a distributed field holds this rank's rows only; the file has them all
-        let len = if data.rows.contains_key(&f.name) { expected } else { nvalues / f.ncomp };
+        let len = if rows.contains_key(&f.name) { expected } else { nvalues / f.ncomp };
         if len != expected {
             return Err(format!(
                 "field {:?}: {len} tuples on a mesh with {expected} {}s",
@@ -103,29 +141,21 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
         let name = escape(&f.name)?;
         let _ = writeln!(
             s,
-            r#"      <Attribute Name="{name}" AttributeType="{attribute_type}" Center="{center}">"#
+            r#"{pad}<Attribute Name="{name}" AttributeType="{attribute_type}" Center="{center}">"#
         );
-        data_item(
-            &mut s,
-            &dims,
-            number_type,
-            precision,
-            &h5,
-            &format!("/fields/{name}"),
-        );
-        let _ = writeln!(s, "      </Attribute>");
+        data_item(s, indent + 2, &dims, number_type, precision, h5, &format!("{group}/{name}"));
+        let _ = writeln!(s, "{pad}</Attribute>");
     }
-    let _ = writeln!(s, "    </Grid>");
-    let _ = writeln!(s, "  </Domain>");
-    let _ = writeln!(s, "</Xdmf>");
-    Ok(s)
+    Ok(())
 }
 
-/// One `<DataItem>` referencing `h5:path`; `h5` and `path` are already escaped.
-fn data_item(s: &mut String, dims: &str, number_type: &str, precision: u32, h5: &str, path: &str) {
+/// One `<DataItem>` referencing `h5:path`, indented by `indent` spaces; `h5` and `path` are
+/// already escaped.
+fn data_item(s: &mut String, indent: usize, dims: &str, number_type: &str, precision: u32, h5: &str, path: &str) {
+    let pad = " ".repeat(indent);
     let _ = writeln!(
         s,
-        r#"        <DataItem Dimensions="{dims}" NumberType="{number_type}" Precision="{precision}" Format="HDF">{h5}:{path}</DataItem>"#
+        r#"{pad}<DataItem Dimensions="{dims}" NumberType="{number_type}" Precision="{precision}" Format="HDF">{h5}:{path}</DataItem>"#
     );
 }
 
@@ -333,6 +363,7 @@ mod tests {
             ],
             attributes: vec![("scene".into(), "x".repeat(100))],
             rows: Default::default(),
+            steps: Vec::new(),
         }
     }
 
@@ -405,5 +436,70 @@ mod tests {
         data.fields[0].name = "a\u{1}b".into();
         assert!(write(&path, "r.h5", &data).is_err());
         assert!(!path.exists());
+    }
+
+    /// `sample()` on a load path of 3 steps, each with a node vector, an escaped-name cell
+    /// scalar (distributed: this rank holds cell 1 only) and an integer cell field.
+    fn with_steps() -> OutputData {
+        let mut data = sample();
+        data.steps = [0.1, 0.5, 1.0]
+            .iter()
+            .map(|&time| crate::output::Step {
+                time,
+                fields: vec![
+                    Field { name: "displacement".into(), center: Center::Node, ncomp: 3, values: Values::F64(vec![time; 36]) },
+                    Field { name: "von <Mises> & \"co\"".into(), center: Center::Cell, ncomp: 1, values: Values::F64(vec![time]) },
+                    Field { name: "status".into(), center: Center::Cell, ncomp: 1, values: Values::I32(vec![0, 1]) },
+                ],
+                rows: [("von <Mises> & \"co\"".to_string(), vec![1])].into(),
+            })
+            .collect();
+        data
+    }
+
+    #[test]
+    fn load_path_is_a_temporal_collection() {
+        let data = with_steps();
+        let doc = render("r&d result.h5", &data).unwrap();
+        let names = check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
+        let count = |n: &str| names.iter().filter(|x| *x == n).count();
+        // The collection and one uniform grid per step, each with its mesh and step fields.
+        assert_eq!((count("Grid"), count("Time"), count("Topology"), count("Geometry")), (4, 3, 3, 3));
+        assert_eq!((count("Attribute"), count("DataItem")), (9, 15));
+        assert_eq!(names[..3], ["Xdmf", "Domain", "Grid"]);
+        assert!(doc.contains(r#"<Grid Name="load path" GridType="Collection" CollectionType="Temporal">"#));
+
+        // Steps in order, each with its time and its own datasets.
+        let at = |needle: &str| doc.find(needle).unwrap_or_else(|| panic!("no {needle:?} in\n{doc}"));
+        let mut last = 0;
+        for (name, time) in [("0001", "0.1"), ("0002", "0.5"), ("0003", "1.0")] {
+            let grid = at(&format!(r#"<Grid Name="step {name}" GridType="Uniform">"#));
+            let t = at(&format!(r#"<Time Value="{time}"/>"#));
+            let u = at(&format!(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/steps/{name}/displacement<"#));
+            let vm = at(&format!(r#"Dimensions="2" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/steps/{name}/von &lt;Mises&gt; &amp; &quot;co&quot;<"#));
+            let st = at(&format!(r#"Dimensions="2" NumberType="Int" Precision="4" Format="HDF">r&amp;d result.h5:/steps/{name}/status<"#));
+            assert!(last < grid && grid < t && t < u && u < vm && vm < st, "step {name} out of order\n{doc}");
+            last = st;
+        }
+        assert!(!doc.contains("/fields/"), "{doc}");
+        assert_eq!(doc.matches(r#"r&amp;d result.h5:/mesh/hexahedra<"#).count(), 3);
+        assert!(doc.contains(r#"<Attribute Name="von &lt;Mises&gt; &amp; &quot;co&quot;" AttributeType="Scalar" Center="Cell">"#));
+    }
+
+    #[test]
+    fn bad_steps_are_an_error() {
+        let mut data = with_steps();
+        data.steps[1].fields[2].values = Values::I32(vec![0; 3]);
+        let err = render("r.h5", &data).unwrap_err();
+        assert!(err.contains("step 0002") && err.contains("status"), "{err}");
+        let mut data = with_steps();
+        data.steps[0].time = f64::INFINITY;
+        assert!(render("r.h5", &data).unwrap_err().contains("not finite"));
+        let mut data = with_steps();
+        data.steps.swap(0, 2);
+        assert!(render("r.h5", &data).unwrap_err().contains("not after"));
+        let mut data = with_steps();
+        data.steps[2].fields[0].name = "a\u{1}b".into();
+        assert!(render("r.h5", &data).is_err());
     }
 }
