@@ -471,6 +471,11 @@ fn print_summary(s: &pipeline::Summary) {
             println!("  {:<10} {:>8} free DOFs  nnz(L) {:>11}  ‖Ku−f‖/‖f‖ {:.1e}  rank {}", b.name, b.free_dofs, b.nnz_l, b.residual, b.rank);
         }
     }
+    if let Some(steps) = &r.load_path {
+        let (na, fp): (usize, usize) = steps.iter().fold((0, 0), |a, s| (a.0 + s.n_a, a.1 + s.fixed_point_iterations));
+        let fp = if fp > 0 { format!(", {fp} Coulomb fixed-point steps") } else { String::new() };
+        println!("load path: {} steps, nA = {na} in all (σ_max included){fp}; the last step:", steps.len());
+    }
     if let Some(sv) = &r.solver {
         let i = &sv.info;
         // plain CG (TFETI without contact) solves A x = b: no KKT conditions beyond its residual

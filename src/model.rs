@@ -23,6 +23,44 @@ pub struct Model {
     pub contact: Vec<(usize, usize)>,
     /// The node-to-node pairs, only when contact is enabled.
     pub pairs: Option<Contact>,
+    /// The load path; `constraints` and `loads` are its last step.
+    pub path: LoadPath,
+}
+
+/// The quasi-static load path: at step k (1…K) every Dirichlet value and traction is its
+/// entry's times the entry's factor f_k.
+#[derive(Clone, Debug, Default)]
+pub struct LoadPath {
+    pub steps: usize,
+    /// The Dirichlet entry of every constraint (parallel to [`Model::constraints`]) and its
+    /// value at factor 1.
+    constraint_entry: Vec<(usize, f64)>,
+    /// f_k of every Dirichlet entry.
+    dirichlet: Vec<Vec<f64>>,
+    /// f_k of every traction, and its nonzero nodal forces at factor 1.
+    traction: Vec<(Vec<f64>, Vec<(usize, f64)>)>,
+}
+
+impl LoadPath {
+    /// Whether there is more than one load state.
+    pub fn is_path(&self) -> bool {
+        self.steps > 1
+    }
+}
+
+impl Model {
+    /// The constraints (same DOFs at every step) and nodal loads at load step k (1…K).
+    pub fn state(&self, k: usize) -> (Vec<(usize, usize, f64)>, Vec<f64>) {
+        let p = &self.path;
+        let constraints = self.constraints.iter().zip(&p.constraint_entry).map(|(&(v, c, _), &(e, val))| (v, c, val * p.dirichlet[e][k - 1])).collect();
+        let mut loads = vec![0.0; self.loads.len()];
+        for (f, entries) in &p.traction {
+            for &(d, x) in entries {
+                loads[d] += f[k - 1] * x;
+            }
+        }
+        (constraints, loads)
+    }
 }
 
 impl Model {
@@ -102,8 +140,12 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         })
         .collect();
 
+    let steps = scene.load.steps;
+    let factors = |f: &Option<Vec<f64>>| -> Vec<f64> { (1..=steps).map(|k| crate::scene::load_factor(f.as_deref(), k, steps)).collect() };
+    let mut path = LoadPath { steps, ..Default::default() };
     let mut constraints = Vec::new();
     for (i, d) in scene.dirichlet.iter().enumerate() {
+        path.dirichlet.push(factors(&d.factors));
         let f = &mesh.faces[face_index(&mesh, format!("dirichlet[{i}].face"), &d.face)?];
         for v in f.nodes() {
             for c in &d.components {
@@ -112,7 +154,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                     Component::Y => 1,
                     Component::Z => 2,
                 };
-                constraints.push((v, c, d.value[c]));
+                constraints.push((v, c, d.value[c] * path.dirichlet[i][steps - 1]));
+                path.constraint_entry.push((i, d.value[c]));
             }
         }
     }
@@ -120,7 +163,13 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let mut loads = vec![0.0; 3 * mesh.nodes.len()];
     for (i, t) in scene.traction.iter().enumerate() {
         let f = &mesh.faces[face_index(&mesh, format!("traction[{i}].face"), &t.face)?];
-        add_traction(&mesh, f, t.p, 0, &mut loads);
+        let mut unit = vec![0.0; loads.len()];
+        add_traction(&mesh, f, t.p, 0, &mut unit);
+        let fk = factors(&t.factors);
+        for (l, u) in loads.iter_mut().zip(&unit) {
+            *l += fk[steps - 1] * u;
+        }
+        path.traction.push((fk, unit.into_iter().enumerate().filter(|x| x.1 != 0.0).collect()));
     }
 
     let mut contact = Vec::new();
@@ -150,6 +199,60 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                 format!("body \"{}\" floats: it has no Dirichlet condition{}", body.name, if contact_active { " and no contact" } else { " (contact is off)" }),
             ));
         }
+        let free = free_motions(&mesh, b, &constraints);
+        if !free.is_empty() {
+            let by = if touches { "; bodies held by contact and friction alone are not solved yet: add Dirichlet conditions (rollers) that stop them" } else { "" };
+            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by no Dirichlet condition{by}", body.name, free.join(", "))));
+        }
     }
-    Ok(Model { mesh, lame, constraints, loads, contact, pairs })
+    Ok(Model { mesh, lame, constraints, loads, contact, pairs, path })
+}
+
+/// The rigid motions of body `b` that its Dirichlet conditions leave free, in words: the kernel
+/// of the 6 × 6 Gram matrix of the rigid modes (about the centroid, rotations scaled by the
+/// body's size) over the constrained DOFs.
+fn free_motions(mesh: &Mesh, b: usize, constraints: &[(usize, usize, f64)]) -> Vec<String> {
+    let nodes = mesh.bodies[b].nodes.clone();
+    let n = nodes.len() as f64;
+    let c: [f64; 3] = std::array::from_fn(|d| nodes.clone().map(|v| mesh.nodes[v][d]).sum::<f64>() / n);
+    let size = nodes.clone().map(|v| (0..3).map(|d| (mesh.nodes[v][d] - c[d]).powi(2)).sum::<f64>()).fold(0.0, f64::max).sqrt().max(f64::MIN_POSITIVE);
+    let mut gram = faer::Mat::<f64>::zeros(6, 6);
+    for &(v, comp, _) in constraints.iter().filter(|x| nodes.contains(&x.0)) {
+        let x: [f64; 3] = std::array::from_fn(|d| (mesh.nodes[v][d] - c[d]) / size);
+        // the DOF's row of R: translations e_comp, rotations (ω × x)_comp
+        let mut r = [0.0; 6];
+        r[comp] = 1.0;
+        let rot = [[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]];
+        for k in 0..3 {
+            r[3 + k] = rot[k][comp];
+        }
+        for i in 0..6 {
+            for j in 0..6 {
+                gram[(i, j)] += r[i] * r[j];
+            }
+        }
+    }
+    let Ok(eig) = gram.self_adjoint_eigen(faer::Side::Lower) else { return vec!["(eigen-decomposition failed)".into()] };
+    let (vals, vecs) = (eig.S(), eig.U());
+    let top = (0..6).map(|i| vals[i]).fold(0.0, f64::max);
+    let axis = |w: [f64; 3]| {
+        let names = ["x", "y", "z"];
+        let big: Vec<usize> = (0..3).filter(|&d| w[d].abs() > 1e-6).collect();
+        if big.len() == 1 { names[big[0]].to_string() } else { format!("({:.3}, {:.3}, {:.3})", w[0], w[1], w[2]) }
+    };
+    (0..6)
+        .filter(|&i| vals[i] <= 1e-10 * top.max(1.0))
+        .map(|i| {
+            let u: [f64; 6] = std::array::from_fn(|k| vecs[(k, i)]);
+            let (t, w) = ([u[0], u[1], u[2]], [u[3], u[4], u[5]]);
+            let (nt, nw) = (t.iter().map(|a| a * a).sum::<f64>().sqrt(), w.iter().map(|a| a * a).sum::<f64>().sqrt());
+            if nw <= 1e-6 * nt {
+                format!("translation along {}", axis(t.map(|a| a / nt)))
+            } else if nt <= 1e-6 * nw {
+                format!("rotation about {}", axis(w.map(|a| a / nw)))
+            } else {
+                format!("screw motion (rotation about {}, translation along {})", axis(w.map(|a| a / nw)), axis(t.map(|a| a / nt)))
+            }
+        })
+        .collect()
 }

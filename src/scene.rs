@@ -29,6 +29,9 @@ pub struct Scene {
     pub dirichlet: Vec<Dirichlet>,
     #[serde(default)]
     pub traction: Vec<Traction>,
+    /// The quasi-static load path: `[load] steps = K`.
+    #[serde(default)]
+    pub load: LoadSettings,
     #[serde(default)]
     pub contact: ContactSettings,
     /// Read by [`SolverSettings::from_table`] (each key checked against the method).
@@ -158,6 +161,9 @@ pub struct Dirichlet {
     /// Constrained components (default all three).
     #[serde(default = "all_components")]
     pub components: Vec<Component>,
+    /// `value` × f_k at load step k (default: the linear ramp k/K).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub factors: Option<Vec<f64>>,
 }
 
 fn all_components() -> Vec<Component> {
@@ -170,6 +176,33 @@ pub struct Traction {
     pub face: String,
     /// Surface traction (MPa), constant over the face.
     pub p: [f64; 3],
+    /// `p` × f_k at load step k (default: the linear ramp k/K).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub factors: Option<Vec<f64>>,
+}
+
+/// `[load]`: a quasi-static load path of `steps` states, each solved from the last; friction
+/// acts on each step's slip increment.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSettings {
+    #[serde(default = "one")]
+    pub steps: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Default for LoadSettings {
+    fn default() -> Self {
+        LoadSettings { steps: 1 }
+    }
+}
+
+/// The factor f_k (k = 1…K) of an entry's `factors`, or the linear ramp k/K.
+pub fn load_factor(factors: Option<&[f64]>, k: usize, steps: usize) -> f64 {
+    factors.map_or(k as f64 / steps as f64, |f| f[k - 1])
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -467,6 +500,9 @@ pub struct Factorization {
 /// Most nodes of one body: its 3 DOFs per node must fit the 32-bit indices of METIS.
 pub const MAX_BODY_NODES: usize = i32::MAX as usize / 3;
 
+/// Load steps at most: every step is a solve and a group in the result file.
+pub const MAX_LOAD_STEPS: usize = 10_000;
+
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
 pub const FIELDS: [&str; 10] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
 
@@ -729,6 +765,22 @@ impl Scene {
             if f.name.is_empty() || f.name.contains('.') {
                 return Err(Error::scene(format!("face[{i}].name"), "face names must be non-empty and contain no '.'"));
             }
+        }
+        if self.load.steps == 0 || self.load.steps > MAX_LOAD_STEPS {
+            return Err(Error::scene("load.steps", format!("must lie in 1..={MAX_LOAD_STEPS}, got {}", self.load.steps)));
+        }
+        let entries = self.dirichlet.iter().map(|d| ("dirichlet", &d.factors)).chain(self.traction.iter().map(|t| ("traction", &t.factors)));
+        let mut index = std::collections::HashMap::new();
+        for (what, f) in entries {
+            let i = index.entry(what).or_insert(0usize);
+            if let Some(f) = f {
+                let key = format!("{what}[{i}].factors");
+                finite(key.clone(), f)?;
+                if f.len() != self.load.steps {
+                    return Err(Error::scene(key, format!("needs one factor per load step (load.steps = {}), got {}", self.load.steps, f.len())));
+                }
+            }
+            *i += 1;
         }
         for (i, d) in self.dirichlet.iter().enumerate() {
             finite(format!("dirichlet[{i}].value"), &d.value)?;

@@ -223,3 +223,33 @@ fn all_five_solvers_agree_and_satisfy_kkt() {
         }
     }
 }
+
+#[test]
+fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
+    // the Coulomb solution λ* is a fixed point: the Tresca problem with gᵢ = μ·λν,ᵢ* fixed has
+    // the same solution (a Tresca solve from zero, not warm-started)
+    let model = seed(6, &["contact.pair.0.friction={type=\"coulomb\", mu=0.3}"]);
+    let contact = model.pairs.as_ref().unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
+    let set = contact.constraint_set();
+    let params = Params::new(Method::Tssn).with_eps(1e-11);
+    let zero = vec![0.0; dual.dim()];
+    let coulomb = qp::solve_friction(&Qp::new(&dual, &b, &set), Some(&contact.coulomb), &zero, &params, &mut Silent).unwrap();
+    let fixed = qp::coulomb::bounds(&set, &contact.coulomb, &coulomb.lambda);
+    let tresca = qp::solve(&Qp::new(&dual, &b, &fixed), &zero, &params, &mut Silent).unwrap();
+    let (uc, ut) = (dual.recover(&coulomb.lambda).u, dual.recover(&tresca.lambda).u);
+    let (mut d, mut m) = (0.0f64, 0.0f64);
+    for (a, b) in uc.iter().flatten().zip(ut.iter().flatten()) {
+        d = d.max((a - b).abs());
+        m = m.max(a.abs());
+    }
+    eprintln!("Coulomb ({} fixed-point steps) vs Tresca at its bounds: max|Δu|/max|u| = {:.2e}", coulomb.info.fixed_point_iterations, d / m);
+    assert!(coulomb.info.fixed_point_iterations >= 2, "a real fixed point");
+    assert!(d <= 1e-8 * m, "u differs by {:.2e} relative", d / m);
+    // and it is not a Tresca solution for any other bound: with g from λν of the elastic guess it differs
+    let slip = qp::solve(&Qp::new(&dual, &b, &qp::coulomb::bounds(&set, &contact.coulomb, &zero)), &zero, &params, &mut Silent).unwrap();
+    let us = dual.recover(&slip.lambda).u;
+    let ds = us.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(ds > 1e-4 * m, "frictionless bounds give a different u ({:.1e})", ds / m);
+}

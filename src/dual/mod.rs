@@ -8,7 +8,7 @@
 
 pub mod monolithic;
 
-use crate::qp::Operator;
+use crate::qp::{Layout, Operator};
 
 /// A dual problem whose solution maps back to the primal one on this rank's pieces (bodies or
 /// subdomains).
@@ -57,3 +57,30 @@ pub fn gather_rows<'a, C: crate::comm::Comm>(comm: &C, pieces: impl Iterator<Ite
     comm.sum_f64(y);
 }
 
+
+/// B u = c − gap − c0 on the tangential rows of `layout` (the prescribed part of B u is
+/// −c0), 0 elsewhere.
+pub fn tangential_jump(layout: Layout, c: &[f64], c0: &[f64], gap: &[f64]) -> Vec<f64> {
+    let mut j = vec![0.0; c.len()];
+    if layout.friction {
+        for i in 0..layout.m {
+            for k in 0..2 {
+                let r = layout.tangent(i, k);
+                j[r] = c[r] - gap[r] - c0[r];
+            }
+        }
+    }
+    j
+}
+
+/// c += `jump` on the tangential rows of `layout`.
+pub fn add_tangential(layout: Layout, jump: &[f64], c: &mut [f64]) {
+    if layout.friction {
+        for i in 0..layout.m {
+            for k in 0..2 {
+                let r = layout.tangent(i, k);
+                c[r] += jump[r];
+            }
+        }
+    }
+}

@@ -4,7 +4,7 @@
 //! (gather), and one sum over the ranks: bodies may live on different ranks, the (short) dual
 //! vector is replicated.
 
-use super::{gather_rows, scatter_rows, DualProblem, Recovered};
+use super::{add_tangential, gather_rows, scatter_rows, tangential_jump, DualProblem, Recovered};
 use crate::comm::Comm;
 use crate::contact::pairing::Contact;
 use crate::fem::assembly::{BodySystem, DofMap, FIXED};
@@ -30,8 +30,11 @@ pub struct MonolithicDual<'c, C: Comm> {
     comm: &'c C,
     pub layout: Layout,
     pub blocks: Vec<BodyBlock>,
-    /// c = [d; 0] − B_c u_c (the prescribed values moved to the right).
+    /// c = [d; 0] − B_c u_c (the prescribed values moved to the right) + the last load step's
+    /// tangential jump ([`MonolithicDual::set_load`]).
     c: Vec<f64>,
+    /// c without the last step's jump.
+    c0: Vec<f64>,
     counter: ProductCounter,
 }
 
@@ -72,28 +75,61 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
     /// The operator over this rank's factorized bodies, and b = B K⁻¹ f − c.
     pub fn new(comm: &'c C, contact: &Contact, bodies: Vec<LocalBody>) -> (Self, Vec<f64>) {
         let layout = Layout::contact(contact.len(), contact.has_friction());
-        let mut shift = vec![0.0; layout.dim()];
         let blocks = bodies
             .into_iter()
             .map(|local| {
-                let (b, s) = body_rows(contact, layout, &local.dofs);
-                for (a, v) in shift.iter_mut().zip(s) {
-                    *a += v;
-                }
+                let (b, _) = body_rows(contact, layout, &local.dofs);
                 BodyBlock { local, b }
             })
             .collect();
-        comm.sum_f64(&mut shift);
-        let mut c = vec![0.0; layout.dim()];
+        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default() };
+        dual.set_c(contact, None);
+        let rhs = dual.rhs();
+        (dual, rhs)
+    }
+
+    /// A new load state on the same bodies and constrained DOFs (a step of a load path): each
+    /// local body's prescribed values and f (`state` maps the body to them), and the tangential
+    /// rows of c moved by `jump` (B_T u of the last step, [`MonolithicDual::jump`]): friction
+    /// acts on the slip increment. Returns b.
+    pub fn set_load(&mut self, contact: &Contact, mut state: impl FnMut(&LocalBody) -> (DofMap, Vec<f64>), jump: &[f64]) -> Vec<f64> {
+        for blk in &mut self.blocks {
+            let (dofs, f) = state(&blk.local);
+            blk.local.dofs = dofs;
+            blk.local.sys.f = f;
+        }
+        self.set_c(contact, Some(jump));
+        self.rhs()
+    }
+
+    /// B u on the tangential rows (prescribed parts included, 0 on the normal rows) from the
+    /// gap c − Bu of a recovered solution: what the next load step's slip is measured from.
+    pub fn jump(&self, gap: &[f64]) -> Vec<f64> {
+        tangential_jump(self.layout, &self.c, &self.c0, gap)
+    }
+
+    /// c0 = [d; 0] − B_c u_c from the bodies' prescribed values (summed over the ranks) and
+    /// c = c0 + `jump` on the tangential rows.
+    fn set_c(&mut self, contact: &Contact, jump: Option<&[f64]>) {
+        let mut shift = vec![0.0; self.layout.dim()];
+        for blk in &self.blocks {
+            for (a, v) in shift.iter_mut().zip(body_rows(contact, self.layout, &blk.local.dofs).1) {
+                *a += v;
+            }
+        }
+        self.comm.sum_f64(&mut shift);
+        let mut c = vec![0.0; self.layout.dim()];
         for (i, g) in contact.gap.iter().enumerate() {
-            c[layout.normal(i)] = *g;
+            c[self.layout.normal(i)] = *g;
         }
         for (ci, s) in c.iter_mut().zip(&shift) {
             *ci -= s;
         }
-        let dual = MonolithicDual { comm, layout, blocks, c, counter: ProductCounter::default() };
-        let rhs = dual.rhs(&contact.gap, &shift);
-        (dual, rhs)
+        self.c0 = c.clone();
+        if let Some(j) = jump {
+            add_tangential(self.layout, j, &mut c);
+        }
+        self.c = c;
     }
 
     /// Bᵀx restricted to each local body.
@@ -106,8 +142,8 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
         gather_rows(self.comm, self.blocks.iter().zip(z).map(|(blk, zb)| (blk.b.as_slice(), zb.as_slice())), y);
     }
 
-    /// b = B K⁻¹ f − c, with c = [d; 0] − B_c u_c (the prescribed values moved to the right).
-    fn rhs(&self, gap: &[f64], shift: &[f64]) -> Vec<f64> {
+    /// b = B K⁻¹ f − c.
+    fn rhs(&self) -> Vec<f64> {
         let z: Vec<Vec<f64>> = self
             .blocks
             .iter()
@@ -119,12 +155,7 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
             .collect();
         let mut b = vec![0.0; self.layout.dim()];
         self.gather(&z, &mut b);
-        for i in 0..self.layout.m {
-            b[self.layout.normal(i)] -= gap[i];
-        }
-        for (bi, s) in b.iter_mut().zip(shift) {
-            *bi += s;
-        }
+        b.iter_mut().zip(&self.c).for_each(|(bi, ci)| *bi -= ci);
         b
     }
 

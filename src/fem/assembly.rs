@@ -180,18 +180,10 @@ pub fn assemble_elements(
         }
         let ke = hex8_stiffness(&x, lame);
         let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(mesh.hexes[e][r / 3]) + r % 3);
+        lift(&ke, &ld, dofs, &mut f);
         for q in 0..24 {
             let j = dofs.free[ld[q]];
             if j == FIXED {
-                let uc = dofs.prescribed[ld[q]];
-                if uc != 0.0 {
-                    for p in 0..24 {
-                        let i = dofs.free[ld[p]];
-                        if i != FIXED {
-                            f[i] -= ke[p][q] * uc;
-                        }
-                    }
-                }
                 continue;
             }
             for p in 0..24 {
@@ -204,6 +196,37 @@ pub fn assemble_elements(
         }
     }
     Ok(BodySystem { k, f, graph: (xadj, adj) })
+}
+
+/// f_f −= K_fc u_c of one element (`ld`: its local DOFs).
+fn lift(ke: &[[f64; 24]; 24], ld: &[usize; 24], dofs: &DofMap, f: &mut [f64]) {
+    for q in 0..24 {
+        let uc = dofs.prescribed[ld[q]];
+        if dofs.free[ld[q]] != FIXED || uc == 0.0 {
+            continue;
+        }
+        for p in 0..24 {
+            let i = dofs.free[ld[p]];
+            if i != FIXED {
+                f[i] -= ke[p][q] * uc;
+            }
+        }
+    }
+}
+
+/// The right-hand side `loads_f − K_fc u_c` of body `body` alone (a new load state on the same
+/// constrained DOFs): only the elements with a nonzero prescribed value are integrated.
+pub fn body_rhs(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Vec<f64> {
+    let b = &mesh.bodies[body];
+    let mut f = dofs.restrict(loads);
+    for e in b.elems.clone() {
+        let ld: [usize; 24] = std::array::from_fn(|r| 3 * (mesh.hexes[e][r / 3] - b.nodes.start) + r % 3);
+        if ld.iter().all(|&d| dofs.free[d] != FIXED || dofs.prescribed[d] == 0.0) {
+            continue;
+        }
+        lift(&hex8_stiffness(&mesh.hex_coords(e), lame), &ld, dofs, &mut f);
+    }
+    f
 }
 
 /// Consistent nodal forces of a uniform traction `p` on `face` (2×2 Gauss per quad), added into

@@ -53,21 +53,32 @@ struct Pattern {
     contact: Vec<Vec<(usize, f64)>>,
 }
 
+/// e = Rᵀf: the load's work in each subdomain's six rigid motions (`loads[s]` = f_s).
+pub fn rigid_loads(mesh: &Mesh, d: &Decomposition, loads: &[Vec<f64>]) -> Vec<f64> {
+    let mut e = vec![0.0; NR * d.subdomains.len()];
+    for (s, sd) in d.subdomains.iter().enumerate() {
+        let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
+        let r = rigid_modes(&coords);
+        let nd = 3 * sd.nodes.len();
+        for k in 0..NR {
+            e[NR * s + k] = r[k * nd..(k + 1) * nd].iter().zip(&loads[s]).map(|(a, b)| a * b).sum();
+        }
+    }
+    e
+}
+
 impl Coarse {
     /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes C; with
     /// `orthogonal` also GGᵀ for the orthogonal projector P.
     pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], orthogonal: bool) -> Result<Coarse> {
         let e_start = cons.e_start();
         let ns = d.subdomains.len();
-        let mut e = vec![0.0; NR * ns];
+        let e = rigid_loads(mesh, d, loads);
         let mut blocks = Vec::with_capacity(ns);
         for (s, sd) in d.subdomains.iter().enumerate() {
             let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
             let r = rigid_modes(&coords);
             let nd = 3 * sd.nodes.len();
-            for k in 0..NR {
-                e[NR * s + k] = r[k * nd..(k + 1) * nd].iter().zip(&loads[s]).map(|(a, b)| a * b).sum();
-            }
             let rows = cons.sorted_rows(s);
             let len = rows.len();
             let mut g = vec![0.0; NR * len];

@@ -36,8 +36,10 @@ pub struct TfetiDual<'c, C: Comm> {
     pub layout: Layout,
     pub subs: Vec<LocalSubdomain>,
     pub coarse: Coarse,
-    /// c on the owned rows.
+    /// c on the owned rows (+ the last load step's tangential jump, [`TfetiDual::set_load`]).
     c: Vec<f64>,
+    /// c without that jump.
+    c0: Vec<f64>,
     /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows: Gλ̂ = e, λ̂_I = 0.
     pub lambda_hat: Vec<f64>,
     /// d̃ − Fλ̂ (before projection, owned): the right-hand side once λ = λ̂ + λ̃.
@@ -66,18 +68,44 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             })
             .collect();
         let c = dist.restrict(&cons.c);
-        let lambda_hat = coarse.lambda_hat_local(&dist);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, subs, coarse, c, lambda_hat, d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None };
-        // d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c
-        let mut b = vec![0.0; layout.dim()];
-        let z = dual.pinv_of_rhs(&dual.lambda_hat);
-        dual.gather(&z, &mut b);
-        b.iter_mut().zip(&dual.c).for_each(|(bi, ci)| *bi -= ci);
-        dual.d_hat = b.clone();
-        dual.coarse.project(&dual.dist, &mut b);
+        let mut dual = TfetiDual { dist, layout, subs, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None };
+        let b = dual.rhs();
         (dual, b)
+    }
+
+    /// A new load state on the same subdomains and rows (a step of a load path): f_s of each
+    /// local subdomain, e = Rᵀf (all subdomains), c on every row, and the tangential rows of c
+    /// moved by `jump` (owned; B_T u of the last step, [`TfetiDual::jump`]): friction acts on
+    /// the slip increment. Returns b̃.
+    pub fn set_load(&mut self, f: Vec<Vec<f64>>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
+        for (s, fs) in self.subs.iter_mut().zip(f) {
+            s.sys.f = fs;
+        }
+        self.coarse.e = e;
+        self.c0 = self.dist.restrict(c);
+        self.c = self.c0.clone();
+        crate::dual::add_tangential(self.layout, jump, &mut self.c);
+        self.rhs()
+    }
+
+    /// B u on the owned tangential rows (prescribed parts included, 0 elsewhere) from the gap
+    /// c − Bu of a recovered solution: what the next load step's slip is measured from.
+    pub fn jump(&self, gap: &[f64]) -> Vec<f64> {
+        crate::dual::tangential_jump(self.layout, &self.c, &self.c0, gap)
+    }
+
+    /// λ̂ and d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c from the current f, e and c; returns b̃ = P̃(d̃ − Fλ̂).
+    fn rhs(&mut self) -> Vec<f64> {
+        self.lambda_hat = self.coarse.lambda_hat_local(&self.dist);
+        let mut b = vec![0.0; self.layout.dim()];
+        let z = self.pinv_of_rhs(&self.lambda_hat);
+        self.gather(&z, &mut b);
+        b.iter_mut().zip(&self.c).for_each(|(bi, ci)| *bi -= ci);
+        self.d_hat = b.clone();
+        self.coarse.project(&self.dist, &mut b);
+        b
     }
 
     /// Builds the FETI preconditioner of [`DualPreconditioner`] (`None`: drops it). Dirichlet

@@ -13,6 +13,7 @@
 
 pub mod finish;
 pub mod monitor;
+pub mod path;
 pub mod plan;
 pub mod report;
 pub mod tfeti;
@@ -63,7 +64,11 @@ impl Timings {
         let mut t = [t0.elapsed().as_secs_f64()];
         let r = comm.agree(r);
         comm.max_f64(&mut t);
-        self.phases.push((name.to_string(), t[0]));
+        // a phase run once per load step: its total
+        match self.phases.iter_mut().find(|p| p.0 == name) {
+            Some(p) => p.1 += t[0],
+            None => self.phases.push((name.to_string(), t[0])),
+        }
         r
     }
 
@@ -229,38 +234,76 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
     Ok(sol)
 }
 
-/// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), solve the
-/// QP (phase `iterate`), recover u (phase `recover`), then stresses and gather as for elasticity.
+/// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), then for
+/// each load step (one without `[load]`) set the load (phase `load`), solve the QP warm-started
+/// from the last step (phase `iterate`), recover u (phase `recover`), stresses and gather as for
+/// elasticity. The outcome is the last step's, with every step's record.
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
     let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
-    let (dual, b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
+    let (mut dual, mut b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
     let set = contact.constraint_set();
     let name = s.params.method().name();
-    let mut monitor = t.monitor();
     let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
-    let sol = t.phase(comm, "iterate", || {
-        qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &vec![0.0; dual.dim()], &s.params, &mut monitor).map_err(|e| Error::solver(name.to_uppercase(), e))
-    })?;
-    // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-    let set = match coulomb {
-        Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
-        None => set,
-    };
-    let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
-    if let Some(path) = &ls.scene.output.export_dual {
-        t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
+    let steps = model.path.steps;
+    let (mut y, mut jump) = (vec![0.0; dual.dim()], vec![0.0; dual.dim()]);
+    let mut records = Vec::new();
+    for k in 1..=steps {
+        let t0 = std::time::Instant::now();
+        if model.path.is_path() {
+            b = t.phase(comm, "load", || {
+                let (cons, loads) = model.state(k);
+                Ok(dual.set_load(contact, |lb| {
+                    let body = &model.mesh.bodies[lb.body];
+                    let dofs = DofMap::new(body.nodes.clone(), &cons);
+                    let f = crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
+                    (dofs, f)
+                }, &jump))
+            })?;
+        }
+        let mut monitor = t.monitor();
+        let sol = t.phase(comm, "iterate", || {
+            qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &y, &s.params, &mut monitor).map_err(|e| Error::solver(step_name(name, k, steps), e))
+        })?;
+        // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+        let set_k = match coulomb {
+            Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
+            None => set.clone(),
+        };
+        let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
+        if k == steps {
+            if let Some(path) = &ls.scene.output.export_dual {
+                t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
+            }
+        }
+        let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
+        let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
+        let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
+        // the status cannot be sharper than the solution: classify at the solver's tolerance
+        let bnorm = dual.space().norm(&b);
+        let state = contact_state(contact, &set_k, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
+        let kkt = qp::kkt::residuals(&set_k, &rec.lambda, &rec.gap, bnorm);
+        let mut outcome = ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt, steps: vec![] };
+        if model.path.is_path() {
+            let rec_k = path::StepOutput::new(k, &solution, contact, &outcome, t0.elapsed().as_secs_f64());
+            t.live.line(&rec_k.line(steps));
+            records.push(rec_k);
+        }
+        if k == steps {
+            outcome.steps = records;
+            return Ok((solution, outcome));
+        }
+        jump = dual.jump(&rec.gap);
+        y = sol.lambda;
     }
-    let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
-    let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
-    let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
-    // the status cannot be sharper than the solution: classify at the solver's tolerance
-    let bnorm = dual.space().norm(&b);
-    let state = contact_state(contact, &set, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
-    let kkt = qp::kkt::residuals(&set, &rec.lambda, &rec.gap, bnorm);
-    Ok((solution, ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt }))
+    unreachable!("a load path has at least one step")
+}
+
+/// The solver's name in an error, with the load step on a path.
+fn step_name(name: &str, k: usize, steps: usize) -> String {
+    if steps > 1 { format!("{} (load step {k}/{steps})", name.to_uppercase()) } else { name.to_uppercase() }
 }
 
 /// `output.export_dual`: the Coulomb problem on the monolithic dual in the local form of the
@@ -387,6 +430,8 @@ pub struct ContactOutcome {
     pub info: qp::Info,
     pub bnorm: f64,
     pub kkt: qp::kkt::Kkt,
+    /// Every step of a load path (empty with one load state).
+    pub steps: Vec<path::StepOutput>,
 }
 
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
@@ -418,6 +463,9 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         if let Some(why) = why {
             return Err(Error::scene("output.export_dual", why));
         }
+    }
+    if model.pairs.is_none() && model.path.is_path() {
+        return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
     }
     let (sol, outcome) = match &model.pairs {
         _ if tfeti => tfeti::solve(comm, &ls, &model, &mut t)?,
@@ -552,6 +600,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         versions: crate::versions(),
         memory: None,
         decomposition_plan: None,
+        load_path: outcome.filter(|o| !o.steps.is_empty()).map(|o| o.steps.iter().map(|s| s.report.clone()).collect()),
         output_verified_values: None,
     }
 }
@@ -562,22 +611,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
 fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str, history: &str) -> OutputData {
     let mesh = &model.mesh;
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
-    let mut fields = Vec::new();
-    let mut rows = std::collections::BTreeMap::new();
-    let local = &sol.local;
-    if want("displacement") {
-        fields.push(Field {
-            name: "displacement".into(),
-            center: Center::Node,
-            ncomp: 3,
-            values: Values::F64(local.displacement.iter().flatten().copied().collect()),
-        });
-        rows.insert("displacement".to_string(), local.nodes.clone());
-    }
-    if want("von_mises") {
-        fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(local.von_mises.clone()) });
-        rows.insert("von_mises".to_string(), local.cells.clone());
-    }
+    let (mut fields, rows) = distributed_fields(&sol.local, &want);
     if want("rank") {
         fields.push(Field { name: "rank".into(), center: Center::Cell, ncomp: 1, values: Values::I32(sol.element_rank.iter().map(|&r| r as i32).collect()) });
     }
@@ -604,11 +638,32 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
         ("report".into(), report.to_string()),
         ("ranks".into(), comm.size().to_string()),
     ];
+    let mut steps = Vec::new();
     if let (Some(o), Some(c)) = (outcome, &model.pairs) {
         fields.extend(contact_fields(mesh.nodes.len(), c, &o.state, want));
         attributes.push(("solver_history".into(), history.to_string()));
+        for s in &o.steps {
+            let (mut fields, rows) = distributed_fields(&s.local, &want);
+            fields.extend(contact_fields(mesh.nodes.len(), c, &s.state, want));
+            steps.push(output::Step { time: s.report.step as f64, fields, rows });
+        }
     }
-    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes, rows }
+    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes, rows, steps }
+}
+
+/// u and the von Mises stress (when `want`ed) on this rank's rows, and the rows.
+fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec<Field>, std::collections::BTreeMap<String, Vec<usize>>) {
+    let mut fields = Vec::new();
+    let mut rows = std::collections::BTreeMap::new();
+    if want("displacement") {
+        fields.push(Field { name: "displacement".into(), center: Center::Node, ncomp: 3, values: Values::F64(local.displacement.iter().flatten().copied().collect()) });
+        rows.insert("displacement".to_string(), local.nodes.clone());
+    }
+    if want("von_mises") {
+        fields.push(Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(local.von_mises.clone()) });
+        rows.insert("von_mises".to_string(), local.cells.clone());
+    }
+    (fields, rows)
 }
 
 /// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print

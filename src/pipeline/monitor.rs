@@ -25,6 +25,11 @@ impl Live {
         Live { on, start: Instant::now() }
     }
 
+    /// `[   1.23 s] text`: a summary line (a load step's).
+    pub fn line(&self, text: &str) {
+        self.phase(text);
+    }
+
     /// `[   1.23 s] name` as a phase starts.
     pub fn phase(&self, name: &str) {
         if self.on {

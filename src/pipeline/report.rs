@@ -36,6 +36,9 @@ pub struct Report {
     /// The priced decompositions when the scene left `[decomposition]` to the cost model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub decomposition_plan: Option<Vec<super::plan::Candidate>>,
+    /// Every step of a load path (`[load] steps` > 1); `solver` and `contact` are the last's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_path: Option<Vec<super::path::StepReport>>,
     /// Values read back and checked (`output.verify`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_verified_values: Option<u64>,

@@ -10,7 +10,7 @@ use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
 use crate::dual::DualProblem;
 use crate::error::{Error, Result};
-use crate::feti::coarse::Coarse;
+use crate::feti::coarse::{rigid_loads, Coarse};
 use crate::feti::constraints;
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
@@ -161,73 +161,102 @@ pub fn stiffness_weights(model: &Model, d: &Decomposition) -> Vec<f64> {
     d.subdomains.iter().map(|s| min / mu(s)).collect()
 }
 
-/// Decomposes, factorizes, solves (contact or not) and recovers on the TFETI dual.
+/// Decomposes, factorizes, then for each load step (one without `[load]`) sets the load
+/// (phase `load`), solves (contact or not) warm-started from the last step and recovers on the
+/// TFETI dual. The outcome is the last step's, with every step's record.
 pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
     let mesh = &model.mesh;
     let dec = &ls.scene.decomposition;
     let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
+    let TfetiProblem { decomposition: d, constraints: cons, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
-    let mut monitor = t.monitor();
-    let (sol, smalse) = t.phase(comm, "iterate", || {
-        let y0 = vec![0.0; dual.dim()];
-        let m = dual.preconditioner();
-        let projected = super::projected(params.method(), super::DualKind::of(ls, model));
-        let qp = Qp::new(&dual, &b, &set)
-            .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
-            .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
-        let coulomb = contact.filter(|c| c.is_coulomb());
-        let r = match (orthogonal, contact.is_some()) {
-            (true, _) if coulomb.is_some() => {
-                return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
-            }
-            (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
-            (false, true) => {
-                let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
-                qp::solve_friction(&qp, mu.as_deref(), &y0, params, &mut monitor).map(|s| (s, None))
-            }
-            (false, false) => qp::cg::solve(&qp, &y0, &params.common, &mut monitor).map(|s| (s, None)),
-        };
-        r.map_err(|e| Error::solver(if orthogonal { format!("SMALSE-M ({name})") } else { name.to_uppercase() }, e))
-    })?;
-    let rec = t.phase(comm, "recover", || {
-        // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
-        Ok(dual.recover(&sol.lambda))
-    })?;
-    let feasibility = rec.feasibility;
-    let distribution = DistributionStats::new(&dual.dist);
-    let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
-    // finish filled the gathered figures (subdomains, gluing jump); add the global ones
-    let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
-    f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
-    f.contact_rows = cons.e_start();
-    f.gluing_rows = cons.gluing_rows;
-    f.dirichlet_rows = cons.dirichlet_rows;
-    f.coarse_dim = coarse_dim;
-    f.nnz_c = nnz_c;
-    f.feasibility = feasibility;
-    f.smalse = smalse;
-    f.distribution = distribution;
-    if contact.is_none() {
-        f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), dual.space().norm(&b)));
+    let coulomb = contact.filter(|c| c.is_coulomb());
+    if orthogonal && coulomb.is_some() {
+        return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
     }
-    let outcome = contact.map(|c| {
-        let set_i = c.constraint_set();
-        // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
-        // gradient on the I rows), whole on every rank
-        let ni = set_i.layout.dim();
-        let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
-        // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-        let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
-        let bnorm = dual.space().norm(&b);
-        let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm);
-        let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
-        ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt }
-    });
-    Ok((solution, outcome))
+    let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
+    let steps = model.path.steps;
+    let (mut y, mut jump) = (vec![0.0; dual.dim()], vec![0.0; dual.dim()]);
+    let mut records = Vec::new();
+    for k in 1..=steps {
+        let t0 = std::time::Instant::now();
+        if model.path.is_path() {
+            b = t.phase(comm, "load", || {
+                let (cons_k, loads) = model.state(k);
+                let f = subdomain_loads(&d, &loads);
+                let e = rigid_loads(mesh, &d, &f);
+                let c = constraints::build(&d, &cons_k, contact, dec.gluing).c;
+                let mine = dual.dist.subs.iter().map(|sr| f[sr.index].clone()).collect();
+                Ok(dual.set_load(mine, e, &c, &jump))
+            })?;
+        }
+        let mut monitor = t.monitor();
+        let (sol, smalse) = t.phase(comm, "iterate", || {
+            let m = dual.preconditioner();
+            let projected = super::projected(params.method(), super::DualKind::of(ls, model));
+            let qp = Qp::new(&dual, &b, &set)
+                .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
+                .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
+            let r = match (orthogonal, contact.is_some()) {
+                (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
+                (false, true) => qp::solve_friction(&qp, mu.as_deref(), &y, params, &mut monitor).map(|s| (s, None)),
+                (false, false) => qp::cg::solve(&qp, &y, &params.common, &mut monitor).map(|s| (s, None)),
+            };
+            let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
+            r.map_err(|e| Error::solver(super::step_name(&what, k, steps), e))
+        })?;
+        let rec = t.phase(comm, "recover", || {
+            // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
+            Ok(dual.recover(&sol.lambda))
+        })?;
+        let feasibility = rec.feasibility;
+        let distribution = DistributionStats::new(&dual.dist);
+        let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
+        // finish filled the gathered figures (subdomains, gluing jump); add the global ones
+        let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
+        f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
+        f.contact_rows = cons.e_start();
+        f.gluing_rows = cons.gluing_rows;
+        f.dirichlet_rows = cons.dirichlet_rows;
+        f.coarse_dim = coarse_dim;
+        f.nnz_c = nnz_c;
+        f.feasibility = feasibility;
+        f.smalse = smalse;
+        f.distribution = distribution;
+        if contact.is_none() {
+            f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), dual.space().norm(&b)));
+        }
+        let mut outcome = contact.map(|c| {
+            let set_i = c.constraint_set();
+            // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
+            // gradient on the I rows), whole on every rank
+            let ni = set_i.layout.dim();
+            let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
+            // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+            let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
+            let bnorm = dual.space().norm(&b);
+            let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm);
+            let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
+            ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt, steps: vec![] }
+        });
+        if let (Some(o), Some(c), true) = (&outcome, contact, model.path.is_path()) {
+            let rec_k = super::path::StepOutput::new(k, &solution, c, o, t0.elapsed().as_secs_f64());
+            t.live.line(&rec_k.line(steps));
+            records.push(rec_k);
+        }
+        if k == steps {
+            if let Some(o) = &mut outcome {
+                o.steps = records;
+            }
+            return Ok((solution, outcome));
+        }
+        jump = dual.jump(&rec.gap);
+        y = sol.lambda;
+    }
+    unreachable!("a load path has at least one step")
 }
 
 /// The post-solve path of the subdomains ([`finish`], one piece per subdomain): checks

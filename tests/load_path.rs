@@ -1,0 +1,129 @@
+//! Quasi-static load paths (`[load] steps`): a path of a frictionless scene ends where the
+//! one-step solve is (monolithic and TFETI), the Cattaneo–Mindlin partial-slip solution
+//! (plane strain, cylinder on a flat, pressed then sheared), and the path dependence friction
+//! brings (press-then-shear against a proportional path).
+
+mod common;
+
+use std::path::Path;
+
+use common::{fields, root, tmpdir};
+use tresca_feti::comm::SerialComm;
+use tresca_feti::output::Values;
+use tresca_feti::pipeline::{run_solve, Summary};
+
+fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+fn max_abs(a: &[[f64; 3]]) -> f64 {
+    a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+#[test]
+fn a_frictionless_path_ends_at_the_one_step_solution() {
+    // without friction the solution depends on the last load state only: a path that overshoots
+    // and comes back (every load ×0.5, ×1.5, then ×1) must end where one
+    // step is, on both duals — this checks each dual's set_load (f, the lifted Dirichlet values,
+    // TFETI's e = Rᵀf, λ̂ and c)
+    let seed = root().join("run/seed.toml");
+    let dir = tmpdir("path-frictionless");
+    for dec in ["decomposition.subdomains=1", "decomposition.subdomains=3"] {
+        let base = ["mesh.n=6", "contact.pair.0.friction={type=\"none\"}", "dirichlet.1.value=[0.0, 0.0, 0.002]", "solver.eps=1e-10", dec];
+        let one = solve(&seed, &base, &dir.join("one.h5"));
+        let mut sets = base.to_vec();
+        sets.extend(["load.steps=3", "traction.0.factors=[0.5, 1.5, 1.0]", "traction.1.factors=[0.5, 1.5, 1.0]", "dirichlet.1.factors=[0.5, 1.5, 1.0]"]);
+        let path = solve(&seed, &sets, &dir.join("path.h5"));
+        let steps = path.report.load_path.as_ref().expect("per-step report");
+        assert_eq!(steps.len(), 3);
+        assert!(steps[1].max_displacement > steps[2].max_displacement, "the overshoot step moves further");
+        let (u1, up) = (&one.solution.displacement, &path.solution.displacement);
+        let d = max_diff(u1, up) / max_abs(u1);
+        eprintln!("{dec}: path vs one step {d:.2e}");
+        assert!(d <= 1e-7, "{dec}: the path ends {d:.2e} away from the one-step solution");
+        // the file holds every step, the last one also at /fields
+        let f = fields(&dir.join("path.h5"));
+        assert_eq!(f.steps.len(), 3);
+        let last = f.steps[2].fields.iter().find(|x| x.name == "displacement").unwrap();
+        let now = f.fields.iter().find(|x| x.name == "displacement").unwrap();
+        assert_eq!(last.values, now.values);
+    }
+}
+
+/// Nodes of the y = 0 row of the contact face with (x − centre, status, pressure, shear traction).
+fn contact_row(h5: &Path) -> Vec<(f64, i32, f64, f64)> {
+    let f = fields(h5);
+    let get = |name: &str| f.fields.iter().find(|x| x.name == name).unwrap_or_else(|| panic!("field {name}")).values.clone();
+    let (Values::I32(status), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else { panic!("field types") };
+    let xc = f.coordinates.iter().map(|x| x[0]).fold(0.0, f64::max) / 2.0;
+    let mut row: Vec<_> = (0..f.coordinates.len()).filter(|&v| status[v] > 0 && f.coordinates[v][1] == 0.0).map(|v| (f.coordinates[v][0] - xc, status[v], p[v], q[3 * v])).collect();
+    row.sort_by(|a, b| a.0.total_cmp(&b.0));
+    row
+}
+
+const CM_MESH: [&str; 2] = ["body.0.box.nodes=[129, 2, 25]", "body.1.box.nodes=[129, 2, 25]"];
+
+#[test]
+fn cattaneo_mindlin_stick_zone_and_shear_traction() {
+    use tresca_feti::contact::state::{SLIP, STICK};
+    let scene = root().join("run/validation/cattaneo_mindlin.toml");
+    let dir = tmpdir("cattaneo-mindlin");
+    let s = solve(&scene, &CM_MESH, &dir.join("cm.h5"));
+    let (e, nu, r, mu, t, h) = (50000.0, 0.3, 8.0, 0.3, 0.03125, 4.0 / 128.0);
+    let force = s.report.contact.as_ref().unwrap().total_force_on_slave;
+    let (p, q) = (force[2] / t, force[0].abs() / t);
+    assert!(q < mu * p, "partial slip needs Q < μP");
+    // Hertz (plane strain, identical materials: 1/E* = 2(1 − ν²)/E) and Cattaneo–Mindlin
+    let es = e / (2.0 * (1.0 - nu * nu));
+    let a = (4.0 * p * r / (std::f64::consts::PI * es)).sqrt();
+    let c = a * (1.0 - q / (mu * p)).sqrt();
+    let p0 = 2.0 * p / (std::f64::consts::PI * a);
+    let row = contact_row(&dir.join("cm.h5"));
+    // the stick zone: its ends halfway between the outermost sticking node and the first
+    // slipping one; the finite blocks shift it a little (the top is held), its half-width is c
+    let stick: Vec<f64> = row.iter().filter(|x| x.1 == STICK).map(|x| x.0).collect();
+    let (l, rr) = (stick[0] - h / 2.0, stick[stick.len() - 1] + h / 2.0);
+    assert!(row.iter().all(|x| x.1 != SLIP || x.0 < l || x.0 > rr), "one stick zone");
+    let half = (rr - l) / 2.0;
+    eprintln!("P = {p:.1}, Q/(μP) = {:.3}, a = {a:.4}, c = {c:.4}, stick zone [{l:.4}, {rr:.4}], half-width {half:.4}, h = {h}", q / (mu * p));
+    assert!((half - c).abs() <= h, "stick half-width {half:.4} vs c = {c:.4} (h = {h})");
+    // the profiles: pressure against Hertz, shear traction against Cattaneo–Mindlin (relative
+    // 2-norm over the contact row; the shear is the looser one: the 2 m blocks are not
+    // half-spaces for a = 0.65 m, and the held top adds a moment), and exactly μp where a node
+    // slips
+    let hertz = |x: f64| p0 * (1.0 - x * x / (a * a)).max(0.0).sqrt();
+    let cm = |x: f64| mu * hertz(x) - if x.abs() < c { mu * p0 * (c / a) * (1.0 - x * x / (c * c)).sqrt() } else { 0.0 };
+    let rel = |f: &dyn Fn(&(f64, i32, f64, f64)) -> (f64, f64)| {
+        let (num, den) = row.iter().map(f).fold((0.0, 0.0), |s, (v, w)| (s.0 + (v - w) * (v - w), s.1 + w * w));
+        (num / den).sqrt()
+    };
+    let (ep, eq) = (rel(&|x| (x.2, hertz(x.0))), rel(&|x| (x.3.abs(), cm(x.0))));
+    eprintln!("pressure vs Hertz {ep:.3}, shear traction vs Cattaneo–Mindlin {eq:.3} (relative 2-norms)");
+    assert!(ep <= 0.1 && eq <= 0.25, "pressure {ep:.3}, shear {eq:.3}");
+    for x in row.iter().filter(|x| x.1 == SLIP) {
+        assert!((x.3.abs() - mu * x.2).abs() <= 1e-6 * mu * p0, "slipping node at {:.4}: |q| = {} vs μp = {}", x.0, x.3.abs(), mu * x.2);
+    }
+}
+
+#[test]
+fn press_then_shear_slips_more_than_a_proportional_path() {
+    // Mindlin–Deresiewicz: raising Q and P together with dQ/dP < μ leaves (in the half-space)
+    // the whole contact stuck; pressing first and shearing after opens a slip annulus. Same
+    // last load state, different paths, different results.
+    let scene = root().join("run/validation/cattaneo_mindlin.toml");
+    let dir = tmpdir("path-dependence");
+    let shear = solve(&scene, &CM_MESH, &dir.join("a.h5"));
+    let mut sets = CM_MESH.to_vec();
+    sets.extend(["load.steps=4", "dirichlet.1.factors=[0.25, 0.5, 0.75, 1.0]", "dirichlet.2.factors=[0.25, 0.5, 0.75, 1.0]"]);
+    let prop = solve(&scene, &sets, &dir.join("b.h5"));
+    let (a, b) = (shear.report.contact.as_ref().unwrap(), prop.report.contact.as_ref().unwrap());
+    eprintln!("press then shear: {} stick, {} slip, Fx {:.4}; proportional: {} stick, {} slip, Fx {:.4}", a.stick, a.slip, a.total_force_on_slave[0], b.stick, b.slip, b.total_force_on_slave[0]);
+    assert!(b.slip < a.slip, "the proportional path slips less");
+    assert!(b.total_force_on_slave[0].abs() < a.total_force_on_slave[0].abs(), "and carries less shear for the same last displacement");
+    assert!((a.total_force_on_slave[2] - b.total_force_on_slave[2]).abs() <= 1e-3 * a.total_force_on_slave[2].abs(), "the normal problem does not depend on the path (identical materials)");
+}
