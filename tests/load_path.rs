@@ -127,3 +127,32 @@ fn press_then_shear_slips_more_than_a_proportional_path() {
     assert!(b.total_force_on_slave[0].abs() < a.total_force_on_slave[0].abs(), "and carries less shear for the same last displacement");
     assert!((a.total_force_on_slave[2] - b.total_force_on_slave[2]).abs() <= 1e-3 * a.total_force_on_slave[2].abs(), "the normal problem does not depend on the path (identical materials)");
 }
+
+#[test]
+fn reversed_tangential_load_slides_both_ways_on_both_duals() {
+    // run/stress/coulomb_load_reversal.toml: pressed, dragged +x until the whole face slides,
+    // back to the start (the friction now holds it the other way: hysteresis), then sliding −x;
+    // the monolithic dual and TFETI (4 subdomains per body) follow the same path
+    let scene = root().join("run/stress/coulomb_load_reversal.toml");
+    let dir = tmpdir("reversal");
+    let mono = solve(&scene, &["decomposition.subdomains=1"], &dir.join("m.h5"));
+    let tfeti = solve(&scene, &["decomposition.subdomains=4"], &dir.join("t.h5"));
+    let d = max_diff(&mono.solution.displacement, &tfeti.solution.displacement) / max_abs(&mono.solution.displacement);
+    eprintln!("reversal: monolithic vs TFETI max|Δu|/max|u| = {d:.2e}");
+    assert!(d <= 1e-7, "the duals differ by {d:.2e}");
+    let mu = 0.3;
+    for s in [&mono, &tfeti] {
+        let steps = s.report.load_path.as_ref().unwrap();
+        let f = |k: usize| steps[k - 1].total_force_on_slave;
+        for k in [3, 6] {
+            // every pair slides: the friction force is μ times the normal force
+            assert_eq!(steps[k - 1].slip, 100, "step {k} slides");
+            assert!((f(k)[0].abs() - mu * f(k)[2]).abs() <= 1e-3 * mu * f(k)[2], "step {k}: |Fx| = {} vs μFz = {}", f(k)[0].abs(), mu * f(k)[2]);
+        }
+        assert!(f(3)[0] < 0.0 && f(6)[0] > 0.0, "the friction force reverses");
+        // back at the start after sliding +x, the block is held the other way: a one-step
+        // solve of that state carries no shear at all
+        assert!(f(4)[0] > 0.1 * mu * f(4)[2], "hysteresis at step 4: Fx = {}", f(4)[0]);
+        assert_eq!(steps[0].slip + steps[1].slip, 0, "sticks while |Fx| < μFz");
+    }
+}
