@@ -250,6 +250,9 @@ fn free_motions(mesh: &Mesh, b: usize, constraints: &[(usize, usize, f64)]) -> V
                 format!("translation along {}", axis(t.map(|a| a / nt)))
             } else if nt <= 1e-6 * nw {
                 format!("rotation about {}", axis(w.map(|a| a / nw)))
+            } else if (0..3).map(|d| t[d] * w[d]).sum::<f64>().abs() <= 1e-6 * nt * nw {
+                // a translation across the axis only moves the axis
+                format!("rotation about an axis along {}", axis(w.map(|a| a / nw)))
             } else {
                 format!("screw motion (rotation about {}, translation along {})", axis(w.map(|a| a / nw)), axis(t.map(|a| a / nt)))
             }
