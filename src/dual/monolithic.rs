@@ -132,6 +132,13 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
         self.c = c;
     }
 
+    /// c on every row (replicated): the normal rows' gap minus the prescribed shift, the
+    /// tangential rows' −shift (0 unless prescribed DOFs touch the pair); the constraint is
+    /// B u ≤ c on the normal rows.
+    pub fn c(&self) -> &[f64] {
+        &self.c
+    }
+
     /// Bᵀx restricted to each local body.
     fn scatter(&self, x: &[f64]) -> Vec<Vec<f64>> {
         self.blocks.iter().map(|blk| scatter_rows(&blk.b, x, blk.local.dofs.nfree)).collect()
