@@ -31,6 +31,10 @@ enum Cmd {
         /// No live progress (phases as they start, one line per outer iteration): the summary only.
         #[arg(long, short)]
         quiet: bool,
+        /// Also write the solved Coulomb problem in the FCLIB global format (HDF5) to this path
+        /// (the scene key `output.export_fclib`; monolithic dual, isotropic Coulomb).
+        #[arg(long = "export-fclib", value_name = "PATH")]
+        export_fclib: Option<PathBuf>,
     },
     /// The paper's Table 1: iter/nA of the dual solvers on the seed scene for growing N, with
     /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
@@ -405,7 +409,13 @@ fn main() -> ExitCode {
         faer::set_global_parallelism(faer::Par::Seq);
     }
     let result = match cli.cmd {
-        Cmd::Solve { scene, set, out, quiet } => pipeline::run_solve(&comm, &scene, &set, out, quiet).map(|s| {
+        Cmd::Solve { scene, mut set, out, quiet, export_fclib } => {
+            if let Some(p) = export_fclib {
+                set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
+            }
+            pipeline::run_solve(&comm, &scene, &set, out, quiet)
+        }
+        .map(|s| {
             if comm.is_root() {
                 print_summary(&s);
             }

@@ -529,6 +529,10 @@ pub struct OutputSettings {
     /// (`run/peer/siconos_check.py`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub export_dual: Option<PathBuf>,
+    /// Also write the solved problem in the FCLIB global format (HDF5: M = K, H = Bᵀ, f, w, μ and
+    /// our solution as the guess; `dual::fclib`, `run/peer/fclib_check.py`); `--export-fclib`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub export_fclib: Option<PathBuf>,
 }
 
 fn default_fields() -> Vec<String> {
@@ -537,7 +541,7 @@ fn default_fields() -> Vec<String> {
 
 impl Default for OutputSettings {
     fn default() -> Self {
-        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false, export_dual: None }
+        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false, export_dual: None, export_fclib: None }
     }
 }
 

@@ -188,6 +188,26 @@ fn siconos_solves_the_exported_coulomb_problem_to_our_solution() {
 }
 
 #[test]
+fn siconos_global_solver_solves_our_fclib_export_to_our_solution() {
+    // `--export-fclib` writes the solved problem in the FCLIB global format (M = K, H = −Bᵀ, f,
+    // w = c, μ, our v and r as the guess); Siconos' gfc3d (NSGS_WR) solves it from zero on the
+    // file's arrays alone and must land on our v and r — under mpirun -n 2 too (gathered)
+    let dir = tmpdir("fclib");
+    for ranks in [1, 2] {
+        let file = dir.join(format!("fclib{ranks}.h5"));
+        let out = dir.join(format!("r{ranks}.h5"));
+        let scene = root().join("run/stress/coulomb_partial_slip.toml");
+        let args = ["solve", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap(), "--set", "mesh.n=6", "--set", "solver.eps=1e-12", "--set", "decomposition.subdomains=1", "--export-fclib", file.to_str().unwrap()];
+        let o = if ranks == 1 { Command::new(BIN).args(args).output().unwrap() } else { common::mpirun(2, &args) };
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/fclib_check.py")).arg(&file).arg("1e-9").output().expect("python3 (run/install-deps installs python3-siconos)");
+        let text = String::from_utf8_lossy(&check.stdout);
+        assert!(check.status.success(), "{ranks} rank(s): {text}{}", String::from_utf8_lossy(&check.stderr));
+        assert!(text.contains("max|v_siconos - v_ours|"), "{text}");
+    }
+}
+
+#[test]
 fn work_precision_has_coulomb_rows() {
     // every solve of a Coulomb scene (the reference too) is the fixed point; the error follows ε
     let dir = tmpdir("wp_coulomb");

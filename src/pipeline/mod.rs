@@ -277,6 +277,9 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
             if let Some(path) = &ls.scene.output.export_dual {
                 t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
             }
+            if let Some(path) = &ls.scene.output.export_fclib {
+                t.phase(comm, "export", || crate::dual::fclib::write_global(comm, path, &dual, contact, &sol.lambda, &ls.scene.title))?;
+            }
         }
         let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
         let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
@@ -452,7 +455,10 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
-    if ls.scene.output.export_dual.is_some() {
+    for (key, set) in [("output.export_dual", ls.scene.output.export_dual.is_some()), ("output.export_fclib", ls.scene.output.export_fclib.is_some())] {
+        if !set {
+            continue;
+        }
         let why = if tfeti {
             Some("exports the monolithic dual; this scene is solved by TFETI (set decomposition.subdomains = 1)")
         } else if !model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) {
@@ -461,7 +467,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             None
         };
         if let Some(why) = why {
-            return Err(Error::scene("output.export_dual", why));
+            return Err(Error::scene(key, why));
         }
     }
     if model.pairs.is_none() && model.path.is_path() {
