@@ -58,13 +58,15 @@ pub fn rigid_loads(mesh: &Mesh, d: &Decomposition, loads: &[Vec<f64>]) -> Vec<f6
     let mut e = vec![0.0; NR * d.subdomains.len()];
     for (s, sd) in d.subdomains.iter().enumerate() {
         let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-        let r = rigid_modes(&coords);
-        let nd = 3 * sd.nodes.len();
-        for k in 0..NR {
-            e[NR * s + k] = r[k * nd..(k + 1) * nd].iter().zip(&loads[s]).map(|(a, b)| a * b).sum();
-        }
+        e[NR * s..NR * (s + 1)].copy_from_slice(&rigid_work(&rigid_modes(&coords), &loads[s]));
     }
     e
+}
+
+/// R_sᵀ f_s for the modes `r` (NR columns of f's length, column-major).
+fn rigid_work(r: &[f64], f: &[f64]) -> [f64; NR] {
+    let nd = f.len();
+    std::array::from_fn(|k| r[k * nd..(k + 1) * nd].iter().zip(f).map(|(a, b)| a * b).sum())
 }
 
 impl Coarse {
@@ -73,12 +75,13 @@ impl Coarse {
     pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], orthogonal: bool) -> Result<Coarse> {
         let e_start = cons.e_start();
         let ns = d.subdomains.len();
-        let e = rigid_loads(mesh, d, loads);
+        let mut e = vec![0.0; NR * ns];
         let mut blocks = Vec::with_capacity(ns);
         for (s, sd) in d.subdomains.iter().enumerate() {
             let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
             let r = rigid_modes(&coords);
             let nd = 3 * sd.nodes.len();
+            e[NR * s..NR * (s + 1)].copy_from_slice(&rigid_work(&r, &loads[s]));
             let rows = cons.sorted_rows(s);
             let len = rows.len();
             let mut g = vec![0.0; NR * len];

@@ -247,12 +247,10 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let set = contact.constraint_set();
     let name = s.params.method().name();
     let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
-    let steps = model.path.steps;
-    let (mut y, mut jump) = (vec![0.0; dual.dim()], vec![0.0; dual.dim()]);
-    let mut records = Vec::new();
-    for k in 1..=steps {
-        let t0 = std::time::Instant::now();
-        if model.path.is_path() {
+    let mut walk = path::Walk::new(&model.path, dual.dim(), &s.params);
+    for k in 1..=walk.steps {
+        walk.begin();
+        if walk.on_path {
             b = t.phase(comm, "load", || {
                 let (cons, loads) = model.state(k);
                 Ok(dual.set_load(contact, |lb| {
@@ -260,20 +258,18 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
                     let dofs = DofMap::new(body.nodes.clone(), &cons);
                     let f = crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
                     (dofs, f)
-                }, &jump))
+                }, &walk.jump))
             })?;
         }
         let mut monitor = t.monitor();
         let sol = t.phase(comm, "iterate", || {
-            qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &y, &s.params, &mut monitor).map_err(|e| Error::solver(step_name(name, k, steps), e))
+            qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &walk.y, &walk.params, &mut monitor).map_err(|e| Error::solver(walk.name(name, k), e))
         })?;
         // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-        let set_k = match coulomb {
-            Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
-            None => set.clone(),
-        };
+        let coulomb_set = coulomb.map(|mu| qp::coulomb::bounds(&set, mu, &sol.lambda));
+        let set_k = coulomb_set.as_ref().unwrap_or(&set);
         let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
-        if k == steps {
+        if k == walk.steps {
             if let Some(path) = &ls.scene.output.export_dual {
                 t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
             }
@@ -286,27 +282,16 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
         // the status cannot be sharper than the solution: classify at the solver's tolerance
         let bnorm = dual.space().norm(&b);
-        let state = contact_state(contact, &set_k, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
-        let kkt = qp::kkt::residuals(&set_k, &rec.lambda, &rec.gap, bnorm);
+        let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
+        let kkt = qp::kkt::residuals(set_k, &rec.lambda, &rec.gap, bnorm);
+        let sigma = sol.info.sigma_est;
         let mut outcome = ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt, steps: vec![] };
-        if model.path.is_path() {
-            let rec_k = path::StepOutput::new(k, &solution, contact, &outcome, t0.elapsed().as_secs_f64());
-            t.live.line(&rec_k.line(steps));
-            records.push(rec_k);
-        }
-        if k == steps {
+        if let Some(records) = walk.end(k, &solution, Some((contact, &outcome)), &t.live, sol.lambda, dual.jump(&rec.gap), Some(sigma)) {
             outcome.steps = records;
             return Ok((solution, outcome));
         }
-        jump = dual.jump(&rec.gap);
-        y = sol.lambda;
     }
     unreachable!("a load path has at least one step")
-}
-
-/// The solver's name in an error, with the load step on a path.
-fn step_name(name: &str, k: usize, steps: usize) -> String {
-    if steps > 1 { format!("{} (load step {k}/{steps})", name.to_uppercase()) } else { name.to_uppercase() }
 }
 
 /// `output.export_dual`: the Coulomb problem on the monolithic dual in the local form of the

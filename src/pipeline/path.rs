@@ -1,13 +1,68 @@
 //! The quasi-static load path (`[load] steps = K`): what each step leaves behind — this rank's
 //! rows of u and of the stresses, the contact state (its slip is the step's increment), the
 //! solver's counters — for the report, the live summary line and the result file's `/steps`.
-//! The steps themselves run inside the two contact paths (each dual's `set_load` and `jump`).
+//! [`Walk`] carries what passes from one step to the next in both contact paths (each dual sets
+//! the load with its `set_load` and measures the slip with its `jump`).
+
+use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use super::monitor::Live;
 use super::{ContactOutcome, LocalFields, Solution};
 use crate::contact::pairing::Contact;
 use crate::contact::state::{ContactState, OPEN, SLIP, STICK};
+use crate::model::LoadPath;
+use crate::qp::Params;
+
+/// The walk along a load path: the warm start y and the last step's tangential jump B_T u, the
+/// solver's settings with σ_max measured at the first step and reused (A does not change along
+/// the path), and the steps' records.
+pub struct Walk {
+    pub steps: usize,
+    /// More than one step: the load is set every step and every step is recorded.
+    pub on_path: bool,
+    pub y: Vec<f64>,
+    pub jump: Vec<f64>,
+    pub params: Params,
+    records: Vec<StepOutput>,
+    start: Instant,
+}
+
+impl Walk {
+    /// Before the first step, on a dual of length `dim`.
+    pub fn new(path: &LoadPath, dim: usize, params: &Params) -> Self {
+        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), records: vec![], start: Instant::now() }
+    }
+
+    /// Step k begins (its time starts).
+    pub fn begin(&mut self) {
+        self.start = Instant::now();
+    }
+
+    /// Step k ended: records it (on a path, with its summary line on `live`), keeps y, the jump
+    /// and σ_max (`None`: measure again) for the next step. After the last step returns the
+    /// records (empty off a path).
+    #[allow(clippy::too_many_arguments)]
+    pub fn end(&mut self, k: usize, solution: &Solution, contact: Option<(&Contact, &ContactOutcome)>, live: &Live, y: Vec<f64>, jump: Vec<f64>, sigma: Option<f64>) -> Option<Vec<StepOutput>> {
+        if let (true, Some((c, o))) = (self.on_path, contact) {
+            let rec = StepOutput::new(k, solution, c, o, self.start.elapsed().as_secs_f64());
+            live.line(&rec.line(self.steps));
+            self.records.push(rec);
+        }
+        if k == self.steps {
+            return Some(std::mem::take(&mut self.records));
+        }
+        (self.y, self.jump) = (y, jump);
+        self.params.common.sigma = sigma.filter(|s| s.is_finite() && *s > 0.0);
+        None
+    }
+
+    /// The solver's name in an error, with the load step on a path.
+    pub fn name(&self, name: &str, k: usize) -> String {
+        if self.on_path { format!("{} (load step {k}/{})", name.to_uppercase(), self.steps) } else { name.to_uppercase() }
+    }
+}
 
 /// One step of a load path.
 #[derive(Clone, Debug)]

@@ -178,19 +178,17 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
     }
     let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
-    let steps = model.path.steps;
-    let (mut y, mut jump) = (vec![0.0; dual.dim()], vec![0.0; dual.dim()]);
-    let mut records = Vec::new();
-    for k in 1..=steps {
-        let t0 = std::time::Instant::now();
-        if model.path.is_path() {
+    let mut walk = super::path::Walk::new(&model.path, dual.dim(), params);
+    for k in 1..=walk.steps {
+        walk.begin();
+        if walk.on_path {
             b = t.phase(comm, "load", || {
                 let (cons_k, loads) = model.state(k);
                 let f = subdomain_loads(&d, &loads);
                 let e = rigid_loads(mesh, &d, &f);
                 let c = constraints::build(&d, &cons_k, contact, dec.gluing).c;
                 let mine = dual.dist.subs.iter().map(|sr| f[sr.index].clone()).collect();
-                Ok(dual.set_load(mine, e, &c, &jump))
+                Ok(dual.set_load(mine, e, &c, &walk.jump))
             })?;
         }
         let mut monitor = t.monitor();
@@ -202,11 +200,11 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                 .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
             let r = match (orthogonal, contact.is_some()) {
                 (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
-                (false, true) => qp::solve_friction(&qp, mu.as_deref(), &y, params, &mut monitor).map(|s| (s, None)),
-                (false, false) => qp::cg::solve(&qp, &y, &params.common, &mut monitor).map(|s| (s, None)),
+                (false, true) => qp::solve_friction(&qp, mu.as_deref(), &walk.y, &walk.params, &mut monitor).map(|s| (s, None)),
+                (false, false) => qp::cg::solve(&qp, &walk.y, &params.common, &mut monitor).map(|s| (s, None)),
             };
             let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
-            r.map_err(|e| Error::solver(super::step_name(&what, k, steps), e))
+            r.map_err(|e| Error::solver(walk.name(&what, k), e))
         })?;
         let rec = t.phase(comm, "recover", || {
             // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
@@ -242,19 +240,14 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
             ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt, steps: vec![] }
         });
-        if let (Some(o), Some(c), true) = (&outcome, contact, model.path.is_path()) {
-            let rec_k = super::path::StepOutput::new(k, &solution, c, o, t0.elapsed().as_secs_f64());
-            t.live.line(&rec_k.line(steps));
-            records.push(rec_k);
-        }
-        if k == steps {
+        // σ_max of SMALSE-M's penalized operator is its own business: measured every step
+        let sigma = (!orthogonal).then_some(sol.info.sigma_est);
+        if let Some(records) = walk.end(k, &solution, contact.zip(outcome.as_ref()), &t.live, sol.lambda, dual.jump(&rec.gap), sigma) {
             if let Some(o) = &mut outcome {
                 o.steps = records;
             }
             return Ok((solution, outcome));
         }
-        jump = dual.jump(&rec.gap);
-        y = sol.lambda;
     }
     unreachable!("a load path has at least one step")
 }
