@@ -25,6 +25,9 @@ pub struct Model {
     pub pairs: Option<Contact>,
     /// The load path; `constraints` and `loads` are its last step.
     pub path: LoadPath,
+    /// Bodies whose Dirichlet conditions leave a rigid motion free that contact holds: solved
+    /// by TFETI with the orthogonal projector (SMALSE-M), Gλ = e over every row.
+    pub floating: Vec<usize>,
 }
 
 /// The quasi-static load path: at step k (1…K) every Dirichlet value and traction is its
@@ -184,6 +187,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let contact_active = scene.contact.enabled && !contact.is_empty();
     let pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
 
+    let mut floating = Vec::new();
     for (b, body) in mesh.bodies.iter().enumerate() {
         let ne = body.elems.len();
         let parts = scene.decomposition.parts(3 * body.nodes.len());
@@ -199,32 +203,55 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                 format!("body \"{}\" floats: it has no Dirichlet condition{}", body.name, if contact_active { " and no contact" } else { " (contact is off)" }),
             ));
         }
-        let free = free_motions(&mesh, b, &constraints);
-        if !free.is_empty() {
-            let by = if touches { "; bodies held by contact and friction alone are not solved yet: add Dirichlet conditions (rollers) that stop them" } else { "" };
-            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by no Dirichlet condition{by}", body.name, free.join(", "))));
+        let dirichlet = constraints.iter().filter(|x| body.nodes.contains(&x.0)).map(|&(v, c, _)| {
+            let mut dir = [0.0; 3];
+            dir[c] = 1.0;
+            (v, dir)
+        });
+        let free = free_motions(&mesh, b, dirichlet.clone());
+        if free.is_empty() {
+            continue;
         }
+        let Some(c) = pairs.as_ref().filter(|_| touches) else {
+            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by no Dirichlet condition", body.name, free.join(", "))));
+        };
+        // the pairs' directions at the body's contact nodes: the normal, and with friction the tangents
+        let mut rows = Vec::new();
+        for i in 0..c.len() {
+            for v in [c.slave[i], c.master[i]].into_iter().filter(|v| body.nodes.contains(v)) {
+                rows.push((v, c.normal[i]));
+                if c.has_friction() {
+                    rows.extend([(v, c.t1[i]), (v, c.t2[i])]);
+                }
+            }
+        }
+        let unheld = free_motions(&mesh, b, dirichlet.chain(rows));
+        if !unheld.is_empty() {
+            let hint = if c.has_friction() { "" } else { " (frictionless contact does not hold a sliding motion)" };
+            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", body.name, unheld.join(", "))));
+        }
+        floating.push(b);
     }
-    Ok(Model { mesh, lame, constraints, loads, contact, pairs, path })
+    Ok(Model { mesh, lame, constraints, loads, contact, pairs, path, floating })
 }
 
-/// The rigid motions of body `b` that its Dirichlet conditions leave free, in words: the kernel
-/// of the 6 × 6 Gram matrix of the rigid modes (about the centroid, rotations scaled by the
-/// body's size) over the constrained DOFs.
-fn free_motions(mesh: &Mesh, b: usize, constraints: &[(usize, usize, f64)]) -> Vec<String> {
+/// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words: the
+/// kernel of the 6 × 6 Gram matrix of the rigid modes (about the centroid, rotations scaled by
+/// the body's size) over the rows.
+fn free_motions(mesh: &Mesh, b: usize, rows: impl Iterator<Item = (usize, [f64; 3])>) -> Vec<String> {
     let nodes = mesh.bodies[b].nodes.clone();
     let n = nodes.len() as f64;
     let c: [f64; 3] = std::array::from_fn(|d| nodes.clone().map(|v| mesh.nodes[v][d]).sum::<f64>() / n);
     let size = nodes.clone().map(|v| (0..3).map(|d| (mesh.nodes[v][d] - c[d]).powi(2)).sum::<f64>()).fold(0.0, f64::max).sqrt().max(f64::MIN_POSITIVE);
     let mut gram = faer::Mat::<f64>::zeros(6, 6);
-    for &(v, comp, _) in constraints.iter().filter(|x| nodes.contains(&x.0)) {
+    for (v, dir) in rows {
         let x: [f64; 3] = std::array::from_fn(|d| (mesh.nodes[v][d] - c[d]) / size);
-        // the DOF's row of R: translations e_comp, rotations (ω × x)_comp
+        // the row's R: translations dir, rotations dir · (ω × x)
         let mut r = [0.0; 6];
-        r[comp] = 1.0;
+        r[..3].copy_from_slice(&dir);
         let rot = [[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]];
         for k in 0..3 {
-            r[3 + k] = rot[k][comp];
+            r[3 + k] = (0..3).map(|d| rot[k][d] * dir[d]).sum();
         }
         for i in 0..6 {
             for j in 0..6 {

@@ -70,8 +70,8 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
     assert_clean_failure("floating", &seed_with("face = \"lower.xmin\"", "face = \"upper.xmin\""), &off, &["lower", "floats"]);
-    assert_clean_failure("rollers-only", SEED, &["--set", "dirichlet.0.components=[\"z\"]"], &["dirichlet", "body \"upper\"", "translation along x", "rotation about z", "rotation about an axis along y"]);
-    assert_clean_failure("contact-held", SEED, &["--set", "dirichlet.0.face=\"lower.xmin\""], &["dirichlet", "body \"upper\"", "translation along x", "contact and friction alone"]);
+    assert_clean_failure("rollers-only", SEED, &["--set", "dirichlet.0.components=[\"z\"]", "--set", "contact.enabled=false"], &["dirichlet", "body \"upper\"", "translation along x", "rotation about z", "rotation about an axis along y", "held by no Dirichlet condition"]);
+    assert_clean_failure("held-by-nothing", SEED, &["--set", "dirichlet.0.face=\"lower.xmin\"", "--set", "contact.pair.0.friction={type=\"none\"}"], &["dirichlet", "body \"upper\"", "translation along x", "translation along y", "rotation about z", "neither Dirichlet conditions nor contact"]);
     assert_clean_failure("load-factors", SEED, &["--set", "load.steps=2", "--set", "traction.1.factors=[1.0]"], &["traction[1].factors", "one factor per load step"]);
     assert_clean_failure("load-steps", SEED, &["--set", "load.steps=0"], &["load.steps"]);
     assert_clean_failure("bad-friction", &seed_with("type = \"tresca\"", "type = \"glue\""), &off, &["friction", "glue"]);

@@ -36,7 +36,9 @@ pub struct Coarse {
     e_start: usize,
     /// e = Rᵀf, 6 per subdomain.
     pub e: Vec<f64>,
-    chol: Cholesky,
+    /// C = G_E G_Eᵀ factorized; `None` when a body is held by contact alone (orthogonal
+    /// projector only: then GGᵀ over every row is what is regular).
+    chol: Option<Cholesky>,
     /// GGᵀ factorized, for the orthogonal projector (SMALSE-M) only.
     full: Option<Cholesky>,
     /// Nonzeros of the lower triangle of C.
@@ -69,10 +71,20 @@ fn rigid_work(r: &[f64], f: &[f64]) -> [f64; NR] {
     std::array::from_fn(|k| r[k * nd..(k + 1) * nd].iter().zip(f).map(|(a, b)| a * b).sum())
 }
 
+/// The coarse matrices a TFETI dual factorizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// C = G_E G_Eᵀ: the oblique projector P̃.
+    Oblique,
+    /// C and GGᵀ over every row: SMALSE-M's orthogonal projector P.
+    Orthogonal,
+    /// GGᵀ alone: a body held by contact alone makes C singular (SMALSE-M).
+    ContactHeld,
+}
+
 impl Coarse {
-    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes C; with
-    /// `orthogonal` also GGᵀ for the orthogonal projector P.
-    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], orthogonal: bool) -> Result<Coarse> {
+    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes what `kind` needs.
+    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], kind: Kind) -> Result<Coarse> {
         let e_start = cons.e_start();
         let ns = d.subdomains.len();
         let mut e = vec![0.0; NR * ns];
@@ -93,10 +105,13 @@ impl Coarse {
             }
             blocks.push((rows, g));
         }
-        let (c, nnz_c) = coarse_matrix(&blocks, e_start, cons.layout.dim(), d, mesh)?;
-        let full = match orthogonal {
-            true => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), d, mesh)?.0),
-            false => None,
+        let full = match kind {
+            Kind::Oblique => None,
+            _ => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), d, mesh)?.0),
+        };
+        let (c, nnz_c) = match kind {
+            Kind::ContactHeld => (None, 0),
+            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), d, mesh).map(|(c, nnz)| (Some(c), nnz))?,
         };
         Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
@@ -156,7 +171,18 @@ impl Coarse {
 
     /// x ← C⁻¹ x, timed on `dist`'s clock.
     fn c_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
-        Clock::time(&dist.clock.coarse_solve, || self.chol.solve_in_place(x));
+        let chol = self.chol.as_ref().expect("C = G_E G_Eᵀ is regular (every body held by Dirichlet conditions)");
+        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(x));
+    }
+
+    /// Whether the orthogonal projector's GGᵀ was built (SMALSE-M).
+    pub fn orthogonal(&self) -> bool {
+        self.full.is_some()
+    }
+
+    /// Whether C = G_E G_Eᵀ is regular: every body held by its Dirichlet conditions.
+    pub fn held(&self) -> bool {
+        self.chol.is_some()
     }
 
     /// z ← P̃ z = z − Gᵀ C⁻¹ G_E z_E (z owned).
@@ -266,6 +292,37 @@ impl Coarse {
         l
     }
 
+    /// λ_e = Gᵀ(GGᵀ)⁻¹e on the local rows (every row: with bodies held by contact alone part of
+    /// e is the contact's to carry): the least-norm solution of Gλ = e (orthogonal projector).
+    pub fn lambda_e_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {
+        let full = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
+        let mut a = self.e.clone();
+        Clock::time(&dist.clock.coarse_solve, || full.solve_in_place(&mut a));
+        let mut l = vec![0.0; dist.local_len()];
+        self.sub_gt(dist, &a, &mut l, Self::local_rows(dist), false);
+        l.iter_mut().for_each(|v| *v = -*v);
+        l
+    }
+
+    /// λ ← λ − [G_E 0]ᵀ C⁻¹ (Gλ − e) on the local rows: closes Gλ = e exactly through the E
+    /// rows alone (the contact components unchanged).
+    pub fn close_local<C: Comm>(&self, dist: &Distribution<'_, C>, lambda: &mut [f64]) {
+        let mut a = self.g_mul(dist, lambda, false);
+        a.iter_mut().zip(&self.e).for_each(|(x, e)| *x -= e);
+        self.c_solve(dist, &mut a);
+        self.sub_gt(dist, &a, lambda, Self::local_rows(dist), true);
+    }
+
+    /// α = (GΠGᵀ)⁻¹ G Πw with `chol` from [`Coarse::restricted`] and `pw` = Πw (owned): the
+    /// rigid-body amplitudes that best close the residual w of the E rows and the contact rows
+    /// in Π (a body held by contact alone).
+    pub fn alpha_restricted<C: Comm>(&self, dist: &Distribution<'_, C>, chol: &Cholesky, pw: &[f64]) -> Vec<f64> {
+        let wl = dist.ghosted(pw);
+        let mut a = self.g_mul(dist, &wl, false);
+        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(&mut a));
+        a
+    }
+
     /// α = C⁻¹ G_E w_E: the rigid-body amplitudes that best close the E rows' residual w (owned).
     pub fn alpha<C: Comm>(&self, dist: &Distribution<'_, C>, w: &[f64]) -> Vec<f64> {
         let wl = dist.ghosted(w);
@@ -364,7 +421,7 @@ mod tests {
     fn projector_identities() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, true).unwrap();
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Orthogonal).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();
@@ -416,7 +473,7 @@ mod tests {
     fn restricted_projector_maps_into_ker_g_on_w() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, false).unwrap();
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Oblique).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();

@@ -97,15 +97,113 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// λ̂ and d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c from the current f, e and c; returns b̃ = P̃(d̃ − Fλ̂).
+    /// With the orthogonal projector λ̂ = λ_e = Gᵀ(GGᵀ)⁻¹e over every row (SMALSE-M's
+    /// Gλ = e, which a body held by contact alone needs) and b = P(d̃ − Fλ_e).
     fn rhs(&mut self) -> Vec<f64> {
-        self.lambda_hat = self.coarse.lambda_hat_local(&self.dist);
+        let orthogonal = self.coarse.orthogonal();
+        self.lambda_hat = if orthogonal { self.coarse.lambda_e_local(&self.dist) } else { self.coarse.lambda_hat_local(&self.dist) };
         let mut b = vec![0.0; self.layout.dim()];
         let z = self.pinv_of_rhs(&self.lambda_hat);
         self.gather(&z, &mut b);
         b.iter_mut().zip(&self.c).for_each(|(bi, ci)| *bi -= ci);
         self.d_hat = b.clone();
-        self.coarse.project(&self.dist, &mut b);
+        if orthogonal {
+            self.coarse.project_orthogonal(&self.dist, &mut b);
+        } else {
+            self.coarse.project(&self.dist, &mut b);
+        }
         b
+    }
+
+    /// The contact rows that fix a body's rigid motion with the E rows, Π ([`Coarse::restricted`]),
+    /// from this rank's free contact components and sliding directions (owned indices), summed
+    /// over the ranks: (free per global contact row, sliding (global first row, t)).
+    fn global_pi(&self, free: &[bool], slides: &[(usize, [f64; 2])]) -> (Vec<bool>, Vec<(usize, [f64; 2])>) {
+        let ni = self.e_start;
+        let owned = &self.dist.owned;
+        let mut w = vec![0.0; 3 * ni];
+        for (i, &r) in owned.iter().enumerate().take_while(|(_, &r)| r < ni) {
+            w[r] = if free[i] { 1.0 } else { 0.0 };
+        }
+        for &(k, t) in slides {
+            let r = owned[k];
+            w[ni + r] = 1.0;
+            w[2 * ni + r] = t[0];
+            w[2 * ni + r + 1] = t[1];
+        }
+        self.dist.reduce(&mut w);
+        let free_all: Vec<bool> = w[..ni].iter().map(|&v| v == 1.0).collect();
+        let slides_all: Vec<(usize, [f64; 2])> = (0..ni).filter(|&r| w[ni + r] == 1.0).map(|r| (r, [w[2 * ni + r], w[2 * ni + r + 1]])).collect();
+        (free_all, slides_all)
+    }
+
+    /// λ, α and u from the solvers' y. Oblique projector: λ = λ̂ + P̃ᵀy, α = C⁻¹G_E(c − Bũ)_E.
+    /// Orthogonal (SMALSE-M solves for λ itself): λ = y, closed to Gλ = e through the E rows
+    /// where C is regular; where a body is held by contact alone, α closes the E rows and the
+    /// contact rows in Π — `pi`: this rank's free contact components and sliding directions
+    /// (owned indices; the pairs' states), or by default every component of the pairs with
+    /// λν > 0. `None` when GΠGᵀ is singular (a rigid motion held by nothing at this solution).
+    pub fn recover_with(&self, y: &[f64], pi: Option<(&[bool], &[(usize, [f64; 2])])>) -> Option<Recovered> {
+        let orthogonal = self.coarse.orthogonal();
+        let mut lambda = self.dist.ghosted(y);
+        if !orthogonal {
+            self.coarse.project_t_local(&self.dist, &mut lambda);
+            lambda.iter_mut().zip(&self.lambda_hat).for_each(|(a, b)| *a += b);
+        } else if self.coarse.held() {
+            self.coarse.close_local(&self.dist, &mut lambda);
+        }
+        let feasibility = self.coarse.feasibility(&self.dist, &lambda);
+        let rhs = self.rhs_of(&lambda);
+        let mut u: Vec<Vec<f64>> = rhs.clone();
+        self.pinv_all(&mut u);
+        // w = c − B ũ; its E part (and Π's contact rows) enter α
+        let mut w = vec![0.0; self.layout.dim()];
+        self.gather(&u, &mut w);
+        w.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
+        let alpha = if self.coarse.held() {
+            self.coarse.alpha(&self.dist, &w)
+        } else {
+            let owned_lambda = self.dist.owned_part(&lambda);
+            let l = self.layout;
+            let (free, slides) = match pi {
+                Some((f, s)) => (f.to_vec(), s.to_vec()),
+                None => {
+                    let lmax = (0..l.m).map(|i| owned_lambda[l.normal(i)]).fold(0.0, f64::max);
+                    let mut f = vec![false; l.contact_dim()];
+                    for i in (0..l.m).filter(|&i| owned_lambda[l.normal(i)] > 1e-9 * lmax) {
+                        f[l.normal(i)] = true;
+                        if l.friction {
+                            f[l.tangent(i, 0)] = true;
+                            f[l.tangent(i, 1)] = true;
+                        }
+                    }
+                    (f, vec![])
+                }
+            };
+            // Πw on the owned rows: E rows whole, free contact rows whole, sliding pairs along t
+            let mut pw: Vec<f64> = w.iter().enumerate().map(|(i, &v)| if i >= l.contact_dim() || free[i] { v } else { 0.0 }).collect();
+            for &(k, t) in &slides {
+                let s = t[0] * w[k] + t[1] * w[k + 1];
+                (pw[k], pw[k + 1]) = (t[0] * s, t[1] * s);
+            }
+            let (free_all, slides_all) = self.global_pi(&free, &slides);
+            let chol = self.coarse.restricted(self.rows, &free_all, &slides_all);
+            // every rank must agree: a rank without the factor makes all of them fail
+            let mut bad = [f64::from(u8::from(chol.is_none()))];
+            self.dist.comm().max_f64(&mut bad);
+            if bad[0] > 0.0 {
+                return None;
+            }
+            self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw)
+        };
+        for (s, us) in self.subs.iter().zip(&mut u) {
+            let i = s.sys.index;
+            s.sys.add_r_mul(&alpha[NR * i..NR * (i + 1)], us);
+        }
+        let mut gap = vec![0.0; self.layout.dim()];
+        self.gather(&u, &mut gap);
+        gap.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
+        Some(Recovered { lambda: self.dist.owned_part(&lambda), alpha, u, rhs, gap, feasibility })
     }
 
     /// Builds the FETI preconditioner of [`DualPreconditioner`] (`None`: drops it). Dirichlet
@@ -209,28 +307,10 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 }
 
 impl<C: Comm> DualProblem for TfetiDual<'_, C> {
-    /// λ, α and u from the solvers' y: λ = λ̂ + P̃ᵀy, u = K⁺(f − Bᵀλ) + Rα.
+    /// [`TfetiDual::recover_with`] with the default Π (a body held by contact alone: every
+    /// component of the pairs in contact); panics where GΠGᵀ is singular.
     fn recover(&self, y: &[f64]) -> Recovered {
-        let mut lambda = self.dist.ghosted(y);
-        self.coarse.project_t_local(&self.dist, &mut lambda);
-        lambda.iter_mut().zip(&self.lambda_hat).for_each(|(a, b)| *a += b);
-        let feasibility = self.coarse.feasibility(&self.dist, &lambda);
-        let rhs = self.rhs_of(&lambda);
-        let mut u: Vec<Vec<f64>> = rhs.clone();
-        self.pinv_all(&mut u);
-        // w = c − B ũ; only its E part enters α
-        let mut w = vec![0.0; self.layout.dim()];
-        self.gather(&u, &mut w);
-        w.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
-        let alpha = self.coarse.alpha(&self.dist, &w);
-        for (s, us) in self.subs.iter().zip(&mut u) {
-            let i = s.sys.index;
-            s.sys.add_r_mul(&alpha[NR * i..NR * (i + 1)], us);
-        }
-        let mut gap = vec![0.0; self.layout.dim()];
-        self.gather(&u, &mut gap);
-        gap.iter_mut().zip(&self.c).for_each(|(a, c)| *a = c - *a);
-        Recovered { lambda: self.dist.owned_part(&lambda), alpha, u, rhs, gap, feasibility }
+        self.recover_with(y, None).expect("the rigid motions are held at this solution")
     }
 }
 
@@ -291,21 +371,7 @@ impl<C: Comm> Preconditioner for DualPreconditioner<'_, '_, C> {
 /// step's subspace W (its free contact components and sliding directions; λ_E always free).
 impl<C: Comm> qp::Coarse for TfetiDual<'_, C> {
     fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn qp::CoarseProjector + 'a>> {
-        let ni = self.e_start;
-        let owned = &self.dist.owned;
-        let mut w = vec![0.0; 3 * ni];
-        for (i, &r) in owned.iter().enumerate().take_while(|(_, &r)| r < ni) {
-            w[r] = if free[i] { 1.0 } else { 0.0 };
-        }
-        for &(k, t) in slides {
-            let r = owned[k];
-            w[ni + r] = 1.0;
-            w[2 * ni + r] = t[0];
-            w[2 * ni + r + 1] = t[1];
-        }
-        self.dist.reduce(&mut w);
-        let free_all: Vec<bool> = w[..ni].iter().map(|&v| v == 1.0).collect();
-        let slides_all: Vec<(usize, [f64; 2])> = (0..ni).filter(|&r| w[ni + r] == 1.0).map(|r| (r, [w[2 * ni + r], w[2 * ni + r + 1]])).collect();
+        let (free_all, slides_all) = self.global_pi(free, slides);
         let chol = self.coarse.restricted(self.rows, &free_all, &slides_all)?;
         Some(Box::new(Restricted { dual: self, chol }))
     }

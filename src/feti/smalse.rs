@@ -1,19 +1,21 @@
 //! SMALSE-M on the TFETI dual: the alternative to the oblique projector that keeps the
 //! orthogonal projector P = I − Gᵀ(GGᵀ)⁻¹G (DESIGN §2, Dostál's SMALSE-M with the QP solver as
-//! the inner loop). With λ = λ̂ + λ̃ (λ̂_I = 0, so λ̃_I = λ_I and Λ is unchanged) the problem is
+//! the inner loop), and the one that solves bodies held by contact alone: G = RᵀBᵀ spans every
+//! row, so Gλ = e holds with bounded multipliers and C = G_E G_Eᵀ may be singular. With
+//! Q = I − P and λ_e = Gᵀ(GGᵀ)⁻¹e (Gλ = e ⇔ Qλ = λ_e, and then λ = Pλ + λ_e) the problem is
 //!
 //! ```text
-//! min ½λ̃ᵀFλ̃ − λ̃ᵀd̂   subject to  Gλ̃ = 0,  λ̃_I ∈ Λ,        d̂ = d̃ − Fλ̂,
+//! min ½λᵀPFPλ − λᵀP(d̃ − Fλ_e)   subject to  Qλ = λ_e,  λ_I ∈ Λ,
 //! ```
 //!
 //! and each outer step k minimizes the augmented Lagrangian
-//! `½λ̃ᵀ(PFP + ϱQ)λ̃ − λ̃ᵀ(Pd̂ − ν_k)` over Λ (Q = I − P, ν_k = Gᵀμ_k kept as a vector in Im Gᵀ)
-//! with any of the QP solvers, then updates ν_{k+1} = ν_k + ϱQλ̃. ϱ = penalty·σ_max(PFP) (σ measured
-//! once by power iterations; penalty 1 by default): the penalty then does not raise ‖A‖, so the inner solvers keep their
-//! step length, and PFP on Ker G is far better conditioned than P̃FP̃ᵀ (DESIGN §3a). The inner
-//! tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k, Mϱ‖Qλ̃_k‖/‖Pd̂‖)), M = 1, ε_1 =
-//! 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ̃‖ (the infeasibility in the gradient's units) are below
-//! ε‖Pd̂‖.
+//! `½λᵀ(PFP + ϱQ)λ − λᵀ(P(d̃ − Fλ_e) + ϱλ_e − ν_k)` over Λ (ν_k kept as a vector in Im Gᵀ)
+//! with any of the QP solvers, then updates ν_{k+1} = ν_k + ϱ(Qλ − λ_e). ϱ = penalty·σ_max(PFP)
+//! (σ measured once; penalty 1 by default): the penalty then does not raise ‖A‖, so the inner
+//! solvers keep their step length, and PFP on Ker G is far better conditioned than P̃FP̃ᵀ
+//! (DESIGN §3a). The inner tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k,
+//! Mϱ‖Qλ − λ_e‖/‖P(d̃ − Fλ_e)‖)), M = 1, ε_1 = 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ − λ_e‖ (the
+//! infeasibility in the gradient's units) are below ε‖P(d̃ − Fλ_e)‖.
 
 use super::distribution::Distribution;
 use super::dual::TfetiDual;
@@ -78,24 +80,28 @@ pub struct SmalseInfo {
     pub feasibility: f64,
 }
 
-/// Solves the TFETI dual by SMALSE-M with `p.method` inside and ϱ = `penalty`·σ_max(PFP); returns λ̃ (λ = λ̂ + λ̃) with the
-/// inner solvers' counters summed (A-products of A_ϱ = F-products).
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
-    let n = dual.dim();
+/// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside and ϱ =
+/// `penalty`·σ_max(PFP) (`p.common.sigma` when given); returns λ with the inner solvers'
+/// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
+/// projector (its λ̂ is λ_e).
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
     let sp = dual.space();
+    let lambda_e = dual.dist.owned_part(&dual.lambda_hat);
     let mut b0 = dual.d_hat.clone();
     dual.coarse.project_orthogonal(&dual.dist, &mut b0);
     let bnorm = sp.norm(&b0).max(f64::MIN_POSITIVE);
     let mut op = Penalized::new(dual, 0.0);
-    let n_power = p.common.power_iterations;
-    let sigma = qp::estimate_sigma(&op, &p.common);
+    let n_power = if p.common.sigma.is_some() { 0 } else { p.common.power_iterations };
+    let sigma = p.common.sigma.unwrap_or_else(|| qp::estimate_sigma(&op, &p.common));
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
     }
     op.penalty = penalty * sigma;
     let sigma = sigma.max(op.penalty);
-    let mut lambda = vec![0.0; n];
-    let mut nu = vec![0.0; n];
+    let mut lambda = x0.to_vec();
+    let mut nu = vec![0.0; x0.len()];
+    // ϱλ_e: the penalty's pull toward Gλ = e
+    let b0: Vec<f64> = b0.iter().zip(&lambda_e).map(|(b, l)| b + op.penalty * l).collect();
     let eps = p.common.eps;
     let mut eps_k = eps.max(1e-2);
     let mut total = Info { sigma_est: sigma, n_a_power: n_power, ..Default::default() };
@@ -116,7 +122,7 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, p: &Params, penalty
         total.rho = sol.info.rho;
         total.q = sol.info.q;
         total.history.extend(sol.info.history);
-        let ql = op.q(&lambda);
+        let ql: Vec<f64> = op.q(&lambda).iter().zip(&lambda_e).map(|(q, l)| q - l).collect();
         let feas = op.penalty * sp.norm(&ql) / bnorm;
         sm.outer = k + 1;
         sm.feasibility = feas;

@@ -240,6 +240,9 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
 /// elasticity. The outcome is the last step's, with every step's record.
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
+    if let Some(&b) = model.floating.first() {
+        return Err(Error::scene("decomposition", format!("body \"{}\" is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)", model.mesh.bodies[b].name)));
+    }
     let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
@@ -434,6 +437,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     })?;
     let model = t.phase(comm, "mesh", || model::build(&ls))?;
     let mut ls = ls;
+    held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
     let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common))?;
     let kind = DualKind::of(&ls, &model);
@@ -491,6 +495,16 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     report.timings = t.times();
     Ok(Summary { report, files, solution: sol })
+}
+
+/// A scene with a body held by contact alone ([`Model::floating`]) is solved by TFETI with the
+/// orthogonal projector (SMALSE-M: Gλ = e over every row; C = G_E G_Eᵀ is singular there),
+/// whatever `[decomposition]` says about the dual and the projector.
+pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Model) {
+    if !model.floating.is_empty() {
+        dec.tfeti = true;
+        dec.projector = crate::scene::Projector::Orthogonal;
+    }
 }
 
 /// DOFs of every body (3 per node).
@@ -663,6 +677,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     use std::fmt::Write;
     let mut ls = crate::scene::load(scene_path, overrides)?;
     let model = model::build(&ls)?;
+    held_by_contact(&mut ls.scene.decomposition, &model);
     let priced = if plan::automatic(&ls.scene.decomposition) {
         let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks)?;
         match plan::cheapest(&cands) {

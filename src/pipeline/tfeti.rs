@@ -8,9 +8,8 @@ use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
 use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
-use crate::dual::DualProblem;
 use crate::error::{Error, Result};
-use crate::feti::coarse::{rigid_loads, Coarse};
+use crate::feti::coarse::{self, rigid_loads, Coarse};
 use crate::feti::constraints;
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
@@ -139,7 +138,12 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
             .collect::<Result<Vec<_>>>()
     })?;
     let orthogonal = dec.projector == Projector::Orthogonal;
-    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, orthogonal))?;
+    let kind = match (orthogonal, model.floating.is_empty()) {
+        (false, _) => coarse::Kind::Oblique,
+        (true, true) => coarse::Kind::Orthogonal,
+        (true, false) => coarse::Kind::ContactHeld,
+    };
+    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, kind))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
     let s = &super::solver_for(ls, model);
@@ -174,9 +178,6 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
-    if orthogonal && coulomb.is_some() {
-        return Err(Error::scene("contact.pair.friction", "Coulomb friction is solved with the oblique projector (decomposition.projector = \"oblique\")"));
-    }
     let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
     let mut walk = super::path::Walk::new(&model.path, dual.dim(), params);
     for k in 1..=walk.steps {
@@ -199,7 +200,25 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                 .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
                 .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
             let r = match (orthogonal, contact.is_some()) {
-                (true, _) => smalse::solve(&dual, &set, params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i))),
+                (true, _) => {
+                    // the Coulomb fixed point with SMALSE-M for each Tresca problem
+                    let mut info = None;
+                    let mut one = |set: &Lambda, x: &[f64], p: &qp::Params| {
+                        smalse::solve(&dual, set, x, p, dec.penalty, &mut monitor).map(|(s, i)| {
+                            info = Some(i);
+                            s
+                        })
+                    };
+                    // the first step starts from λ_e, the least-norm equilibrium Gλ = e: its
+                    // normal components give Coulomb's first bounds something to carry the load of
+                    // a body held by contact alone (λν = 0 would leave it frictionless, infeasible)
+                    let x0 = if k == 1 { dual.dist.owned_part(&dual.lambda_hat) } else { walk.y.clone() };
+                    let r = match &mu {
+                        Some(mu) => qp::coulomb::solve(dual.space(), &set, mu, &x0, &walk.params, &Default::default(), &mut one).map(|r| r.0),
+                        None => one(&set, &x0, &walk.params),
+                    };
+                    r.map(|s| (s, info))
+                }
                 (false, true) => qp::solve_friction(&qp, mu.as_deref(), &walk.y, &walk.params, &mut monitor).map(|s| (s, None)),
                 (false, false) => qp::cg::solve(&qp, &walk.y, &params.common, &mut monitor).map(|s| (s, None)),
             };
@@ -207,8 +226,21 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             r.map_err(|e| Error::solver(walk.name(&what, k), e))
         })?;
         let rec = t.phase(comm, "recover", || {
-            // SMALSE-M's λ̃ satisfies Gλ̃ = 0 to ε: λ̂ + P̃ᵀλ̃ closes it exactly (E rows only)
-            Ok(dual.recover(&sol.lambda))
+            // a body held by contact alone: α closes the E rows and the contact rows the pairs'
+            // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
+            let pi = (!dual.coarse.held()).then(|| {
+                let set_k = match &mu {
+                    Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
+                    None => set.clone(),
+                };
+                held_rows(&set_k, &sol.lambda)
+            });
+            dual.recover_with(&sol.lambda, pi.as_ref().map(|(f, s)| (f.as_slice(), s.as_slice()))).ok_or_else(|| {
+                Error::numerical(
+                    "TFETI recovery",
+                    "a body held by contact alone keeps a rigid motion at this solution that no sticking or pressed pair holds (frictionless sliding freedom, or a body that lifts off)",
+                )
+            })
         })?;
         let feasibility = rec.feasibility;
         let distribution = DistributionStats::new(&dual.dist);
@@ -250,6 +282,30 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         }
     }
     unreachable!("a load path has at least one step")
+}
+
+/// The contact components that fix a rigid motion at the solution λ (this rank's pairs, owned
+/// indices): the normal of every pair in contact (λν > 0), both tangents of a sticking one and,
+/// of a sliding one (λτ on the bound of its set), the direction across the slip.
+fn held_rows(set: &Lambda, lambda: &[f64]) -> (Vec<bool>, Vec<(usize, [f64; 2])>) {
+    let l = set.layout;
+    let lmax = (0..l.m).map(|i| lambda[l.normal(i)]).fold(0.0, f64::max);
+    let mut free = vec![false; l.contact_dim()];
+    let mut slides = Vec::new();
+    for i in (0..l.m).filter(|&i| lambda[l.normal(i)] > 1e-9 * lmax) {
+        free[l.normal(i)] = true;
+        if !l.friction {
+            continue;
+        }
+        let (k, lt) = (l.tangent(i, 0), [lambda[l.tangent(i, 0)], lambda[l.tangent(i, 1)]]);
+        let outward = [lt[0] * (1.0 + 1e-6), lt[1] * (1.0 + 1e-6)];
+        if set.tangent[i].frame(&outward).is_some() {
+            slides.push((k, set.tangent[i].boundary_tangent(&lt)));
+        } else {
+            (free[k], free[k + 1]) = (true, true);
+        }
+    }
+    (free, slides)
 }
 
 /// The post-solve path of the subdomains ([`finish`], one piece per subdomain): checks

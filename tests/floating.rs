@@ -1,0 +1,68 @@
+//! Bodies held by contact alone (TFETI with the orthogonal projector, Gλ = e over every row):
+//! a floating block pressed and pushed below the friction limit sticks with the contact force
+//! balancing the load exactly, on several decompositions; a block dragged by one face (free in
+//! the other directions) sticks below μN and slides at μN above; a frictionless floating block
+//! is refused with its free motions named.
+
+mod common;
+
+use std::path::Path;
+
+use common::{root, tmpdir};
+use tresca_feti::comm::SerialComm;
+use tresca_feti::pipeline::{run_solve, Summary};
+
+fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn max_abs(u: &[[f64; 3]]) -> f64 {
+    u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+#[test]
+fn a_floating_block_sticks_and_the_contact_balances_its_load() {
+    let scene = root().join("run/validation/floating_block.toml");
+    let dir = tmpdir("floating");
+    let one = solve(&scene, &[], &dir.join("s1.h5"));
+    assert!(one.report.problem.contains("TFETI"), "a body held by contact alone goes to TFETI: {}", one.report.problem);
+    let u1 = &one.solution.displacement;
+    for s in [1, 4] {
+        let sets = [format!("decomposition.subdomains={s}")];
+        let r = solve(&scene, &sets.iter().map(String::as_str).collect::<Vec<_>>(), &dir.join(format!("s{s}.h5")));
+        let c = r.report.contact.as_ref().unwrap();
+        // the upper block's load: 2 down on its top, 0.3 along x on its side
+        let f = c.total_force_on_slave;
+        eprintln!("S = {s}: contact force on the floating block ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}", f[0], f[1], f[2], c.stick, c.slip, r.report.solver.as_ref().unwrap().kkt_worst);
+        assert!((f[0] + 0.3).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "the contact force balances the load: {f:?}");
+        assert_eq!((c.stick, c.slip, c.open), (49, 0, 0), "T = 0.3 < μN = 0.6: every pair sticks");
+        assert!(r.report.solver.as_ref().unwrap().kkt_worst <= 1e-8);
+        let d = r.solution.displacement.iter().flatten().zip(u1.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-7 * max_abs(u1), "S = {s} differs from S = 1 by {:.1e} relative", d / max_abs(u1));
+    }
+}
+
+#[test]
+fn a_block_dragged_by_one_face_sticks_below_mu_n_and_slides_at_mu_n_above() {
+    // the upper block is held in x by its xmin face only (moved by δ); y, z and the rotation
+    // about x are held by contact and friction
+    let base = std::fs::read_to_string(root().join("run/validation/floating_block.toml")).unwrap();
+    let scene = base.replace("[[traction]]\nface = \"upper.xmin\"\np = [0.3, 0.0, 0.0]\n", "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\nvalue = [0.00001, 0.0, 0.0]\n");
+    assert_ne!(scene, base);
+    let dir = tmpdir("dragged-floating");
+    let path = dir.join("dragged.toml");
+    std::fs::write(&path, scene).unwrap();
+    let mu = 0.3;
+    let small = solve(&path, &[], &dir.join("a.h5"));
+    let large = solve(&path, &["dirichlet.1.value=[0.0001, 0.0, 0.0]"], &dir.join("b.h5"));
+    let (a, b) = (small.report.contact.as_ref().unwrap(), large.report.contact.as_ref().unwrap());
+    let (fa, fb) = (a.total_force_on_slave, b.total_force_on_slave);
+    eprintln!("δ = 1e-5: Fx {:.5}, {} stick / {} slip; δ = 1e-4: Fx {:.5} vs μFz {:.5}, {} slip", fa[0], a.stick, a.slip, fb[0], mu * fb[2], b.slip);
+    assert!(a.stick > 0 && fa[0].abs() < 0.9 * mu * fa[2], "a small drag sticks (partly)");
+    assert_eq!(b.slip, 49, "a large drag slides everywhere");
+    assert!((fb[0].abs() - mu * fb[2]).abs() <= 1e-3 * mu * fb[2], "sliding: |Fx| = {} vs μFz = {}", fb[0].abs(), mu * fb[2]);
+    for f in [fa, fb] {
+        assert!((f[2] - 2.0).abs() <= 1e-8 && f[1].abs() <= 1e-8, "z and y balance the pressing load: {f:?}");
+    }
+}
