@@ -96,12 +96,13 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         crate::dual::tangential_jump(self.layout, &self.c, &self.c0, gap)
     }
 
-    /// λ̂ and d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c from the current f, e and c; returns b̃ = P̃(d̃ − Fλ̂).
-    /// With the orthogonal projector λ̂ = λ_e = Gᵀ(GGᵀ)⁻¹e over every row (SMALSE-M's
-    /// Gλ = e, which a body held by contact alone needs) and b = P(d̃ − Fλ_e).
+    /// λ̂ and d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c from the current f, e and c; returns b̃ = P̃(d̃ − Fλ̂),
+    /// or P(d̃ − Fλ̂) with the orthogonal projector. Gλ̂ = e: λ̂ = (G_Eᵀ C⁻¹ e, 0) where every body
+    /// is held by Dirichlet conditions, else λ_e = Gᵀ(GGᵀ)⁻¹e over every row (a body held by
+    /// contact alone: part of e is the contact's to carry).
     fn rhs(&mut self) -> Vec<f64> {
         let orthogonal = self.coarse.orthogonal();
-        self.lambda_hat = if orthogonal { self.coarse.lambda_e_local(&self.dist) } else { self.coarse.lambda_hat_local(&self.dist) };
+        self.lambda_hat = if self.coarse.held() { self.coarse.lambda_hat_local(&self.dist) } else { self.coarse.lambda_e_local(&self.dist) };
         let mut b = vec![0.0; self.layout.dim()];
         let z = self.pinv_of_rhs(&self.lambda_hat);
         self.gather(&z, &mut b);

@@ -83,14 +83,23 @@ pub struct SmalseInfo {
 /// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside and ϱ =
 /// `penalty`·σ_max(PFP) (`p.common.sigma` when given); returns λ with the inner solvers'
 /// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
-/// projector (its λ̂ is λ_e).
+/// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start).
 pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
     let sp = dual.space();
-    let lambda_e = dual.dist.owned_part(&dual.lambda_hat);
+    // the dual's λ̂ solves Gλ̂ = e; λ_e = Qλ̂, and P(d̃ − Fλ_e) = P(d̃ − Fλ̂) + PFPλ̂
+    let lambda_p = dual.dist.owned_part(&dual.lambda_hat);
+    let mut op = Penalized::new(dual, 0.0);
+    let lambda_e = op.q(&lambda_p);
     let mut b0 = dual.d_hat.clone();
     dual.coarse.project_orthogonal(&dual.dist, &mut b0);
+    let pl: Vec<f64> = lambda_p.iter().zip(&lambda_e).map(|(a, b)| a - b).collect();
+    let shifted = sp.norm(&pl) > 0.0;
+    if shifted {
+        let mut y = vec![0.0; pl.len()];
+        op.apply(&pl, &mut y);
+        b0.iter_mut().zip(&y).for_each(|(b, v)| *b += v);
+    }
     let bnorm = sp.norm(&b0).max(f64::MIN_POSITIVE);
-    let mut op = Penalized::new(dual, 0.0);
     let n_power = if p.common.sigma.is_some() { 0 } else { p.common.power_iterations };
     let sigma = p.common.sigma.unwrap_or_else(|| qp::estimate_sigma(&op, &p.common));
     if !(sigma.is_finite() && sigma > 0.0) {
@@ -104,7 +113,7 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Par
     let b0: Vec<f64> = b0.iter().zip(&lambda_e).map(|(b, l)| b + op.penalty * l).collect();
     let eps = p.common.eps;
     let mut eps_k = eps.max(1e-2);
-    let mut total = Info { sigma_est: sigma, n_a_power: n_power, ..Default::default() };
+    let mut total = Info { sigma_est: sigma, n_a_power: n_power, n_a: usize::from(shifted), ..Default::default() };
     let mut sm = SmalseInfo { penalty: op.penalty, ..Default::default() };
     for k in 0..p.common.max_outer {
         let b: Vec<f64> = b0.iter().zip(&nu).map(|(a, v)| a - v).collect();
