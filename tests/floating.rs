@@ -6,20 +6,7 @@
 
 mod common;
 
-use std::path::Path;
-
-use common::{root, tmpdir};
-use tresca_feti::comm::SerialComm;
-use tresca_feti::pipeline::{run_solve, Summary};
-
-fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn max_abs(u: &[[f64; 3]]) -> f64 {
-    u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()))
-}
+use common::{max_abs, root, solve, tmpdir};
 
 #[test]
 fn a_floating_block_sticks_and_the_contact_balances_its_load() {

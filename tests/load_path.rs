@@ -7,22 +7,11 @@ mod common;
 
 use std::path::Path;
 
-use common::{fields, root, tmpdir};
-use tresca_feti::comm::SerialComm;
+use common::{fields, max_abs, root, solve, tmpdir};
 use tresca_feti::output::Values;
-use tresca_feti::pipeline::{run_solve, Summary};
-
-fn solve(scene: &Path, sets: &[&str], out: &Path) -> Summary {
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    run_solve(&SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap_or_else(|e| panic!("{e}"))
-}
 
 fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
-}
-
-fn max_abs(a: &[[f64; 3]]) -> f64 {
-    a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
 #[test]

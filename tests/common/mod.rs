@@ -1,5 +1,5 @@
-//! Helpers shared by the integration tests that run the `tresca-feti` binary (`cli`,
-//! `determinism`): paths, scratch folders, `mpirun` and reading result files back.
+//! Helpers shared by the integration tests: paths, scratch folders, `mpirun`, a serial solve
+//! of a scene through the library, and reading result files back.
 
 #![allow(dead_code)]
 
@@ -39,4 +39,15 @@ pub fn mpirun(n: usize, args: &[&str]) -> Output {
 /// The fields of a result file.
 pub fn fields(path: &Path) -> OutputData {
     output::hdf5::read(path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `tresca-feti solve` through the library on one rank, quiet; panics with the error.
+pub fn solve(scene: &Path, sets: &[&str], out: &Path) -> tresca_feti::pipeline::Summary {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    tresca_feti::pipeline::run_solve(&tresca_feti::comm::SerialComm, scene, &sets, Some(out.to_path_buf()), true).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// max |uᵢ| over every node and component.
+pub fn max_abs(u: &[[f64; 3]]) -> f64 {
+    u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()))
 }
