@@ -233,7 +233,8 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = contact.constraint_set();
-    let params = Params::new(Method::Tssn).with_eps(1e-11);
+    let mut params = Params::new(Method::Tssn).with_eps(1e-11);
+    params.common.coulomb = qp::params::CoulombSolve::FixedPoint;
     let zero = vec![0.0; dual.dim()];
     let coulomb = qp::solve_friction(&Qp::new(&dual, &b, &set), Some(&contact.coulomb), &zero, &params, &mut Silent).unwrap();
     let fixed = qp::coulomb::bounds(&set, &contact.coulomb, &coulomb.lambda);
@@ -247,6 +248,13 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     eprintln!("Coulomb ({} fixed-point steps) vs Tresca at its bounds: max|Δu|/max|u| = {:.2e}", coulomb.info.fixed_point_iterations, d / m);
     assert!(coulomb.info.fixed_point_iterations >= 2, "a real fixed point");
     assert!(d <= 1e-8 * m, "u differs by {:.2e} relative", d / m);
+    // the Newton method on the Coulomb law lands on the same solution
+    params.common.coulomb = qp::params::CoulombSolve::Newton;
+    let newton = qp::solve_friction(&Qp::new(&dual, &b, &set), Some(&contact.coulomb), &zero, &params, &mut Silent).unwrap();
+    let un = dual.recover(&newton.lambda).u;
+    let dn = un.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    eprintln!("Newton on the Coulomb law: {} products against the fixed point's {}, max|Δu|/max|u| = {:.2e}", newton.info.n_a, coulomb.info.n_a, dn / m);
+    assert!(newton.info.fixed_point_iterations == 0 && dn <= 1e-8 * m, "Newton vs fixed point {:.2e}", dn / m);
     // and it is not a Tresca solution for any other bound: with g from λν of the elastic guess it differs
     let slip = qp::solve(&Qp::new(&dual, &b, &qp::coulomb::bounds(&set, &contact.coulomb, &zero)), &zero, &params, &mut Silent).unwrap();
     let us = dual.recover(&slip.lambda).u;

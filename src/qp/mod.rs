@@ -65,10 +65,15 @@ impl<'a, A: Operator> Qp<'a, A> {
     }
 }
 
-/// Solves the QP, or — with Coulomb coefficients per pair of its Λ — the Coulomb problem by the
-/// fixed point of [`coulomb::solve`] (default settings) from `lambda0`.
+/// Solves the QP, or — with Coulomb coefficients per pair of its Λ — the Coulomb problem from
+/// `lambda0`: by the semi-smooth Newton method on the Coulomb law ([`coulomb::newton`],
+/// `common.coulomb = Newton`, isotropic μ) or by the fixed point of [`coulomb::solve`] (default
+/// settings) with the method of `p`.
 pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[coulomb::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     match coulomb {
+        Some(mu) if p.common.coulomb == params::CoulombSolve::Newton && !mu.iter().any(|c| matches!(c, coulomb::Coefficient::Orthotropic(..))) => {
+            coulomb::newton(qp, mu, lambda0, p, monitor)
+        }
         Some(mu) => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),
         None => solve(qp, lambda0, p, monitor),
     }

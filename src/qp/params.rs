@@ -68,6 +68,21 @@ pub enum SigmaEstimate {
     Lanczos,
 }
 
+/// How Coulomb friction is solved.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CoulombSolve {
+    /// The semi-smooth Newton method on the Coulomb law itself, the bound's dependence on λν in
+    /// the slant derivative, BiCGSTAB inner solves (`qp::coulomb::newton`): the default, 0.4–0.8×
+    /// the fixed point's time on the Coulomb benchmark set (README). Isotropic μ; orthotropic
+    /// pairs and SMALSE-M take the fixed point.
+    #[default]
+    Newton,
+    /// A fixed point on the slip bounds, each step a Tresca solve with the method
+    /// (`qp::coulomb::solve`).
+    FixedPoint,
+}
+
 /// Settings every method reads.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
@@ -84,6 +99,8 @@ pub struct Common {
     pub power_iterations: usize,
     /// How σ_max(A) is estimated.
     pub sigma_estimate: SigmaEstimate,
+    /// How a Coulomb problem is solved.
+    pub coulomb: CoulombSolve,
     /// A-products (power iterations excluded) at most: a budget checked between outer steps.
     #[serde(skip)]
     pub max_products: usize,
@@ -95,7 +112,7 @@ pub struct Common {
 
 impl Default for Common {
     fn default() -> Self {
-        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 10, sigma_estimate: SigmaEstimate::Lanczos, max_products: usize::MAX, sigma: None }
+        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 10, sigma_estimate: SigmaEstimate::Lanczos, coulomb: CoulombSolve::Newton, max_products: usize::MAX, sigma: None }
     }
 }
 
