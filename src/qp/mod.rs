@@ -65,15 +65,20 @@ impl<'a, A: Operator> Qp<'a, A> {
     }
 }
 
+/// Whether a Coulomb problem is solved by the Newton method on the Coulomb law: asked for, or
+/// `Auto` without a coarse projector; never with an orthotropic pair.
+pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[coulomb::Coefficient], how: params::CoulombSolve) -> bool {
+    let isotropic = !mu.iter().any(|c| matches!(c, coulomb::Coefficient::Orthotropic(..)));
+    isotropic && (how == params::CoulombSolve::Newton || (how == params::CoulombSolve::Auto && qp.coarse.is_none()))
+}
+
 /// Solves the QP, or — with Coulomb coefficients per pair of its Λ — the Coulomb problem from
-/// `lambda0`: by the semi-smooth Newton method on the Coulomb law ([`coulomb::newton`],
-/// `common.coulomb = Newton`, isotropic μ) or by the fixed point of [`coulomb::solve`] (default
-/// settings) with the method of `p`.
+/// `lambda0`: by the semi-smooth Newton method on the Coulomb law ([`coulomb::newton`]) or by
+/// the fixed point of [`coulomb::solve`] (default settings) with the method of `p`, as
+/// `common.coulomb` says ([`newton`]).
 pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[coulomb::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     match coulomb {
-        Some(mu) if p.common.coulomb == params::CoulombSolve::Newton && !mu.iter().any(|c| matches!(c, coulomb::Coefficient::Orthotropic(..))) => {
-            coulomb::newton(qp, mu, lambda0, p, monitor)
-        }
+        Some(mu) if newton(qp, mu, p.common.coulomb) => coulomb::newton(qp, mu, lambda0, p, monitor),
         Some(mu) => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),
         None => solve(qp, lambda0, p, monitor),
     }

@@ -72,11 +72,14 @@ pub enum SigmaEstimate {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum CoulombSolve {
-    /// The semi-smooth Newton method on the Coulomb law itself, the bound's dependence on λν in
-    /// the slant derivative, BiCGSTAB inner solves (`qp::coulomb::newton`): the default, 0.4–0.8×
-    /// the fixed point's time on the Coulomb benchmark set (README). Isotropic μ; orthotropic
-    /// pairs and SMALSE-M take the fixed point.
+    /// Newton where the inner solves have no coarse projector (the monolithic dual), the fixed
+    /// point where TSSN's projected, preconditioned CG does them (TFETI): what won on the
+    /// Coulomb benchmark set (README).
     #[default]
+    Auto,
+    /// The semi-smooth Newton method on the Coulomb law itself, the bound's dependence on λν in
+    /// the slant derivative, BiCGSTAB inner solves (`qp::coulomb::newton`). Isotropic μ;
+    /// orthotropic pairs and SMALSE-M take the fixed point.
     Newton,
     /// A fixed point on the slip bounds, each step a Tresca solve with the method
     /// (`qp::coulomb::solve`).
@@ -112,7 +115,7 @@ pub struct Common {
 
 impl Default for Common {
     fn default() -> Self {
-        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 10, sigma_estimate: SigmaEstimate::Lanczos, coulomb: CoulombSolve::Newton, max_products: usize::MAX, sigma: None }
+        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 10, sigma_estimate: SigmaEstimate::Lanczos, coulomb: CoulombSolve::Auto, max_products: usize::MAX, sigma: None }
     }
 }
 
