@@ -581,7 +581,12 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         }),
         solver: match (outcome, sol.tfeti.as_ref().and_then(|f| f.cg.as_ref())) {
             (Some(o), _) => Some(SolverReport {
-                method: solver.method().name().into(),
+                // a Coulomb solve without fixed-point steps was the Newton method on the law
+                method: if model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) && o.info.fixed_point_iterations == 0 {
+                    "coulomb-newton".into()
+                } else {
+                    solver.method().name().into()
+                },
                 dual_dim: o.dim,
                 eps: solver.common.eps,
                 info: o.info.clone(),

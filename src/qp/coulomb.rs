@@ -6,12 +6,11 @@
 //! any dual), so this layer knows nothing of meshes or FETI. [`newton`] is the other way: the
 //! semi-smooth Newton method on the Coulomb law itself (the default for isotropic μ).
 
-use super::driver::{err_of, Driver, Monitor, Setup};
-use super::krylov::Bicgstab;
+use super::driver::Monitor;
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{MethodParams, Params, Ssn};
-use super::{Qp, StepKind};
+use super::Qp;
 use super::sets::{Disc, Ellipse, TangentSet};
 use super::{Info, QpError, QpSolution};
 
@@ -136,92 +135,7 @@ pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[Coefficient], lambda0: &[f64], 
         MethodParams::SsnBicgstab(s) => s.clone(),
         _ => Ssn::default(),
     };
-    let c = &params.common;
-    let (a, set) = (qp.a, qp.set);
-    let (sp, n, l) = (a.space(), a.dim(), set.layout);
-    let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
-    let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
-    let cut = |x: &[f64]| bounds(set, mu, x);
-    let mut lambda = vec![0.0; n];
-    cut(lambda0).project(lambda0, &mut lambda);
-    let mut r = vec![0.0; n];
-    drv.residual(&lambda, &mut r);
-    let mut rt = vec![0.0; n];
-    let mut err = err_of(sp, &cut(&lambda), &lambda, &r, &drv.st, &mut rt);
-    let err0 = err.max(f64::MIN_POSITIVE);
-    let mut tol = p.rtol / p.cfact;
-    let (mut y, mut z, mut rz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut work = Bicgstab::new(n);
-    for k in 0.. {
-        drv.check(k, err, "the reduced gradient")?;
-        if drv.met(err) {
-            // confirm at the projection onto the cones cut there
-            cut(&lambda).project(&lambda, &mut z);
-            drv.residual(&z, &mut rz);
-            let ez = err_of(sp, &cut(&z), &z, &rz, &drv.st, &mut rt);
-            if drv.met(ez) {
-                return Ok(drv.finish(k, z, rz, ez));
-            }
-            std::mem::swap(&mut lambda, &mut z);
-            std::mem::swap(&mut r, &mut rz);
-            err = ez;
-        }
-        drv.budget(k, err)?;
-        let set_k = cut(&lambda);
-        let sets = set_k.active_sets(&lambda, &r, rho);
-        for i in 0..n {
-            y[i] = lambda[i] - rho * r[i];
-        }
-        let d = set_k.slant(&y);
-        // the bound's derivative: on a sliding pair in contact, ∂P/∂g = yτ/‖yτ‖, ∂g/∂λν = μ
-        let mut dg: Vec<(usize, usize, [f64; 2])> = Vec::new();
-        if l.friction {
-            for (i, cf) in mu.iter().enumerate() {
-                let Coefficient::Isotropic(m) = *cf else { continue };
-                let (kt, kn) = (l.tangent(i, 0), l.normal(i));
-                let yt = [y[kt], y[kt + 1]];
-                let ny = yt[0].hypot(yt[1]);
-                if lambda[kn] > 0.0 && ny > m * lambda[kn] {
-                    dg.push((kn, kt, [m * yt[0] / ny, m * yt[1] / ny]));
-                }
-            }
-        }
-        let rhs: Vec<f64> = rt.iter().map(|v| -rho * v).collect();
-        tol = match p.inner_tol {
-            Some(t) => t,
-            None => (p.rtol * err / err0).min(p.cfact * tol),
-        };
-        let scale = match p.cg_stop {
-            super::CgStop::Rhs => rho * bnorm,
-            super::CgStop::InitialGradient => sp.norm(&rhs),
-        };
-        let threshold = (tol * scale).min(p.rtol * sp.norm(&rhs)).max(p.inner_floor * c.eps * rho * bnorm);
-        // J v = v − D(v − ρ A v) − (∂P/∂g)(∂g/∂λν) v_ν, also returning A v
-        let jacobian = |v: &[f64], jv: &mut [f64], av: &mut [f64]| {
-            a.apply(v, av);
-            for i in 0..n {
-                jv[i] = v[i] - rho * av[i];
-            }
-            d.apply_in_place(jv);
-            for i in 0..n {
-                jv[i] = v[i] - jv[i];
-            }
-            for &(kn, kt, g) in &dg {
-                jv[kt] -= g[0] * v[kn];
-                jv[kt + 1] -= g[1] * v[kn];
-            }
-        };
-        let inner = work.solve(sp, &rhs, threshold, c.max_inner, jacobian, k)?;
-        for i in 0..n {
-            lambda[i] += work.x[i];
-            r[i] += work.ax[i];
-        }
-        err = err_of(sp, &cut(&lambda), &lambda, &r, &drv.st, &mut rt);
-        let q = drv.q(&lambda, &r);
-        let step = drv.newton(StepKind::Newton, err, tol, q, &sets, inner);
-        drv.record(step);
-    }
-    unreachable!("the outer loop returns")
+    super::ssn::run(qp, Some(mu), lambda0, &params.common, &p, monitor)
 }
 
 #[cfg(test)]

@@ -12,26 +12,45 @@
 //! no extra product. Iterates need not lie in Λ; the stop `‖r̃_ρ‖ ≤ ε‖b‖` is confirmed at
 //! P_Λ(λ) with a fresh product, and P_Λ(λ) is the result. No globalization: the method is
 //! locally superlinear, and a run that does not converge ends in `QpError::NoConvergence`.
+//! The same iteration solves the Coulomb law directly ([`run`] with coefficients: Λ(λ) cut at
+//! the iterate's normals, the bound's dependence on λν in J; `qp::coulomb::newton`).
 
-use super::driver::{Driver, Monitor, Setup};
+use std::borrow::Cow;
+
+use super::coulomb::{bounds, Coefficient};
+use super::driver::{err_of, Driver, Monitor, Setup};
 use super::krylov::Bicgstab;
+use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{Common, Ssn};
 use super::{CgStop, Qp, QpError, QpSolution, StepKind};
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by SSN with BiCGSTAB inner solves.
 pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    run(qp, None, lambda0, c, p, monitor)
+}
+
+/// The Newton iteration, on Λ or — with isotropic Coulomb coefficients `mu` — on Λ(λ), the cones
+/// cut at the iterate's own normals ([`super::coulomb::newton`]): then the slant derivative
+/// also carries the bound's dependence on λν.
+pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambda0: &[f64], c: &Common, p: &Ssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     let (a, set) = (qp.a, qp.set);
     let sp = a.space();
     let n = a.dim();
+    let at = |x: &[f64]| -> Cow<'_, Lambda> {
+        match mu {
+            Some(mu) => Cow::Owned(bounds(set, mu, x)),
+            None => Cow::Borrowed(set),
+        }
+    };
     let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
     let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
     let mut lambda = vec![0.0; n];
-    set.project(lambda0, &mut lambda);
+    at(lambda0).project(lambda0, &mut lambda);
     let mut r = vec![0.0; n];
     drv.residual(&lambda, &mut r);
     let mut rt = vec![0.0; n];
-    let mut err = drv.err(&lambda, &r, &mut rt);
+    let mut err = err_of(sp, &at(&lambda), &lambda, &r, &drv.st, &mut rt);
     let err0 = err.max(f64::MIN_POSITIVE);
     let mut tol = p.rtol / p.cfact;
     let (mut y, mut z, mut rz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -39,17 +58,25 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, 
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
         if drv.met(err) {
-            match drv.confirm_projected(k, &mut lambda, &mut r, &mut z, &mut rz, &mut rt) {
-                Ok(sol) => return Ok(sol),
-                Err(e) => err = e,
+            // confirm at the projection (onto the cones cut there, with Coulomb)
+            at(&lambda).project(&lambda, &mut z);
+            drv.residual(&z, &mut rz);
+            let ez = err_of(sp, &at(&z), &z, &rz, &drv.st, &mut rt);
+            if drv.met(ez) {
+                return Ok(drv.finish(k, z, rz, ez));
             }
+            std::mem::swap(&mut lambda, &mut z);
+            std::mem::swap(&mut r, &mut rz);
+            err = ez;
         }
         drv.budget(k, err)?;
-        let sets = set.active_sets(&lambda, &r, rho);
+        let set_k = at(&lambda);
+        let sets = set_k.active_sets(&lambda, &r, rho);
         for i in 0..n {
             y[i] = lambda[i] - rho * r[i];
         }
-        let d = set.slant(&y);
+        let d = set_k.slant(&y);
+        let dg = mu.map(|mu| bound_slant(set.layout, mu, &lambda, &y)).unwrap_or_default();
         // −F(λ) = −ρ r̃_ρ(λ); rt holds r̃ at the current λ (from the last err)
         let rhs: Vec<f64> = rt.iter().map(|v| -rho * v).collect();
         tol = match p.inner_tol {
@@ -63,7 +90,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, 
         // never ask less than a reduction by rtol of the current residual: from a warm start
         // (err_0 small) tol·scale could exceed ‖rhs‖ and the step would be zero
         let threshold = (tol * scale).min(p.rtol * sp.norm(&rhs)).max(p.inner_floor * c.eps * rho * bnorm);
-        // J v = v − D(v − ρ A v), also returning A v
+        // J v = v − D(v − ρ A v) (− the bound's part), also returning A v
         let jacobian = |v: &[f64], jv: &mut [f64], av: &mut [f64]| {
             a.apply(v, av);
             for i in 0..n {
@@ -73,16 +100,38 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, 
             for i in 0..n {
                 jv[i] = v[i] - jv[i];
             }
+            for &(kn, kt, g) in &dg {
+                jv[kt] -= g[0] * v[kn];
+                jv[kt + 1] -= g[1] * v[kn];
+            }
         };
         let inner = work.solve(sp, &rhs, threshold, c.max_inner, jacobian, k)?;
         for i in 0..n {
             lambda[i] += work.x[i];
             r[i] += work.ax[i];
         }
-        err = drv.err(&lambda, &r, &mut rt);
+        err = err_of(sp, &at(&lambda), &lambda, &r, &drv.st, &mut rt);
         let q = drv.q(&lambda, &r);
         let step = drv.newton(StepKind::Newton, err, tol, q, &sets, inner);
         drv.record(step);
     }
     unreachable!("the outer loop returns")
+}
+
+/// The Coulomb bound's part of the slant derivative: for each sliding pair in contact (λν > 0,
+/// ‖yτ‖ > μλν) its (λν row, first λτ row, μ·yτ/‖yτ‖) — ∂P/∂g = yτ/‖yτ‖, ∂g/∂λν = μ.
+fn bound_slant(l: super::Layout, mu: &[Coefficient], lambda: &[f64], y: &[f64]) -> Vec<(usize, usize, [f64; 2])> {
+    let mut dg = Vec::new();
+    if !l.friction {
+        return dg;
+    }
+    for (i, cf) in mu.iter().enumerate() {
+        let Coefficient::Isotropic(m) = *cf else { continue };
+        let (kt, kn) = (l.tangent(i, 0), l.normal(i));
+        let ny = y[kt].hypot(y[kt + 1]);
+        if lambda[kn] > 0.0 && ny > m * lambda[kn] {
+            dg.push((kn, kt, [m * y[kt] / ny, m * y[kt + 1] / ny]));
+        }
+    }
+    dg
 }
