@@ -40,7 +40,8 @@ pub struct TfetiDual<'c, C: Comm> {
     c: Vec<f64>,
     /// c without that jump.
     c0: Vec<f64>,
-    /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows: Gλ̂ = e, λ̂_I = 0.
+    /// λ̂ on the local rows, Gλ̂ = e: (G_Eᵀ C⁻¹ e, 0) where every body is held by Dirichlet
+    /// conditions (λ̂_I = 0), λ_e = Gᵀ(GGᵀ)⁻¹e where one is held by contact alone.
     pub lambda_hat: Vec<f64>,
     /// d̃ − Fλ̂ (before projection, owned): the right-hand side once λ = λ̂ + λ̃.
     pub d_hat: Vec<f64>,
