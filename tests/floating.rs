@@ -1,7 +1,8 @@
 //! Bodies held by contact alone (TFETI with the orthogonal projector, Gλ = e over every row):
 //! a floating block pressed and pushed below the friction limit sticks with the contact force
 //! balancing the load exactly, on several decompositions; a block dragged by one face (free in
-//! the other directions) sticks below μN and slides at μN above; a frictionless floating block
+//! the other directions) sticks below μN and slides at μN above, also far beyond (both ways of
+//! solving Coulomb); a frictionless floating block
 //! is refused with its free motions named.
 
 mod common;
@@ -43,6 +44,14 @@ fn a_block_dragged_by_one_face_sticks_below_mu_n_and_slides_at_mu_n_above() {
     let mu = 0.3;
     let small = solve(&path, &[], &dir.join("a.h5"));
     let large = solve(&path, &["dirichlet.1.value=[0.0001, 0.0, 0.0]"], &dir.join("b.h5"));
+    // a deep slide (100× the stick limit's displacement), by each way of solving Coulomb
+    for how in ["newton", "fixed-point"] {
+        let deep = solve(&path, &["dirichlet.1.value=[0.001, 0.0, 0.0]", &format!("solver.coulomb=\"{how}\"")], &dir.join("c.h5"));
+        let c = deep.report.contact.as_ref().unwrap();
+        let f = c.total_force_on_slave;
+        eprintln!("δ = 1e-3 ({how}): Fx {:.6} vs μFz {:.6}, {} slip, {} products", f[0], mu * f[2], c.slip, deep.report.solver.as_ref().unwrap().info.n_a);
+        assert!(c.slip == 49 && (f[0].abs() - mu * f[2]).abs() <= 1e-3 * mu * f[2], "{how}: deep slide Fx = {}", f[0]);
+    }
     let (a, b) = (small.report.contact.as_ref().unwrap(), large.report.contact.as_ref().unwrap());
     let (fa, fb) = (a.total_force_on_slave, b.total_force_on_slave);
     eprintln!("δ = 1e-5: Fx {:.5}, {} stick / {} slip; δ = 1e-4: Fx {:.5} vs μFz {:.5}, {} slip", fa[0], a.stick, a.slip, fb[0], mu * fb[2], b.slip);

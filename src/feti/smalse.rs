@@ -20,6 +20,7 @@
 use super::distribution::Distribution;
 use super::dual::TfetiDual;
 use crate::comm::Comm;
+use crate::qp::coulomb::Coefficient;
 use crate::qp::{self, Info, Lambda, Monitor, Operator, Params, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
 
 /// A_ϱ = PFP + ϱQ.
@@ -80,11 +81,12 @@ pub struct SmalseInfo {
     pub feasibility: f64,
 }
 
-/// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside and ϱ =
+/// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside (with `coulomb`
+/// coefficients per pair: the Coulomb problem, each inner step by [`qp::solve_friction`]) and ϱ =
 /// `penalty`·σ_max(PFP) (`p.common.sigma` when given); returns λ with the inner solvers'
 /// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
 /// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start).
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, coulomb: Option<&[Coefficient]>, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
     let sp = dual.space();
     // the dual's λ̂ solves Gλ̂ = e; λ_e = Qλ̂, and P(d̃ − Fλ_e) = P(d̃ − Fλ̂) + PFPλ̂
     let lambda_p = dual.dist.owned_part(&dual.lambda_hat);
@@ -122,11 +124,12 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Par
         inner.common.eps = eps_k * bnorm / bk;
         inner.common.sigma = Some(SIGMA_SAFETY * sigma);
         inner.common.power_iterations = 0;
-        let sol = qp::solve(&Qp::new(&op, &b, set), &lambda, &inner, monitor)?;
+        let sol = qp::solve_friction(&Qp::new(&op, &b, set), coulomb, &lambda, &inner, monitor)?;
         lambda = sol.lambda;
         let err = sol.info.err * bk / bnorm;
         total.iterations += sol.info.iterations;
         total.inner_iterations += sol.info.inner_iterations;
+        total.fixed_point_iterations += sol.info.fixed_point_iterations;
         total.n_a += sol.info.n_a;
         total.rho = sol.info.rho;
         total.q = sol.info.q;

@@ -201,23 +201,12 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                 .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
             let r = match (orthogonal, contact.is_some()) {
                 (true, _) => {
-                    // the Coulomb fixed point with SMALSE-M for each Tresca problem
-                    let mut info = None;
-                    let mut one = |set: &Lambda, x: &[f64], p: &qp::Params| {
-                        smalse::solve(&dual, set, x, p, dec.penalty, &mut monitor).map(|(s, i)| {
-                            info = Some(i);
-                            s
-                        })
-                    };
-                    // the first step starts from λ_e, the least-norm equilibrium Gλ = e: its
-                    // normal components give Coulomb's first bounds something to carry the load of
-                    // a body held by contact alone (λν = 0 would leave it frictionless, infeasible)
+                    // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
+                    // where a body is held by contact alone: its normal components give Coulomb's
+                    // first bounds something to carry the load with); Coulomb is solved inside
+                    // each augmented-Lagrangian step (`qp::solve_friction`)
                     let x0 = if k == 1 { dual.dist.owned_part(&dual.lambda_hat) } else { walk.y.clone() };
-                    let r = match &mu {
-                        Some(mu) => qp::coulomb::solve(dual.space(), &set, mu, &x0, &walk.params, &Default::default(), &mut one).map(|r| r.0),
-                        None => one(&set, &x0, &walk.params),
-                    };
-                    r.map(|s| (s, info))
+                    smalse::solve(&dual, &set, mu.as_deref(), &x0, &walk.params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
                 }
                 (false, true) => qp::solve_friction(&qp, mu.as_deref(), &walk.y, &walk.params, &mut monitor).map(|s| (s, None)),
                 (false, false) => qp::cg::solve(&qp, &walk.y, &params.common, &mut monitor).map(|s| (s, None)),
