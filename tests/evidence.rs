@@ -106,7 +106,7 @@ fn work_precision_bad_arguments_give_one_line() {
         (&["--eps", "0"][..], "--eps"),
         (&["--sizes", "1"], "--sizes"),
         (&["--solvers", "newton"], "newton"),
-        (&["--solvers", "gimssn:dirichlet"], "gimssn takes no preconditioner"),
+        (&["--solvers", "imssn:dirichlet"], "imssn takes no preconditioner"),
         (&["--subdomains", "2", "--set", "decomposition.projector=\"orthogonal\""], "--subdomains"),
         (&["--max-seconds=-1"], "--max-seconds"),
         (&["--csv", "/proc/no-such-dir/x.csv"], "/proc/no-such-dir"),

@@ -193,6 +193,22 @@ fn without_contact_cg_on_the_dual_matches_the_direct_solve() {
 fn smalse_with_the_orthogonal_projector_matches_too() {
     let sets = seed(8, &["decomposition.projector=\"orthogonal\""]);
     equivalence("run/seed.toml", &sets, &[1, 4]);
+    // with P M P + ϱ⁻¹Q preconditioning SSN's (right) and TSSN's inner solves, with and
+    // without contact: the same solution
+    for (method, pc, contact) in [("ssn-bicgstab", "dirichlet", "false"), ("tssn", "lumped", "true")] {
+        let m = format!("solver.method=\"{method}\"");
+        let p = format!("solver.preconditioner=\"{pc}\"");
+        let c = format!("contact.enabled={contact}");
+        equivalence("run/seed.toml", &seed(8, &["decomposition.projector=\"orthogonal\"", &m, &p, &c]), &[4]);
+    }
+}
+
+#[test]
+fn gimssn_and_mpgp_preconditioned_in_face_match_too() {
+    for method in ["gimssn", "mpgp"] {
+        let m = format!("solver.method=\"{method}\"");
+        equivalence("run/seed.toml", &seed(8, &[&m, "solver.preconditioner=\"lumped\"", "solver.max_outer=20000"]), &[4]);
+    }
 }
 
 #[test]

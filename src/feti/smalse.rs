@@ -16,12 +16,15 @@
 //! (DESIGN §3a). The inner tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k,
 //! Mϱ‖Qλ − λ_e‖/‖P(d̃ − Fλ_e)‖)), M = 1, ε_1 = 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ − λ_e‖ (the
 //! infeasibility in the gradient's units) are below ε‖P(d̃ − Fλ_e)‖.
+//!
+//! A FETI preconditioner M of F acts on A_ϱ as `P M P + ϱ⁻¹Q` ([`PenalizedPreconditioner`]):
+//! A_ϱ is PFP on Ker G = Im P and ϱ on Im Q, so this is its inverse where M is F's on Ker G.
 
 use super::distribution::Distribution;
 use super::dual::TfetiDual;
 use crate::comm::Comm;
 use crate::qp::coulomb::Coefficient;
-use crate::qp::{self, Info, Lambda, Monitor, Operator, Params, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
+use crate::qp::{self, Info, Lambda, Monitor, Operator, Params, Preconditioner, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
 
 /// A_ϱ = PFP + ϱQ.
 pub struct Penalized<'a, 'c, C: Comm> {
@@ -72,6 +75,29 @@ impl<'c, C: Comm> Operator for Penalized<'_, 'c, C> {
     }
 }
 
+/// `P M P + ϱ⁻¹Q` ≈ A_ϱ⁻¹ from a preconditioner M of F on every row.
+pub struct PenalizedPreconditioner<'a, 'c, C: Comm> {
+    dual: &'a TfetiDual<'c, C>,
+    m: &'a dyn Preconditioner,
+    penalty: f64,
+}
+
+impl<C: Comm> Preconditioner for PenalizedPreconditioner<'_, '_, C> {
+    fn block(&self) -> std::ops::Range<usize> {
+        0..self.dual.dim()
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        let mut px = x.to_vec();
+        self.dual.coarse.project_orthogonal(&self.dual.dist, &mut px);
+        self.m.apply(&px, y);
+        self.dual.coarse.project_orthogonal(&self.dual.dist, y);
+        for ((yi, xi), pi) in y.iter_mut().zip(x).zip(&px) {
+            *yi += (xi - pi) / self.penalty;
+        }
+    }
+}
+
 /// Counters of the outer loop beside the summed inner [`Info`].
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SmalseInfo {
@@ -83,10 +109,12 @@ pub struct SmalseInfo {
 
 /// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside (with `coulomb`
 /// coefficients per pair: the Coulomb problem, each inner step by [`qp::solve_friction`]) and ϱ =
-/// `penalty`·σ_max(PFP) (`p.common.sigma` when given); returns λ with the inner solvers'
+/// `penalty`·σ_max(PFP) (`p.common.sigma` when given), the inner solves preconditioned by
+/// [`PenalizedPreconditioner`] when `m` (a preconditioner of F) is given; returns λ with the inner solvers'
 /// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
 /// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start).
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, coulomb: Option<&[Coefficient]>, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
+#[allow(clippy::too_many_arguments)]
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, m: Option<&dyn Preconditioner>, set: &Lambda, coulomb: Option<&[Coefficient]>, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
     let sp = dual.space();
     // the dual's λ̂ solves Gλ̂ = e; λ_e = Qλ̂, and P(d̃ − Fλ_e) = P(d̃ − Fλ̂) + PFPλ̂
     let lambda_p = dual.dist.owned_part(&dual.lambda_hat);
@@ -108,6 +136,7 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, coulomb: Option<&[C
         return Err(QpError::NotFinite { what: "the σ_max estimate", outer: 0 });
     }
     op.penalty = penalty * sigma;
+    let pm = m.map(|m| PenalizedPreconditioner { dual, m, penalty: op.penalty });
     let sigma = sigma.max(op.penalty);
     let mut lambda = x0.to_vec();
     let mut nu = vec![0.0; x0.len()];
@@ -124,7 +153,9 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, coulomb: Option<&[C
         inner.common.eps = eps_k * bnorm / bk;
         inner.common.sigma = Some(SIGMA_SAFETY * sigma);
         inner.common.power_iterations = 0;
-        let sol = qp::solve_friction(&Qp::new(&op, &b, set), coulomb, &lambda, &inner, monitor)?;
+        let qp = Qp::new(&op, &b, set).with_preconditioner(pm.as_ref().map(|m| m as &dyn Preconditioner));
+        let sol = qp::solve_friction(&qp, coulomb, &lambda, &inner, monitor)?;
+        total.preconditioner_applications += sol.info.preconditioner_applications;
         lambda = sol.lambda;
         let err = sol.info.err * bk / bnorm;
         total.iterations += sol.info.iterations;

@@ -355,9 +355,10 @@ impl DualKind {
     }
 }
 
-/// Whether the inner CG runs projected onto Ker G ∩ W ([`crate::qp::Coarse`]): on TFETI with
-/// the oblique projector, in TSSN's CG ([`Method::takes_preconditioner`]) or the plain CG of a
-/// scene without contact, unless `decomposition.projected_cg = false`.
+/// Whether the inner solves run projected onto Ker G ∩ W ([`crate::qp::Coarse`]): on TFETI with
+/// the oblique projector, in the methods that take a preconditioner
+/// ([`Method::takes_preconditioner`]; SSN-BiCGSTAB projects its preconditioner only) or the
+/// plain CG of a scene without contact, unless `decomposition.projected_cg = false`.
 pub fn projected(method: Method, dual: DualKind) -> bool {
     match dual {
         DualKind::Tfeti { orthogonal: false, contact, projected: true } => !contact || method.takes_preconditioner(),
@@ -366,27 +367,33 @@ pub fn projected(method: Method, dual: DualKind) -> bool {
 }
 
 /// The one place that decides whether the scene's `solver.preconditioner` applies: the FETI
-/// preconditioner acts on every row of the TFETI dual inside the projected CG ([`projected`]).
-/// Anything else is refused with the key named. `auto` (the default) is Dirichlet for the
-/// plain CG of a TFETI scene without contact (standard PCPG) and none elsewhere: with contact
-/// the preconditioned TSSN does not win on every scene (both measured in the README).
+/// preconditioner acts on every row of the TFETI dual in the inner solves of the methods that
+/// take one ([`Method::takes_preconditioner`]): projected onto Ker G ∩ W under the oblique
+/// projector ([`projected`]), as `P M P + ϱ⁻¹Q` under SMALSE-M. Anything else is refused with
+/// the key named. `auto` (the default) is Dirichlet for the plain CG of a TFETI scene without
+/// contact (standard PCPG), lumped for TSSN under the oblique projector and none elsewhere
+/// (each measured in the README).
 pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> Result<Option<Preconditioner>> {
     match kind {
         Preconditioner::None => return Ok(None),
         Preconditioner::Auto => {
-            let plain_cg = matches!(dual, DualKind::Tfeti { contact: false, .. });
+            let plain_cg = matches!(dual, DualKind::Tfeti { contact: false, orthogonal: false, .. });
             let auto = if plain_cg { Preconditioner::Dirichlet } else { Preconditioner::Lumped };
-            return Ok(projected(method, dual).then_some(auto));
+            return Ok((projected(method, dual) && (plain_cg || method == Method::Tssn)).then_some(auto));
         }
         _ => {}
     }
     let refuse = |why: String| Err(Error::scene("solver.preconditioner", format!("\"{}\" {why}", kind.name())));
+    let takes = || {
+        let names: Vec<&str> = Method::ALL.iter().filter(|m| m.takes_preconditioner()).map(|m| m.name()).collect();
+        format!("acts in the inner solves of {} only; \"{}\" takes none", names.join(", "), method.name())
+    };
     match dual {
         DualKind::Monolithic => refuse("acts on the TFETI dual; this scene is solved on the monolithic dual (set decomposition.subdomains or decomposition.tfeti = true)".into()),
-        DualKind::Tfeti { orthogonal: true, .. } => refuse("needs the oblique projector (decomposition.projector = \"oblique\")".into()),
-        DualKind::Tfeti { projected: false, .. } => refuse("acts in the projected CG (decomposition.projected_cg = true)".into()),
+        DualKind::Tfeti { orthogonal: true, contact, .. } if !contact || method.takes_preconditioner() => Ok(Some(kind)),
+        DualKind::Tfeti { orthogonal: false, projected: false, .. } => refuse("acts in the projected inner solves (decomposition.projected_cg = true)".into()),
         _ if projected(method, dual) => Ok(Some(kind)),
-        DualKind::Tfeti { .. } => refuse(format!("acts in TSSN's CG only (solver.method = \"tssn\"); \"{}\" takes none", method.name())),
+        DualKind::Tfeti { .. } => refuse(takes()),
     }
 }
 

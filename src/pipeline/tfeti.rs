@@ -206,7 +206,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                     // first bounds something to carry the load with); Coulomb is solved inside
                     // each augmented-Lagrangian step (`qp::solve_friction`)
                     let x0 = if k == 1 { dual.dist.owned_part(&dual.lambda_hat) } else { walk.y.clone() };
-                    smalse::solve(&dual, &set, mu.as_deref(), &x0, &walk.params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
+                    smalse::solve(&dual, qp.preconditioner, &set, mu.as_deref(), &x0, &walk.params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
                 }
                 (false, true) => qp::solve_friction(&qp, mu.as_deref(), &walk.y, &walk.params, &mut monitor).map(|s| (s, None)),
                 (false, false) => qp::cg::solve(&qp, &walk.y, &params.common, &mut monitor).map(|s| (s, None)),

@@ -104,7 +104,8 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, variant: 
                 (tol * scale).max(m.inner_floor * c.eps * bnorm)
             }
         };
-        let inner = cg_free(&drv, &sets.free, &mut x, &mut g, threshold, c.max_inner, feasible, k)?;
+        let (inner, applications) = cg_free(&drv, &sets.free, &mut x, &mut g, threshold, c.max_inner, feasible, k)?;
+        drv.info.preconditioner_applications += applications;
         std::mem::swap(&mut lambda, &mut x);
         std::mem::swap(&mut r, &mut g);
         if feasible {
@@ -128,12 +129,24 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, variant: 
 
 /// CG on the components `free` from x with g = r(x), the others frozen, until the free gradient
 /// is at most `threshold(‖g_free‖)`; `feasible` (CGMfeas): stop at the boundary of Λ, with the
-/// step taken up to it, when a CG step would leave Λ. x and g = r(x) (by the recurrence) are
-/// updated; returns the CG iterations (one A-product each).
+/// step taken up to it, when a CG step would leave Λ. With the QP's preconditioner (GIMSSN
+/// only: preconditioning in face) PCG with M restricted to the free components and projected
+/// onto Ker G ∩ W by the QP's coarse space: each step still minimizes q along its direction,
+/// so q stays monotone. x and g = r(x) (by the recurrence) are updated; returns the CG
+/// iterations (one A-product each) and the preconditioner's applications.
 #[allow(clippy::too_many_arguments)]
-fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g: &mut [f64], threshold: impl FnOnce(f64) -> f64, max_inner: usize, feasible: bool, outer: usize) -> Result<usize, QpError> {
-    let opts = Pcg { system: &Masked(free), preconditioner: None, coarse: None, coefficients: Coefficients::Conjugated, feasible, max_iter: max_inner, outer };
-    Ok(pcg(drv.qp, &opts, x, g, threshold, |_| {})?.iterations)
+fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g: &mut [f64], threshold: impl FnOnce(f64) -> f64, max_inner: usize, feasible: bool, outer: usize) -> Result<(usize, usize), QpError> {
+    let qp = drv.qp;
+    let m = qp.preconditioner.filter(|_| feasible);
+    let coarse = match (m, qp.coarse) {
+        (Some(_), Some(g)) => Some(g.restrict(free, &[]).ok_or(QpError::SingularCoarse { outer })?),
+        _ => None,
+    };
+    let coefficients = if m.is_some() { Coefficients::Standard } else { Coefficients::Conjugated };
+    let system = Masked(free);
+    let opts = Pcg { system: &system, preconditioner: m.map(|m| (m, drv.st.rho)), coarse: coarse.as_deref(), coefficients, feasible, max_iter: max_inner, outer };
+    let info = pcg(qp, &opts, x, g, threshold, |_| {})?;
+    Ok((info.iterations, info.applications))
 }
 
 /// The result of one [`feasible_step`].
@@ -154,6 +167,6 @@ pub(crate) fn feasible_step<A: Operator>(drv: &Driver<'_, '_, A>, set: &Lambda, 
     set.project(&y, &mut x);
     let mut g = vec![0.0; y.len()];
     drv.residual(&x, &mut g);
-    let inner = cg_free(drv, &sets.free, &mut x, &mut g, |_| threshold, max_inner, true, outer)?;
+    let (inner, _) = cg_free(drv, &sets.free, &mut x, &mut g, |_| threshold, max_inner, true, outer)?;
     Ok(FeasibleStep { lambda: x, gradient: g, inner })
 }

@@ -1,6 +1,7 @@
 //! The Krylov kernels of the inner solves: one masked, preconditioned CG (`pcg`) for every
 //! symmetric inner system (GIMSSN's CGMfeas, IMSSN/MSSN, TSSN, plain CG) and one BiCGSTAB
-//! (`Bicgstab`) for SSN's unsymmetric Newton systems.
+//! (`Bicgstab`, right-preconditioned where a preconditioner is given) for SSN's unsymmetric
+//! Newton systems.
 
 use super::driver::positive_curvature;
 use super::operator::{CoarseProjector, Operator, Preconditioner, Space};
@@ -32,6 +33,38 @@ impl InnerSystem for Masked<'_> {
             *o = if *f { *gi } else { 0.0 };
         }
     }
+}
+
+/// The components where `free` holds and the lines t of `slides` (first component, unit t):
+/// Π = the mask, t tᵀ on a sliding pair; C = 0.
+pub(crate) struct Subspace<'a> {
+    pub free: &'a [bool],
+    pub slides: &'a [(usize, [f64; 2])],
+}
+
+impl InnerSystem for Subspace<'_> {
+    fn apply(&self, g: &[f64], _: Option<&[f64]>, out: &mut [f64]) {
+        Masked(self.free).apply(g, None, out);
+        for &(k, t) in self.slides {
+            let a = t[0] * g[k] + t[1] * g[k + 1];
+            out[k] = a * t[0];
+            out[k + 1] = a * t[1];
+        }
+    }
+}
+
+/// z = P_W Π M̂ Π h: the preconditioner M on its block, `scale`·I on the other components,
+/// restricted to the system's subspace and projected onto Ker G ∩ W (`work`: scratch).
+pub(crate) fn precondition(m: &dyn Preconditioner, scale: f64, system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, h: &[f64], z: &mut [f64], work: &mut [f64]) {
+    m.apply(h, work);
+    let block = m.block();
+    for (k, (p, hk)) in work.iter_mut().zip(h).enumerate() {
+        if !block.contains(&k) {
+            *p = scale * hk;
+        }
+    }
+    system.apply(work, None, z);
+    project(system, coarse, z, work);
 }
 
 /// How the CG coefficients are formed (equal in exact arithmetic).
@@ -94,17 +127,9 @@ pub(crate) fn pcg<A: Operator>(
     let mut work = if opts.coarse.is_some() { vec![0.0; n] } else { vec![] };
     let mut applications = 0;
     // z = Π M h (z = h without a preconditioner)
-    let mut precondition = |h: &[f64], z: &mut [f64]| match opts.preconditioner {
+    let mut apply_m = |h: &[f64], z: &mut [f64]| match opts.preconditioner {
         Some((m, scale)) => {
-            m.apply(h, &mut pz);
-            let block = m.block();
-            for (k, (p, hk)) in pz.iter_mut().zip(h).enumerate() {
-                if !block.contains(&k) {
-                    *p = scale * hk;
-                }
-            }
-            opts.system.apply(&pz, None, z);
-            project(opts.system, opts.coarse, z, &mut pz);
+            precondition(m, scale, opts.system, opts.coarse, h, z, &mut pz);
             applications += 1;
         }
         None => z.copy_from_slice(h),
@@ -116,7 +141,7 @@ pub(crate) fn pcg<A: Operator>(
     let mut hnorm = hz.sqrt();
     let threshold = threshold(hnorm);
     if preconditioned {
-        precondition(&h, &mut z);
+        apply_m(&h, &mut z);
         hz = sp.dot(&h, &z);
     } else {
         z.copy_from_slice(&h);
@@ -153,7 +178,7 @@ pub(crate) fn pcg<A: Operator>(
         match opts.coefficients {
             Coefficients::Standard => {
                 let hz_new = if preconditioned {
-                    precondition(&h, &mut z);
+                    apply_m(&h, &mut z);
                     let v = sp.dot(&h, &z);
                     hnorm = sp.norm(&h);
                     v
@@ -198,18 +223,23 @@ pub(crate) struct Bicgstab {
     s: Vec<f64>,
     t: Vec<f64>,
     as_: Vec<f64>,
+    /// M p and M s (right preconditioning).
+    mp: Vec<f64>,
+    ms: Vec<f64>,
 }
 
 impl Bicgstab {
     pub fn new(n: usize) -> Self {
         let z = || vec![0.0; n];
-        Bicgstab { x: z(), ax: z(), res: z(), rhat: z(), p: z(), v: z(), ap: z(), s: z(), t: z(), as_: z() }
+        Bicgstab { x: z(), ax: z(), res: z(), rhat: z(), p: z(), v: z(), ap: z(), s: z(), t: z(), as_: z(), mp: z(), ms: z() }
     }
 
     /// Solves J x = rhs from x = 0 until ‖rhs − Jx‖ ≤ threshold; returns the iterations.
-    /// `jacobian(v, jv, av)` writes J v and A v. A breakdown after some progress ends the solve
-    /// with the last iterate (Newton goes on from an inexact step); one before any progress is
-    /// an error.
+    /// `jacobian(v, jv, av)` writes J v and A v. With `precondition` (y = M v, M ≈ J⁻¹) it
+    /// solves J M y = rhs, x = M y (right preconditioning: the residual it tests is J x's own).
+    /// A breakdown after some progress ends the solve with the last iterate (Newton goes on
+    /// from an inexact step); one before any progress is an error.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve<S: Space>(
         &mut self,
         sp: &S,
@@ -217,6 +247,7 @@ impl Bicgstab {
         threshold: f64,
         max_iter: usize,
         jacobian: impl Fn(&[f64], &mut [f64], &mut [f64]),
+        mut precondition: Option<&mut dyn FnMut(&[f64], &mut [f64])>,
         outer: usize,
     ) -> Result<usize, QpError> {
         let n = rhs.len();
@@ -243,7 +274,11 @@ impl Bicgstab {
             for i in 0..n {
                 self.p[i] = self.res[i] + beta * (self.p[i] - omega * self.v[i]);
             }
-            jacobian(&self.p, &mut self.v, &mut self.ap);
+            match precondition.as_mut() {
+                Some(m) => m(&self.p, &mut self.mp),
+                None => self.mp.copy_from_slice(&self.p),
+            }
+            jacobian(&self.mp, &mut self.v, &mut self.ap);
             let rv = sp.dot(&self.rhat, &self.v);
             if rv == 0.0 || !rv.is_finite() {
                 return fail(it, "r̂ᵀJp = 0");
@@ -256,16 +291,20 @@ impl Bicgstab {
             let snorm = sp.norm(&self.s);
             if snorm <= threshold {
                 for i in 0..n {
-                    self.x[i] += alpha * self.p[i];
+                    self.x[i] += alpha * self.mp[i];
                     self.ax[i] += alpha * self.ap[i];
                 }
                 return Ok(it);
             }
-            jacobian(&self.s, &mut self.t, &mut self.as_);
+            match precondition.as_mut() {
+                Some(m) => m(&self.s, &mut self.ms),
+                None => self.ms.copy_from_slice(&self.s),
+            }
+            jacobian(&self.ms, &mut self.t, &mut self.as_);
             let tt = sp.dot(&self.t, &self.t);
             omega = if tt > 0.0 { sp.dot(&self.t, &self.s) / tt } else { 0.0 };
             for i in 0..n {
-                self.x[i] += alpha * self.p[i] + omega * self.s[i];
+                self.x[i] += alpha * self.mp[i] + omega * self.ms[i];
                 self.ax[i] += alpha * self.ap[i] + omega * self.as_[i];
                 self.res[i] = self.s[i] - omega * self.t[i];
             }

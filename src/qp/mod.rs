@@ -36,10 +36,11 @@ pub struct Qp<'a, A: Operator> {
     pub a: &'a A,
     pub b: &'a [f64],
     pub set: &'a Lambda,
-    /// M ≈ A⁻¹ on a block of the components (only TSSN's CG uses it: see
-    /// [`Method::takes_preconditioner`]).
+    /// M ≈ A⁻¹ on a block of the components (the methods of
+    /// [`Method::takes_preconditioner`] use it).
     pub preconditioner: Option<&'a dyn Preconditioner>,
-    /// G δ = 0 on the inner corrections (TSSN's CG and plain CG project onto Ker G ∩ W).
+    /// G δ = 0 on the inner corrections (TSSN's CG and plain CG project onto Ker G ∩ W;
+    /// SSN-BiCGSTAB its preconditioner).
     pub coarse: Option<&'a dyn Coarse>,
 }
 
@@ -85,10 +86,11 @@ pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[coulomb::Co
 }
 
 impl Method {
-    /// Whether the method has a symmetric inner solve that a preconditioner can act on (TSSN's
-    /// CG). The others' inner systems are masked or unsymmetric and take none.
+    /// Whether the method's inner solve takes a preconditioner: TSSN's CG, SSN's BiCGSTAB
+    /// (right-preconditioned), GIMSSN's CGMfeas and MPGP's CG steps (in face). IMSSN and MSSN
+    /// take none.
     pub fn takes_preconditioner(self) -> bool {
-        self == Method::Tssn
+        matches!(self, Method::Tssn | Method::SsnBicgstab | Method::Gimssn | Method::Mpgp)
     }
 }
 
@@ -147,7 +149,7 @@ pub struct Info {
     #[serde(rename = "nA_power")]
     pub n_a_power: usize,
     pub inner_iterations: usize,
-    /// Applications of the preconditioner M (TSSN with a preconditioner; 0 otherwise).
+    /// Applications of the preconditioner M (0 without one).
     pub preconditioner_applications: usize,
     pub sigma_est: f64,
     pub rho: f64,

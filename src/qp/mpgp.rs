@@ -18,11 +18,20 @@
 //!   active blocks `λ_A ← P_Λ(λ_A − ᾱ g_A)` (a projected gradient step of the restricted
 //!   problem, monotone for ᾱ < 2/‖A‖; the same step along β is not).
 //!
+//! With the QP's preconditioner M (preconditioning in face, Dostál's MPRGP variant; Kružík &
+//! Horák 2025) the CG directions start from z = P_W Π M Π P_W φ, Π the mask of the free blocks
+//! and P_W the orthogonal projection onto Ker G ∩ W of the QP's coarse space (restricted anew
+//! whenever the face changes), with conjugacy enforced against the last direction; φᵀz ≥ 0, so
+//! the CG step still descends and q still decreases in every step. Expansion and proportioning
+//! steps are unchanged.
+//!
 //! ᾱ = ρ = rho_factor/(1.1 σ_est); the stop is the same as the Newton methods'
 //! (`‖r̃_ρ(λ)‖ ≤ ε‖b‖`, confirmed with a fresh product). q decreases in every step. One
 //! outer iteration is one step; `inner_iterations` counts the CG steps.
 
 use super::driver::{curvature, Driver, Monitor, Setup};
+use super::krylov::{precondition, InnerSystem, Masked};
+use super::operator::CoarseProjector;
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{Common, Mpgp};
@@ -38,6 +47,8 @@ struct Split {
     beta: Vec<f64>,
     /// φ̃, the reduced free gradient.
     phit: Vec<f64>,
+    /// The free blocks' components (the face).
+    free: Vec<bool>,
     /// Free normals, free (interior) tangential pairs, active tangential pairs.
     free_normal: usize,
     free_tangent: usize,
@@ -51,8 +62,10 @@ fn split<S: Space>(sp: &S, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, 
     out.free_normal = 0;
     out.free_tangent = 0;
     out.active_tangent = 0;
+    let free = &mut out.free;
     for i in 0..m {
-        if lambda[i] > ON_BOUNDARY * lmax {
+        free[i] = lambda[i] > ON_BOUNDARY * lmax;
+        if free[i] {
             phi[i] = g[i];
             beta[i] = 0.0;
             out.free_normal += 1;
@@ -70,6 +83,9 @@ fn split<S: Space>(sp: &S, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, 
         let gi = [g[k], g[k + 1]];
         let degenerate = s.is_outside(&[f64::MIN_POSITIVE, f64::MIN_POSITIVE]);
         let scaled = [x[0] * (1.0 + ON_BOUNDARY), x[1] * (1.0 + ON_BOUNDARY)];
+        let interior = !degenerate && !s.is_outside(&scaled);
+        free[k] = interior;
+        free[k + 1] = interior;
         if degenerate {
             // the point set {0}: nothing can move
             phi[k..k + 2].fill(0.0);
@@ -98,6 +114,7 @@ fn split<S: Space>(sp: &S, set: &Lambda, lambda: &[f64], g: &[f64], alpha: f64, 
     }
     // the unconstrained components (TFETI's λ_E) are always free
     let e = set.free_range();
+    free[e.clone()].fill(true);
     phi[e.clone()].copy_from_slice(&g[e.clone()]);
     phit[e.clone()].copy_from_slice(&g[e.clone()]);
     beta[e].fill(0.0);
@@ -114,9 +131,40 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
     set.project(lambda0, &mut lambda);
     let mut g = vec![0.0; n];
     drv.residual(&lambda, &mut g);
-    let mut spl = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
+    let mut spl = Split { phi: vec![0.0; n], beta: vec![0.0; n], phit: vec![0.0; n], free: vec![false; n], free_normal: 0, free_tangent: 0, active_tangent: 0 };
     split(sp, set, &lambda, &g, alpha_bar, &mut spl);
-    let mut dir = spl.phi.clone();
+    // preconditioning in face: z = P_W Π M Π P_W φ, the face's coarse projection kept until the
+    // face changes
+    let mut face: Option<(Vec<bool>, Option<Box<dyn CoarseProjector + '_>>)> = None;
+    let (mut h, mut work) = (vec![0.0; n], vec![0.0; n]);
+    let applications = std::cell::Cell::new(0);
+    let mut start = |spl: &Split, z: &mut [f64], outer: usize| -> Result<(), QpError> {
+        let Some(m) = qp.preconditioner else {
+            z.copy_from_slice(&spl.phi);
+            return Ok(());
+        };
+        if face.as_ref().is_none_or(|(f, _)| *f != spl.free) {
+            let restricted = match qp.coarse {
+                Some(g) => Some(g.restrict(&spl.free, &[]).ok_or(QpError::SingularCoarse { outer })?),
+                None => None,
+            };
+            face = Some((spl.free.clone(), restricted));
+        }
+        let (free, coarse) = face.as_ref().expect("set above");
+        let system = Masked(free);
+        h.copy_from_slice(&spl.phi);
+        if let Some(c) = coarse {
+            c.apply(&mut h);
+            system.apply(&h, None, &mut work);
+            h.copy_from_slice(&work);
+        }
+        precondition(m, alpha_bar, &system, coarse.as_deref(), &h, z, &mut work);
+        applications.set(applications.get() + 1);
+        Ok(())
+    };
+    let mut dir = vec![0.0; n];
+    start(&spl, &mut dir, 0)?;
+    let mut z = vec![0.0; n];
     let (mut ad, mut y, mut rt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut err = drv.err(&lambda, &g, &mut rt);
     // λ ← P_Λ(λ − ᾱ v), g fresh, split, CG restarted
@@ -134,10 +182,11 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
             drv.residual(&lambda, &mut g);
             err = drv.err(&lambda, &g, &mut rt);
             if drv.met(err) {
+                drv.info.preconditioner_applications = applications.get();
                 return Ok(drv.finish(k, lambda, g, err));
             }
             split(sp, set, &lambda, &g, alpha_bar, &mut spl);
-            dir.copy_from_slice(&spl.phi);
+            start(&spl, &mut dir, k)?;
         }
         drv.budget(k, err)?;
         let (free_normal, stick, slip) = (sp.count(spl.free_normal), sp.count(spl.free_tangent), sp.count(spl.active_tangent));
@@ -154,9 +203,10 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
                     g[i] -= acg * ad[i];
                 }
                 split(sp, set, &lambda, &g, alpha_bar, &mut spl);
-                let gamma = sp.dot(&spl.phi, &ad) / pap;
+                start(&spl, &mut z, k)?;
+                let gamma = sp.dot(&z, &ad) / pap;
                 for i in 0..n {
-                    dir[i] = spl.phi[i] - gamma * dir[i];
+                    dir[i] = z[i] - gamma * dir[i];
                 }
             } else {
                 kind = StepKind::Expansion;
@@ -169,7 +219,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
                 projected_step(&mut lambda, &phi, &mut g, &mut y);
                 spl.phi = phi; // split overwrites every entry
                 split(sp, set, &lambda, &g, alpha_bar, &mut spl);
-                dir.copy_from_slice(&spl.phi);
+                start(&spl, &mut dir, k)?;
             }
         } else {
             kind = StepKind::Proportioning;
@@ -197,7 +247,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
                 projected_step(&mut lambda, &ad, &mut g, &mut y);
                 split(sp, set, &lambda, &g, alpha_bar, &mut spl);
             }
-            dir.copy_from_slice(&spl.phi);
+            start(&spl, &mut dir, k)?;
         }
         err = drv.err(&lambda, &g, &mut rt);
         let q = drv.q(&lambda, &g);

@@ -12,6 +12,12 @@
 //! no extra product. Iterates need not lie in Λ; the stop `‖r̃_ρ‖ ≤ ε‖b‖` is confirmed at
 //! P_Λ(λ) with a fresh product, and P_Λ(λ) is the result. No globalization: the method is
 //! locally superlinear, and a run that does not converge ends in `QpError::NoConvergence`.
+//! With the QP's preconditioner M the Newton system is right-preconditioned (J M_J y = −F,
+//! δ = M_J y, so the inner stop still tests ‖Jδ + F‖): J = [ρA_WW, ·; 0, I] up to the sliding
+//! pairs' μρ on their tangents, so `M_J = (I − Π) + P_W Π M Π S`, Π the step's subspace W (D = I
+//! components; t tᵀ on sliding pairs whose cᵢ ≤ [`SLIDE_CAP`]·σ, as TSSN's), S = 1/ρ there and
+//! 1/(μρ) on a slide, P_W the orthogonal projection onto Ker G ∩ W when the QP has a coarse
+//! space: the FETI preconditioner in its projected form (DESIGN §3c).
 //! The same iteration solves the Coulomb law directly ([`run`] with coefficients: Λ(λ) cut at
 //! the iterate's normals, the bound's dependence on λν in J; `qp::coulomb::newton`).
 
@@ -19,11 +25,16 @@ use std::borrow::Cow;
 
 use super::coulomb::{bounds, Coefficient};
 use super::driver::{err_of, Driver, Monitor, Setup};
-use super::krylov::Bicgstab;
+use super::krylov::{precondition, Bicgstab, InnerSystem, Subspace};
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{Common, Ssn};
 use super::{CgStop, Qp, QpError, QpSolution, StepKind};
+
+/// A sliding pair whose cᵢ = (1/μ − 1)/ρ exceeds this multiple of σ_max(A) is left out of
+/// the preconditioned subspace (its tangent row of J is then nearly (1 − μ)·I): TSSN's default
+/// `slide_cap`.
+pub const SLIDE_CAP: f64 = 0.5;
 
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 by SSN with BiCGSTAB inner solves.
 pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
@@ -105,7 +116,53 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
                 jv[kt + 1] -= g[1] * v[kn];
             }
         };
-        let inner = work.solve(sp, &rhs, threshold, c.max_inner, jacobian, k)?;
+        // the right preconditioner M_J on this step's subspace
+        let free = &sets.free;
+        let mut slides = Vec::new();
+        let mut scale = vec![];
+        if qp.preconditioner.is_some() {
+            for (i, ts) in set_k.tangent.iter().enumerate() {
+                let kt = set_k.layout.tangent(i, 0);
+                if free[kt] {
+                    continue;
+                }
+                if let Some(f) = ts.frame(&y[kt..kt + 2]) {
+                    let ci = (1.0 / f.mu - 1.0) / rho;
+                    if f.mu > 0.0 && ci <= SLIDE_CAP * drv.st.sigma {
+                        slides.push((kt, f.tangent));
+                        scale.push(1.0 / (f.mu * rho));
+                    }
+                }
+            }
+        }
+        let subspace = Subspace { free, slides: &slides };
+        let coarse = match (qp.preconditioner, qp.coarse) {
+            (Some(_), Some(g)) => Some(g.restrict(free, &slides).ok_or(QpError::SingularCoarse { outer: k })?),
+            _ => None,
+        };
+        let len = if qp.preconditioner.is_some() { n } else { 0 };
+        let (mut sv, mut pv, mut work_m) = (vec![0.0; len], vec![0.0; len], vec![0.0; len]);
+        let mut applications = 0;
+        let mut m_j = |v: &[f64], out: &mut [f64]| {
+            let m = qp.preconditioner.expect("a preconditioner");
+            // S v on W, then P_W Π M Π; plus (I − Π) v
+            subspace.apply(v, None, &mut pv);
+            for i in 0..n {
+                sv[i] = pv[i] / rho;
+            }
+            for (&(kt, _), s) in slides.iter().zip(&scale) {
+                sv[kt] = pv[kt] * s;
+                sv[kt + 1] = pv[kt + 1] * s;
+            }
+            precondition(m, rho, &subspace, coarse.as_deref(), &sv, out, &mut work_m);
+            for i in 0..n {
+                out[i] += v[i] - pv[i];
+            }
+            applications += 1;
+        };
+        let m_j: Option<&mut dyn FnMut(&[f64], &mut [f64])> = if qp.preconditioner.is_some() { Some(&mut m_j) } else { None };
+        let inner = work.solve(sp, &rhs, threshold, c.max_inner, jacobian, m_j, k)?;
+        drv.info.preconditioner_applications += applications;
         for i in 0..n {
             lambda[i] += work.x[i];
             r[i] += work.ax[i];

@@ -297,6 +297,44 @@ pub(crate) mod tests {
         }
     }
 
+    /// M = diag(A)⁻¹ on every component.
+    struct Jacobi(Vec<f64>);
+
+    impl crate::qp::Preconditioner for Jacobi {
+        fn block(&self) -> std::ops::Range<usize> {
+            0..self.0.len()
+        }
+        fn apply(&self, x: &[f64], y: &mut [f64]) {
+            y.iter_mut().zip(x).zip(&self.0).for_each(|((y, x), d)| *y = x * d);
+        }
+    }
+
+    #[test]
+    fn preconditioned_ssn_gimssn_and_mpgp_reach_the_same_solution_and_the_monotone_ones_stay_monotone() {
+        let mut seed = 5;
+        for _ in 0..3 {
+            let (a, b, set) = problem(12, &mut seed);
+            let n = a.dim();
+            let jacobi = Jacobi((0..n).map(|i| 1.0 / a.a[i * n + i]).collect());
+            let zero = vec![0.0; n];
+            let reference = solve(&Qp::new(&a, &b, &set), &zero, &Params::default().with_eps(1e-11), &mut Silent).expect("SSN converges");
+            let scale = reference.lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for method in [Method::SsnBicgstab, Method::Gimssn, Method::Mpgp, Method::Tssn] {
+                let mut p = Params::new(method).with_eps(1e-11);
+                p.common.max_outer = 20_000;
+                let qp = Qp::new(&a, &b, &set).with_preconditioner(Some(&jacobi));
+                let s = solve(&qp, &zero, &p, &mut Silent).unwrap_or_else(|e| panic!("{} converges: {e}", method.name()));
+                let d = s.lambda.iter().zip(&reference.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+                assert!(d <= 1e-8 * scale, "{} with M differs by {d:e} of {scale:e}", method.name());
+                assert!(s.info.preconditioner_applications > 0, "{} applied M", method.name());
+                if matches!(method, Method::Gimssn | Method::Mpgp) {
+                    let q: Vec<f64> = s.info.history.iter().map(|h| h.q).collect();
+                    assert!(q.windows(2).all(|w| w[1] <= w[0] + 1e-12 * w[0].abs()), "{} is monotone with M: {q:?}", method.name());
+                }
+            }
+        }
+    }
+
     #[test]
     fn the_safeguard_takes_over_when_rho_is_far_too_large_and_still_converges() {
         // ρ far above 2/σ_max: the Newton sets cycle; GIMSSN steps ('g') restore descent

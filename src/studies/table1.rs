@@ -69,7 +69,8 @@ impl Column {
         let column = Column { method, preset };
         // on the dual that takes one most widely, so that only the method can refuse
         if preconditioner(method, column.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true }).is_err() {
-            return Err(format!("{name} takes no preconditioner (only tssn: tssn:lumped, tssn:dirichlet)"));
+            let takes: Vec<&str> = Method::ALL.iter().filter(|m| m.takes_preconditioner()).map(|m| m.name()).collect();
+            return Err(format!("{name} takes no preconditioner (only {}: e.g. tssn:lumped, tssn:dirichlet)", takes.join(", ")));
         }
         Ok(column)
     }
