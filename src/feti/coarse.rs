@@ -23,14 +23,15 @@ use crate::comm::Comm;
 use super::subdomain::{rigid_modes, NR};
 use crate::feti::decomposition::Decomposition;
 use crate::error::{Error, Result};
-use crate::linalg::cholesky::{Cholesky, Ordering};
+use crate::linalg::cholesky::{Cholesky, Ordering, Symbolic};
+use crate::linalg::ordering::nested_dissection;
 use crate::linalg::sparse::SymCsc;
 use crate::mesh::Mesh;
 
 /// G, e and the factorized C.
 pub struct Coarse {
     /// Per subdomain: the multipliers whose rows touch it (ascending) and G_s = R_sᵀB_sᵀ on
-    /// them, row-major 6 × len.
+    /// them, column-major 6 × len (each row's six values together).
     blocks: Vec<(Vec<usize>, Vec<f64>)>,
     /// First λ_E index.
     e_start: usize,
@@ -53,6 +54,8 @@ pub struct Coarse {
 struct Pattern {
     c: SymCsc,
     contact: Vec<Vec<(usize, f64)>>,
+    /// The analysis of c's pattern, once (every GΠGᵀ has it).
+    symbolic: Symbolic,
 }
 
 /// e = Rᵀf: the load's work in each subdomain's six rigid motions (`loads[s]` = f_s).
@@ -95,12 +98,11 @@ impl Coarse {
             let nd = 3 * sd.nodes.len();
             e[NR * s..NR * (s + 1)].copy_from_slice(&rigid_work(&r, &loads[s]));
             let rows = cons.sorted_rows(s);
-            let len = rows.len();
-            let mut g = vec![0.0; NR * len];
+            let mut g = vec![0.0; NR * rows.len()];
             for &(row, dof, coef) in &cons.rows[s] {
                 let p = rows.binary_search(&row).expect("row listed");
                 for k in 0..NR {
-                    g[k * len + p] += coef * r[k * nd + dof];
+                    g[p * NR + k] += coef * r[k * nd + dof];
                 }
             }
             blocks.push((rows, g));
@@ -128,17 +130,16 @@ impl Coarse {
         for sr in &dist.subs {
             let s = sr.index;
             let (rows, g) = &self.blocks[s];
-            let len = rows.len();
-            for k in 0..NR {
-                let gk = &g[k * len..(k + 1) * len];
-                out[NR * s + k] = rows
-                    .iter()
-                    .zip(gk)
-                    .zip(&sr.rows)
-                    .filter(|((&r, _), _)| !e_only || r >= self.e_start)
-                    .map(|((_, v), &l)| v * xl[l])
-                    .sum();
+            let mut acc = [0.0; NR];
+            for ((&r, gp), &l) in rows.iter().zip(g.chunks_exact(NR)).zip(&sr.rows) {
+                if !e_only || r >= self.e_start {
+                    let x = xl[l];
+                    for k in 0..NR {
+                        acc[k] += gp[k] * x;
+                    }
+                }
             }
+            out[NR * s..NR * (s + 1)].copy_from_slice(&acc);
         }
         dist.reduce(&mut out);
         out
@@ -152,9 +153,8 @@ impl Coarse {
                 continue;
             }
             for &(s, p) in dist.touching(l) {
-                let g = &self.blocks[s].1;
-                let len = self.blocks[s].0.len();
-                v[i] -= (0..NR).map(|k| g[k * len + p] * a[NR * s + k]).sum::<f64>();
+                let gp = &self.blocks[s].1[p * NR..(p + 1) * NR];
+                v[i] -= (0..NR).map(|k| gp[k] * a[NR * s + k]).sum::<f64>();
             }
         }
     }
@@ -237,7 +237,8 @@ impl Coarse {
                 cols_push(&mut c, col);
             }
             let contact = by_row[..self.e_start].to_vec();
-            Pattern { c, contact }
+            let symbolic = Symbolic::analyze(&c, block_nested_dissection(&c)).expect("a valid permutation of GGᵀ's pattern");
+            Pattern { c, contact, symbolic }
         })
     }
 
@@ -271,7 +272,7 @@ impl Coarse {
             }
             add(&merged.into_iter().collect::<Vec<_>>());
         }
-        Cholesky::factorize(&c, Ordering::Amd).ok()
+        Cholesky::with_symbolic(pat.symbolic.clone(), &c).ok()
     }
 
     /// x ← x − Gᵀ(GΠGᵀ)⁻¹ G x on owned vectors, with `chol` from [`Coarse::restricted`].
@@ -351,20 +352,47 @@ fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d:
         }
         cols_push(&mut c, col);
     }
-    let chol = Cholesky::factorize(&c, Ordering::Amd).map_err(|_| {
+    let chol = Cholesky::factorize(&c, block_nested_dissection(&c)).map_err(|_| {
         Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
     })?;
     Ok((chol, c.nnz()))
+}
+
+/// METIS nested dissection of C's block graph (one vertex per subdomain, an edge where two
+/// subdomains' 6 × 6 blocks couple), expanded to the blocks' NR unknowns; AMD if METIS fails.
+fn block_nested_dissection(c: &SymCsc) -> Ordering {
+    let nb = c.n / NR;
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nb];
+    for j in 0..c.n {
+        for &i in &c.row_idx[c.col_ptr[j]..c.col_ptr[j + 1]] {
+            let (bi, bj) = (i / NR, j / NR);
+            if bi != bj {
+                adj[bi].push(bj);
+                adj[bj].push(bi);
+            }
+        }
+    }
+    let mut xadj = vec![0];
+    let mut adjncy = Vec::new();
+    for a in &mut adj {
+        a.sort_unstable();
+        a.dedup();
+        adjncy.extend_from_slice(a);
+        xadj.push(adjncy.len());
+    }
+    match nested_dissection(&xadj, &adjncy) {
+        Ok(perm) => Ordering::Custom(perm.iter().flat_map(|&b| (0..NR).map(move |k| NR * b + k)).collect()),
+        Err(_) => Ordering::Amd,
+    }
 }
 
 /// The columns of G per row from `first` on: (coarse index, value).
 fn columns(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
     let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
     for (s, (rows, g)) in blocks.iter().enumerate() {
-        let len = rows.len();
         for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= first) {
             for k in 0..NR {
-                by_row[row - first].push((NR * s + k, g[k * len + p]));
+                by_row[row - first].push((NR * s + k, g[p * NR + k]));
             }
         }
     }

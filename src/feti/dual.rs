@@ -339,6 +339,17 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     fn products(&self) -> usize {
         self.counter.get()
     }
+
+    /// F x: for x ∈ Ker G, P̃ᵀx = x and A x = P̃ F x = F x − Gᵀ(…).
+    fn apply_kernel(&self, x: &[f64], y: &mut [f64]) {
+        self.counter.tick();
+        Clock::time(&self.dist.clock.apply, || self.apply_f(x, y));
+    }
+
+    /// y ← P̃ y.
+    fn finish_kernel(&self, y: &mut [f64]) {
+        Clock::time(&self.dist.clock.apply, || self.coarse.project(&self.dist, y));
+    }
 }
 
 /// M⁻¹ = (BBᵀ)⁻¹ (Σ_s B_s S_s B_sᵀ) (BBᵀ)⁻¹ on every row of the dual (gluing, Dirichlet and

@@ -1,6 +1,7 @@
 //! Sparse Cholesky LLᵀ of a symmetric positive definite [`SymCsc`] (faer, supernodal or
 //! simplicial as faer decides), with a caller-supplied fill-reducing permutation (METIS nested
-//! dissection by default, see [`super::ordering`]) or faer's AMD.
+//! dissection by default, see [`super::ordering`]) or faer's AMD. The symbolic analysis can be
+//! kept ([`Symbolic`]) and reused for matrices of the same pattern.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -21,16 +22,24 @@ pub enum Ordering {
     Amd,
 }
 
+/// The symbolic analysis of a pattern (ordering and structure of L), shared by the
+/// factorizations of matrices with that pattern.
+#[derive(Clone, Debug)]
+pub struct Symbolic(std::sync::Arc<SymbolicCholesky<usize>>);
+
 /// A numeric LLᵀ factorization, ready to solve.
 pub struct Cholesky {
-    symbolic: SymbolicCholesky<usize>,
+    symbolic: Symbolic,
     values: Vec<f64>,
 }
 
-impl Cholesky {
-    /// Factorizes `a`; fails with the reason if `a` is not numerically positive definite.
-    pub fn factorize(a: &SymCsc, ordering: Ordering) -> Result<Self> {
-        let fail = |r: String| Error::numerical("Cholesky factorization", r);
+fn fail(r: String) -> Error {
+    Error::numerical("Cholesky factorization", r)
+}
+
+impl Symbolic {
+    /// Orders and analyzes the pattern of `a` (its values are not read).
+    pub fn analyze(a: &SymCsc, ordering: Ordering) -> Result<Self> {
         let view = a.as_faer();
         let inv: Vec<usize>;
         let (fwd, ord) = match ordering {
@@ -57,11 +66,25 @@ impl Cholesky {
         };
         let symbolic = factorize_symbolic_cholesky(view.symbolic(), Side::Lower, ord, CholeskySymbolicParams::default())
             .map_err(|e| fail(format!("symbolic analysis: {e:?}")))?;
+        Ok(Symbolic(std::sync::Arc::new(symbolic)))
+    }
+}
+
+impl Cholesky {
+    /// Factorizes `a`; fails with the reason if `a` is not numerically positive definite.
+    pub fn factorize(a: &SymCsc, ordering: Ordering) -> Result<Self> {
+        Cholesky::with_symbolic(Symbolic::analyze(a, ordering)?, a)
+    }
+
+    /// Factorizes `a`, whose pattern is the one `symbolic` analyzed.
+    pub fn with_symbolic(symbolic: Symbolic, a: &SymCsc) -> Result<Self> {
+        let view = a.as_faer();
         let par = faer::get_global_parallelism();
-        let mut values = vec![0.0; symbolic.len_val()];
-        let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+        let sym = &symbolic.0;
+        let mut values = vec![0.0; sym.len_val()];
+        let mut mem = MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
             .map_err(|_| fail("out of memory for the factorization workspace".into()))?;
-        symbolic
+        sym
             .factorize_numeric_llt(
                 &mut values,
                 view,
@@ -79,7 +102,7 @@ impl Cholesky {
     }
 
     pub fn n(&self) -> usize {
-        self.symbolic.nrows()
+        self.symbolic.0.nrows()
     }
 
     /// Number of stored entries of L.
@@ -92,9 +115,9 @@ impl Cholesky {
         let n = self.n();
         assert_eq!(b.len(), n);
         let par = Par::Seq;
-        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
+        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f64>(1, par));
         let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+        LltRef::new(&self.symbolic.0, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
     }
 }
 

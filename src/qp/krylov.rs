@@ -147,9 +147,17 @@ pub(crate) fn pcg<A: Operator>(
         z.copy_from_slice(&h);
     }
     d.copy_from_slice(&z);
+    // projected: the directions lie in Ker G, so A d = F d + Gᵀ(…) (`apply_kernel`), whose Gᵀ
+    // part the projection of md removes; the gradient's recurrence sums F d and is mapped to
+    // A's once at the end (`finish_kernel`)
+    let g0 = if opts.coarse.is_some() { g.to_vec() } else { vec![] };
     let mut it = 0;
     while hnorm > threshold && it < opts.max_iter {
-        a.apply(&d, &mut ad);
+        if opts.coarse.is_some() {
+            a.apply_kernel(&d, &mut ad);
+        } else {
+            a.apply(&d, &mut ad);
+        }
         opts.system.apply(&ad, Some(&d), &mut md);
         project(opts.system, opts.coarse, &mut md, &mut work);
         let dmd = positive_curvature(sp.dot(&d, &md), "the curvature dᵀSd", opts.outer)?;
@@ -203,6 +211,14 @@ pub(crate) fn pcg<A: Operator>(
             }
         }
         each(hnorm);
+    }
+    if opts.coarse.is_some() && it > 0 {
+        // g = g₀ − Σ α A d = g₀ − P̃(g₀ − g)
+        let mut sum: Vec<f64> = g0.iter().zip(g.iter()).map(|(a, b)| a - b).collect();
+        a.finish_kernel(&mut sum);
+        for ((gi, g0i), si) in g.iter_mut().zip(&g0).zip(&sum) {
+            *gi = g0i - si;
+        }
     }
     if preconditioned {
         // the last residual's preconditioning counts too (as it always did: one per iteration + 1)

@@ -61,6 +61,16 @@ pub trait Operator {
     fn apply(&self, x: &[f64], y: &mut [f64]);
     /// A-products so far.
     fn products(&self) -> usize;
+    /// For x in Ker G of the QP's [`Coarse`] space: a y with A x = y + Gᵀa for some a, without
+    /// the work that only adds the Gᵀa part (TFETI: F x, no coarse solves). A solver that
+    /// projects its residuals onto Ker G ∩ W loses nothing; [`Operator::finish_kernel`] turns a
+    /// sum of such products into the sum of the A-products. Counts as one. Default: A x.
+    fn apply_kernel(&self, x: &[f64], y: &mut [f64]) {
+        self.apply(x, y)
+    }
+    /// y ← the A-products' sum from the sum y of [`Operator::apply_kernel`] results (TFETI: P̃ y).
+    /// Default: nothing to do.
+    fn finish_kernel(&self, _y: &mut [f64]) {}
 }
 
 /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]
