@@ -3,7 +3,8 @@
 //! must not initialize MPI) and under `mpirun` ([`MpiComm`]). Branch decisions are taken on
 //! reduced values ([`Comm::agree`]) so that all ranks follow the same path.
 
-use mpi::datatype::PartitionMut;
+use mpi::datatype::{Partition, PartitionMut};
+use mpi::Count;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
@@ -27,6 +28,9 @@ pub trait Comm {
     /// (sized by the caller) from rank `recv[k].0`. Ranks list each neighbour once; both
     /// sides must agree on the sizes. Only the ranks named take part (no collective).
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]);
+    /// Personalized all-to-all: sends `send[q]` (any length, one per rank) to rank q and
+    /// returns what every rank sent this one, in rank order. Collective.
+    fn all_to_all_u64(&self, send: &[Vec<u64>]) -> Vec<Vec<u64>>;
     fn barrier(&self);
     /// The MPI communicator handle, for libraries that take one (MPI-IO); None without MPI.
     fn mpi_comm(&self) -> Option<mpi::ffi::MPI_Comm> {
@@ -93,6 +97,10 @@ impl Comm for SerialComm {
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
         // one rank has no neighbours
         assert!(send.is_empty() && recv.is_empty(), "SerialComm has no neighbours");
+    }
+    fn all_to_all_u64(&self, send: &[Vec<u64>]) -> Vec<Vec<u64>> {
+        assert_eq!(send.len(), 1, "SerialComm: one message per rank");
+        send.to_vec()
     }
     fn barrier(&self) {}
     fn library(&self) -> String {
@@ -193,6 +201,29 @@ impl Comm for MpiComm {
             }
         });
     }
+    fn all_to_all_u64(&self, send: &[Vec<u64>]) -> Vec<Vec<u64>> {
+        let p = self.size();
+        assert_eq!(send.len(), p, "all_to_all_u64: one message per rank");
+        let count = |n: usize| Count::try_from(n).expect("all_to_all_u64: more than 2^31 values on one rank");
+        let scounts: Vec<Count> = send.iter().map(|v| count(v.len())).collect();
+        let mut rcounts = vec![0 as Count; p];
+        self.world.all_to_all_into(&scounts[..], &mut rcounts[..]);
+        let displs = |c: &[Count]| -> Vec<Count> { c.iter().scan(0usize, |acc, &n| { let d = *acc; *acc += n as usize; Some(count(d)) }).collect() };
+        let (sdispls, rdispls) = (displs(&scounts), displs(&rcounts));
+        let rtotal: usize = rcounts.iter().map(|&n| n as usize).sum();
+        count(send.iter().map(Vec::len).sum());
+        count(rtotal);
+        // never an empty buffer (a null pointer to some MPI libraries): one unused value then
+        let mut sbuf: Vec<u64> = send.concat();
+        sbuf.push(0);
+        let mut rbuf = vec![0u64; rtotal + 1];
+        {
+            let sp = Partition::new(&sbuf[..], &scounts[..], &sdispls[..]);
+            let mut rp = PartitionMut::new(&mut rbuf[..], &rcounts[..], &rdispls[..]);
+            self.world.all_to_all_varcount_into(&sp, &mut rp);
+        }
+        rcounts.iter().zip(&rdispls).map(|(&c, &d)| rbuf[d as usize..(d + c) as usize].to_vec()).collect()
+    }
     fn barrier(&self) {
         self.world.barrier();
     }
@@ -217,5 +248,6 @@ mod tests {
         let e = c.agree::<()>(Err(Error::scene("a.b", "bad"))).unwrap_err();
         assert_eq!(e.to_string(), "a.b: bad");
         assert_eq!(c.dot(&[1.0, 2.0], &[3.0, 4.0]), 11.0);
+        assert_eq!(c.all_to_all_u64(&[vec![7, 8]]), [vec![7, 8]]);
     }
 }

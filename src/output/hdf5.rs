@@ -1,7 +1,7 @@
 //! The HDF5 result file, written by all ranks together: MPI-IO file access and collective
-//! writes ([`write_collective`]), each rank writing its own rows of the distributed fields
-//! (point selections) and one contiguous share of the replicated ones (hyperslabs); one
-//! process without MPI writes it alone ([`write`]).
+//! writes ([`write_collective`]), each rank writing one contiguous block of every dataset's rows
+//! (a hyperslab; the rows of a distributed field first sent to the rank whose block holds them,
+//! one all-to-all exchange); one process without MPI writes it alone ([`write`]).
 //!
 //! Layout:
 //!
@@ -62,8 +62,7 @@ pub fn write(path: &Path, data: &OutputData) -> Result<()> {
 pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Result<()> {
     let shown = path.display().to_string();
     comm.agree(validate(data).map_err(|msg| Error::output(&shown, msg)))?;
-    let par = comm.mpi_comm().map(|raw| Par { comm: raw, rank: comm.rank(), size: comm.size() });
-    let result = write_file(path, data, par.as_ref());
+    let result = write_file(comm, path, data);
     if result.is_err() && comm.is_root() {
         let _ = std::fs::remove_file(path);
     }
@@ -219,17 +218,10 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-/// The ranks writing one file together.
-struct Par {
-    comm: mpi::ffi::MPI_Comm,
-    rank: usize,
-    size: usize,
-}
-
-fn write_file(tmp: &Path, data: &OutputData, par: Option<&Par>) -> Result<()> {
+fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
     let file = File::with_options()
-        .with_fapl(|p| match par {
-            Some(par) => p.mpio(par.comm, None),
+        .with_fapl(|p| match comm.mpi_comm() {
+            Some(raw) => p.mpio(raw, None),
             None => p,
         })
         .with_fcpl(|p| {
@@ -238,15 +230,15 @@ fn write_file(tmp: &Path, data: &OutputData, par: Option<&Par>) -> Result<()> {
         })
         .create(tmp)
         .map_err(ctx("cannot create file"))?;
-    write_contents(&file, data, par)?;
+    write_contents(comm, &file, data)?;
     // Every child handle is dropped by now, so this really closes (and flushes) the file.
     file.close().map_err(ctx("closing file"))
 }
 
-fn write_contents(file: &File, data: &OutputData, par: Option<&Par>) -> Result<()> {
+fn write_contents<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<()> {
     let mesh = file.create_group(MESH).map_err(ctx("creating /mesh"))?;
     let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
-    write_dataset(&mesh, COORDINATES, &[data.coordinates.len(), 3], None, &coords, par)?;
+    write_dataset(comm, &mesh, COORDINATES, &[data.coordinates.len(), 3], None, &coords)?;
     let hexes = data
         .hexahedra
         .iter()
@@ -254,14 +246,14 @@ fn write_contents(file: &File, data: &OutputData, par: Option<&Par>) -> Result<(
         .map(|&n| i64::try_from(n))
         .collect::<std::result::Result<Vec<i64>, _>>()
         .map_err(|_| Error::output(String::new(), "node index does not fit in i64"))?;
-    write_dataset(&mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], None, &hexes, par)?;
+    write_dataset(comm, &mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], None, &hexes)?;
     drop(mesh);
 
     let fields = create_group(file, FIELDS)?;
-    write_fields(&fields, data, &data.fields, &data.rows, par)?;
+    write_fields(comm, &fields, data, &data.fields, &data.rows)?;
     drop(fields);
     if !data.steps.is_empty() {
-        write_steps(file, data, par)?;
+        write_steps(comm, file, data)?;
     }
 
     for (name, value) in &data.attributes {
@@ -285,7 +277,7 @@ fn create_group(parent: &Group, name: &str) -> Result<Group> {
 
 /// Writes `fields` into `group`, one dataset each with its `center` attribute: the rows `rows`
 /// of the distributed ones, the replicated ones whole (see [`write_dataset`]).
-fn write_fields(group: &Group, data: &OutputData, fields: &[Field], rows: &Rows, par: Option<&Par>) -> Result<()> {
+fn write_fields<C: Comm>(comm: &C, group: &Group, data: &OutputData, fields: &[Field], rows: &Rows) -> Result<()> {
     for f in fields {
         let len = mesh_len(data, f.center);
         let rows = rows.get(&f.name).map(Vec::as_slice);
@@ -295,8 +287,8 @@ fn write_fields(group: &Group, data: &OutputData, fields: &[Field], rows: &Rows,
             vec![len, f.ncomp]
         };
         let ds = match &f.values {
-            Values::F64(v) => write_dataset(group, &f.name, &shape, rows, v, par)?,
-            Values::I32(v) => write_dataset(group, &f.name, &shape, rows, v, par)?,
+            Values::F64(v) => write_dataset(comm, group, &f.name, &shape, rows, v)?,
+            Values::I32(v) => write_dataset(comm, group, &f.name, &shape, rows, v)?,
         };
         write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
             .map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name)))?;
@@ -305,12 +297,12 @@ fn write_fields(group: &Group, data: &OutputData, fields: &[Field], rows: &Rows,
 }
 
 /// Writes `/steps`: one group per step with its `time` attribute and its fields.
-fn write_steps(file: &File, data: &OutputData, par: Option<&Par>) -> Result<()> {
+fn write_steps<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<()> {
     let steps = create_group(file, STEPS)?;
     for (i, step) in data.steps.iter().enumerate() {
         let group = create_group(&steps, &step_name(i))?;
         write_time_attr(&group, step.time)?;
-        write_fields(&group, data, &step.fields, &step.rows, par)?;
+        write_fields(comm, &group, data, &step.fields, &step.rows)?;
     }
     Ok(())
 }
@@ -327,70 +319,136 @@ fn write_time_attr(group: &Group, time: f64) -> Result<()> {
         .map_err(|e| ctx(format!("writing {}", what()))(e))
 }
 
+/// The rows `[lo, hi)` of `len` that rank `rank` of `size` writes: contiguous blocks in rank
+/// order, the ranks' shares as even as can be.
+fn block(len: usize, rank: usize, size: usize) -> (usize, usize) {
+    (len * rank / size, len * (rank + 1) / size)
+}
+
+/// The rank whose [`block`] holds row `row` (< `len`).
+fn block_owner(row: usize, len: usize, size: usize) -> usize {
+    ((row + 1) * size - 1) / len
+}
+
+/// Element types of the datasets, carried bit for bit through [`Comm::all_to_all_u64`].
+trait Bits: H5Type + Copy + Default {
+    fn to_u64(self) -> u64;
+    fn from_u64(b: u64) -> Self;
+}
+
+impl Bits for f64 {
+    fn to_u64(self) -> u64 {
+        self.to_bits()
+    }
+    fn from_u64(b: u64) -> Self {
+        f64::from_bits(b)
+    }
+}
+
+impl Bits for i32 {
+    fn to_u64(self) -> u64 {
+        u64::from(self as u32)
+    }
+    fn from_u64(b: u64) -> Self {
+        b as u32 as i32
+    }
+}
+
+impl Bits for i64 {
+    fn to_u64(self) -> u64 {
+        self as u64
+    }
+    fn from_u64(b: u64) -> Self {
+        b as i64
+    }
+}
+
+/// This rank's [`block`] of a distributed field of `len` rows × `ncomp`, from the rows each rank
+/// holds (`rows`, values `v` in their order): one all-to-all exchange, each row sent to the rank
+/// whose block has it. Rows no rank holds are 0 (HDF5's fill value); a row held twice gets the
+/// values of its last holder (by rank, then by position).
+fn gather_block<T: Bits, C: Comm>(comm: &C, len: usize, ncomp: usize, rows: &[usize], v: &[T]) -> Vec<T> {
+    let size = comm.size();
+    let mut counts = vec![0usize; size];
+    for &r in rows {
+        counts[block_owner(r, len, size)] += 1 + ncomp;
+    }
+    let mut send: Vec<Vec<u64>> = counts.iter().map(|&n| Vec::with_capacity(n)).collect();
+    for (&r, x) in rows.iter().zip(v.chunks_exact(ncomp)) {
+        let m = &mut send[block_owner(r, len, size)];
+        m.push(r as u64);
+        m.extend(x.iter().map(|&y| y.to_u64()));
+    }
+    let (lo, hi) = block(len, comm.rank(), size);
+    let mut out = vec![T::default(); (hi - lo) * ncomp];
+    for m in comm.all_to_all_u64(&send) {
+        for rec in m.chunks_exact(1 + ncomp) {
+            let at = (rec[0] as usize - lo) * ncomp;
+            for (o, &b) in out[at..at + ncomp].iter_mut().zip(&rec[1..]) {
+                *o = T::from_u64(b);
+            }
+        }
+    }
+    out
+}
+
 /// Creates the dataset `name` of the global `shape` (len or len × ncomp) and writes this
-/// rank's part: the rows `rows` (values `v` in their order), or, for a replicated `v` (rows
-/// None), the rank's contiguous share of the rows. Collective under MPI (a rank with nothing
-/// to write still takes part with an empty selection).
-fn write_dataset<T: H5Type>(group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T], par: Option<&Par>) -> Result<Dataset> {
+/// rank's [`block`] of its rows as one hyperslab: taken from `v` where it is replicated (rows
+/// None), gathered by [`gather_block`] from every rank's rows `rows` (values `v` in their order)
+/// where it is distributed. Collective (a rank with nothing to write still takes part with an
+/// empty selection), and through collective MPI-IO transfers under MPI.
+fn write_dataset<T: Bits, C: Comm>(comm: &C, group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T]) -> Result<Dataset> {
     use hdf5_sys::h5::hsize_t;
     use hdf5_sys::h5d::{H5Dget_space, H5Dwrite};
     use hdf5_sys::h5p::{H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER, H5P_DEFAULT};
-    use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_elements, H5Sselect_hyperslab, H5Sselect_none};
+    use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_hyperslab, H5Sselect_none};
     let what = || format!("dataset {}/{name}", group.name());
+    let ncomp = shape.get(1).copied().unwrap_or(1);
+    let (lo, hi) = block(shape[0], comm.rank(), comm.size());
+    let gathered;
+    let vals = match rows {
+        Some(r) => {
+            gathered = gather_block(comm, shape[0], ncomp, r, v);
+            &gathered[..]
+        }
+        None => &v[lo * ncomp..hi * ncomp],
+    };
     let ds = group
         .new_dataset::<T>()
         .shape(shape.to_vec())
         .create(name)
         .map_err(|e| ctx(format!("creating {}", what()))(e))?;
     let mem_type = ::hdf5::Datatype::from_type::<T>().map_err(|e| ctx(format!("datatype of {}", what()))(e))?;
-    let ncomp = shape.get(1).copied().unwrap_or(1);
-    let (rank, size) = par.map_or((0, 1), |p| (p.rank, p.size));
-    let (lo, hi) = (shape[0] * rank / size, shape[0] * (rank + 1) / size);
-    let vals = match rows {
-        Some(_) => v,
-        None => &v[lo * ncomp..hi * ncomp],
-    };
+    let collective = comm.mpi_comm().is_some();
     // SAFETY: plain HDF5 C calls on ids this function owns (closed below) or that `ds` keeps
     // alive; the buffer holds `vals.len()` elements of `T`, matching the memory space. They run
     // under hdf5-metno's global lock, like its own calls (HDF5 is not thread-safe).
     let status = ::hdf5::sync::sync(|| unsafe {
         let fspace = H5Dget_space(ds.id());
-        match rows {
-            Some(r) if !r.is_empty() => {
-                let coords: Vec<hsize_t> = if shape.len() == 1 {
-                    r.iter().map(|&i| i as hsize_t).collect()
-                } else {
-                    r.iter().flat_map(|&i| (0..ncomp).flat_map(move |c| [i as hsize_t, c as hsize_t])).collect()
-                };
-                H5Sselect_elements(fspace, H5S_seloper_t::H5S_SELECT_SET, r.len() * ncomp, coords.as_ptr());
-            }
-            None if hi > lo => {
-                let start = [lo as hsize_t, 0];
-                let count = [(hi - lo) as hsize_t, ncomp as hsize_t];
-                H5Sselect_hyperslab(fspace, H5S_seloper_t::H5S_SELECT_SET, start.as_ptr(), std::ptr::null(), count.as_ptr(), std::ptr::null());
-            }
-            _ => {
-                H5Sselect_none(fspace);
-            }
+        if hi > lo {
+            let start = [lo as hsize_t, 0];
+            let count = [(hi - lo) as hsize_t, ncomp as hsize_t];
+            H5Sselect_hyperslab(fspace, H5S_seloper_t::H5S_SELECT_SET, start.as_ptr(), std::ptr::null(), count.as_ptr(), std::ptr::null());
+        } else {
+            H5Sselect_none(fspace);
         }
         let mdims = [vals.len().max(1) as hsize_t];
         let mspace = H5Screate_simple(1, mdims.as_ptr(), std::ptr::null());
         if vals.is_empty() {
             H5Sselect_none(mspace);
         }
-        let dxpl = match par {
-            Some(_) => {
-                let d = H5Pcreate(*H5P_CLS_DATASET_XFER);
-                H5Pset_dxpl_mpio(d, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE);
-                d
-            }
-            None => H5P_DEFAULT,
+        let dxpl = if collective {
+            let d = H5Pcreate(*H5P_CLS_DATASET_XFER);
+            H5Pset_dxpl_mpio(d, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE);
+            d
+        } else {
+            H5P_DEFAULT
         };
         // HDF5 wants a non-null buffer even when nothing is selected
         let one = std::mem::MaybeUninit::<T>::uninit();
         let buf = if vals.is_empty() { one.as_ptr() } else { vals.as_ptr() };
         let st = H5Dwrite(ds.id(), mem_type.id(), mspace, fspace, dxpl, buf.cast());
-        if par.is_some() {
+        if collective {
             H5Pclose(dxpl);
         }
         H5Sclose(mspace);
@@ -999,6 +1057,24 @@ mod tests {
         assert_same_fields(&back.steps[2].fields, &data.steps[2].fields);
         assert!(verify(&path, &data).is_ok());
         std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn blocks_tile_the_rows_and_owners_find_them() {
+        for len in 1..40 {
+            for size in 1..9 {
+                for rank in 0..size {
+                    let (lo, hi) = block(len, rank, size);
+                    assert!((lo..hi).all(|r| block_owner(r, len, size) == rank), "len {len} size {size}");
+                }
+                assert_eq!(block(len, size - 1, size).1, len);
+            }
+        }
+        // one rank: every row, unheld rows 0, a row held twice by its last holder
+        let v = [1.5, -2.0, 3.0, 4.0, 5.0, 6.0];
+        let got = gather_block(&crate::comm::SerialComm, 4, 2, &[3, 0, 3], &v);
+        assert_eq!(got, [3.0, 4.0, 0.0, 0.0, 0.0, 0.0, 5.0, 6.0]);
+        assert_eq!(gather_block(&crate::comm::SerialComm, 3, 1, &[2, 0], &[-7i32, i32::MIN]), [i32::MIN, 0, -7]);
     }
 
     #[test]

@@ -44,7 +44,7 @@ pub struct OutputData {
     pub attributes: Vec<(String, String)>,
     /// Distributed fields: field name → the rows (nodes or cells) this rank holds, whose
     /// values the field's `values` are (in this order). A field not listed holds every row
-    /// (replicated; under MPI each rank writes one contiguous share).
+    /// (replicated). Either way, under MPI each rank writes one contiguous block of the rows.
     pub rows: std::collections::BTreeMap<String, Vec<usize>>,
     /// The states of a quasi-static load path, in order: `/steps/0001`, `/steps/0002`, … in
     /// the HDF5 file, a temporal collection in the XDMF sidecar. Empty = one load state: the
