@@ -277,10 +277,12 @@ impl Coarse {
 
     /// x ← x − Gᵀ(GΠGᵀ)⁻¹ G x on owned vectors, with `chol` from [`Coarse::restricted`].
     pub fn project_restricted<C: Comm>(&self, dist: &Distribution<'_, C>, chol: &Cholesky, x: &mut [f64]) {
-        let xl = dist.ghosted(x);
-        let mut a = self.g_mul(dist, &xl, false);
-        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(&mut a));
-        self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
+        Clock::time(&dist.clock.restricted, || {
+            let xl = dist.ghosted(x);
+            let mut a = self.g_mul(dist, &xl, false);
+            chol.solve_in_place(&mut a);
+            self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
+        });
     }
 
     /// λ̂ = (G_Eᵀ C⁻¹ e, 0) on the local rows.

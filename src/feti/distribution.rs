@@ -33,8 +33,11 @@ pub struct Clock {
     pub exchange: Cell<f64>,
     /// Reductions: coarse vectors and dot products.
     pub reduce: Cell<f64>,
-    /// C⁻¹ solves.
+    /// C⁻¹ (and (GGᵀ)⁻¹) solves of the projectors P̃ and P.
     pub coarse_solve: Cell<f64>,
+    /// Whole projections onto Ker G ∩ W in the inner solves (exchange, G x, (GΠGᵀ)⁻¹, Gᵀa) and
+    /// the factorizations of GΠGᵀ.
+    pub restricted: Cell<f64>,
     /// Whole A-products.
     pub apply: Cell<f64>,
 }

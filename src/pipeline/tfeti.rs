@@ -68,7 +68,12 @@ pub struct DistributionStats {
     pub pinv_s: f64,
     pub exchange_s: f64,
     pub reduce_s: f64,
+    /// C⁻¹ solves (the A-products' P̃; SMALSE-M's P).
     pub coarse_solve_s: f64,
+    /// The inner solves' projections onto Ker G ∩ W and GΠGᵀ's factorizations (outside the
+    /// A-products).
+    #[serde(default)]
+    pub restricted_s: f64,
     /// The least loaded rank's K⁺ time (load balance: pinv_min_s / pinv_s).
     pub pinv_min_s: f64,
 }
@@ -79,7 +84,7 @@ impl DistributionStats {
         let (owned, ghosts) = (dist.owned.len(), dist.local_len() - dist.owned.len());
         let (fwd, rev, nbrs) = dist.message_sizes();
         let c = &dist.clock;
-        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get()];
+        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get()];
         comm.max_f64(&mut mx);
         let mut sent = [(2 * fwd + rev) as u64];
         comm.sum_u64(&mut sent);
@@ -95,6 +100,7 @@ impl DistributionStats {
             reduce_s: mx[7],
             coarse_solve_s: mx[8],
             pinv_min_s: -mx[9],
+            restricted_s: mx[10],
         }
     }
 }
