@@ -459,11 +459,20 @@ fn one_two_three_ranks_give_identical_fields() {
 
 /// TFETI with distributed dual vectors: 4 subdomains per body over 1, 2, 3 ranks, with
 /// friction, with the symmetrized solver and with TSSN's projected CG and the FETI Dirichlet
-/// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step); each rank reads the
-/// parallel HDF5 file back.
+/// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step), and the preconditioner in
+/// SSN's BiCGSTAB, GIMSSN's CGMfeas and MPGP (whose face, and so GΠGᵀ, changes on one rank
+/// only: the decision to restrict anew is collective); each rank reads the parallel HDF5 file
+/// back.
 #[test]
 fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
-    for (name, method, pc) in [("tfeti-ssn", "ssn-bicgstab", "none"), ("tfeti-gimssn", "gimssn", "none"), ("tfeti-tssn-dirichlet", "tssn", "dirichlet")] {
+    for (name, method, pc) in [
+        ("tfeti-ssn", "ssn-bicgstab", "none"),
+        ("tfeti-gimssn", "gimssn", "none"),
+        ("tfeti-tssn-dirichlet", "tssn", "dirichlet"),
+        ("tfeti-ssn-lumped", "ssn-bicgstab", "lumped"),
+        ("tfeti-gimssn-dirichlet", "gimssn", "dirichlet"),
+        ("tfeti-mpgp-lumped", "mpgp", "lumped"),
+    ] {
         let m = format!("solver.method=\"{method}\"");
         let p = format!("solver.preconditioner=\"{pc}\"");
         // ε = 1e-6: GIMSSN stalls near 5e-8 on this TFETI dual (README)

@@ -143,7 +143,9 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Mpgp,
             z.copy_from_slice(&spl.phi);
             return Ok(());
         };
-        if face.as_ref().is_none_or(|(f, _)| *f != spl.free) {
+        // the face changed on some rank: every rank restricts anew (a collective decision)
+        let changed = face.as_ref().is_none_or(|(f, _)| *f != spl.free);
+        if sp.max(f64::from(u8::from(changed))) > 0.0 {
             let restricted = match qp.coarse {
                 Some(g) => Some(g.restrict(&spl.free, &[]).ok_or(QpError::SingularCoarse { outer })?),
                 None => None,
