@@ -495,6 +495,23 @@ mod tests {
         let mut pzo = z.clone();
         c.project_orthogonal(&dist, &mut pzo);
         assert!((dot(&z, &py) - dot(&pzo, &y)).abs() < 1e-12 * norm(&z) * norm(&y));
+        // on Ker G, P̃ᵀ is the identity (the projected CG's products skip it: apply_kernel)
+        let mut t = py.clone();
+        c.project_t_local(&dist, &mut t);
+        assert!(t.iter().zip(&py).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&py)));
+        // and P̃ maps F x and F x + Gᵀα alike (finish_kernel after the sum)
+        let mut f1 = z.clone();
+        let mut f2: Vec<f64> = z.iter().zip(&gta_raw(&c, &dist, &alpha, n)).map(|(a, b)| a + b).collect();
+        c.project(&dist, &mut f1);
+        c.project(&dist, &mut f2);
+        assert!(f1.iter().zip(&f2).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&f1).max(1.0)));
+    }
+
+    /// Gᵀα on every row.
+    fn gta_raw<C: crate::comm::Comm>(c: &Coarse, dist: &Distribution<'_, C>, alpha: &[f64], n: usize) -> Vec<f64> {
+        let mut v = vec![0.0; n];
+        c.sub_gt(dist, alpha, &mut v, Coarse::local_rows(dist), false);
+        v.iter().map(|x| -x).collect()
     }
 
     /// The restricted projector: for x ∈ W (free rows, sliding pairs' t directions, E rows),
