@@ -239,7 +239,7 @@ pub(crate) struct Bicgstab {
     s: Vec<f64>,
     t: Vec<f64>,
     as_: Vec<f64>,
-    /// M p and M s (right preconditioning).
+    /// M p and M s (right preconditioning; empty without).
     mp: Vec<f64>,
     ms: Vec<f64>,
 }
@@ -247,7 +247,7 @@ pub(crate) struct Bicgstab {
 impl Bicgstab {
     pub fn new(n: usize) -> Self {
         let z = || vec![0.0; n];
-        Bicgstab { x: z(), ax: z(), res: z(), rhat: z(), p: z(), v: z(), ap: z(), s: z(), t: z(), as_: z(), mp: z(), ms: z() }
+        Bicgstab { x: z(), ax: z(), res: z(), rhat: z(), p: z(), v: z(), ap: z(), s: z(), t: z(), as_: z(), mp: vec![], ms: vec![] }
     }
 
     /// Solves J x = rhs from x = 0 until ‖rhs − Jx‖ ≤ threshold; returns the iterations.
@@ -267,6 +267,10 @@ impl Bicgstab {
         outer: usize,
     ) -> Result<usize, QpError> {
         let n = rhs.len();
+        if precondition.is_some() {
+            self.mp.resize(n, 0.0);
+            self.ms.resize(n, 0.0);
+        }
         self.x.fill(0.0);
         self.ax.fill(0.0);
         self.res.copy_from_slice(rhs);
@@ -290,11 +294,15 @@ impl Bicgstab {
             for i in 0..n {
                 self.p[i] = self.res[i] + beta * (self.p[i] - omega * self.v[i]);
             }
-            match precondition.as_mut() {
-                Some(m) => m(&self.p, &mut self.mp),
-                None => self.mp.copy_from_slice(&self.p),
-            }
-            jacobian(&self.mp, &mut self.v, &mut self.ap);
+            // M p (p itself without a preconditioner: no copy)
+            let mp: &[f64] = match precondition.as_mut() {
+                Some(m) => {
+                    m(&self.p, &mut self.mp);
+                    &self.mp
+                }
+                None => &self.p,
+            };
+            jacobian(mp, &mut self.v, &mut self.ap);
             let rv = sp.dot(&self.rhat, &self.v);
             if rv == 0.0 || !rv.is_finite() {
                 return fail(it, "r̂ᵀJp = 0");
@@ -307,20 +315,23 @@ impl Bicgstab {
             let snorm = sp.norm(&self.s);
             if snorm <= threshold {
                 for i in 0..n {
-                    self.x[i] += alpha * self.mp[i];
+                    self.x[i] += alpha * mp[i];
                     self.ax[i] += alpha * self.ap[i];
                 }
                 return Ok(it);
             }
-            match precondition.as_mut() {
-                Some(m) => m(&self.s, &mut self.ms),
-                None => self.ms.copy_from_slice(&self.s),
-            }
-            jacobian(&self.ms, &mut self.t, &mut self.as_);
+            let ms: &[f64] = match precondition.as_mut() {
+                Some(m) => {
+                    m(&self.s, &mut self.ms);
+                    &self.ms
+                }
+                None => &self.s,
+            };
+            jacobian(ms, &mut self.t, &mut self.as_);
             let tt = sp.dot(&self.t, &self.t);
             omega = if tt > 0.0 { sp.dot(&self.t, &self.s) / tt } else { 0.0 };
             for i in 0..n {
-                self.x[i] += alpha * self.mp[i] + omega * self.ms[i];
+                self.x[i] += alpha * mp[i] + omega * ms[i];
                 self.ax[i] += alpha * self.ap[i] + omega * self.as_[i];
                 self.res[i] = self.s[i] - omega * self.t[i];
             }
