@@ -464,12 +464,13 @@ fn print_summary(s: &pipeline::Summary) {
         let nnz_l: f64 = tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum();
         let mul = &tf.multipliers;
         println!(
-            "TFETI: {} subdomains {:?}, multipliers {} contact + {} gluing + {} Dirichlet, coarse {} × {}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
+            "TFETI: {} subdomains {:?}, multipliers {} contact + {} gluing + {} Dirichlet ({} held DOFs eliminated), coarse {} × {}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
             tf.subdomains.len(),
             tf.subdomains_per_body,
             mul.contact,
             mul.gluing,
             mul.dirichlet,
+            tf.eliminated_dofs,
             tf.coarse_dim,
             tf.coarse_dim,
             tf.gluing_jump,

@@ -419,6 +419,10 @@ pub struct DecompositionSettings {
     /// Gluing rows of the interface DOFs.
     #[serde(default)]
     pub gluing: Gluing,
+    /// How TFETI holds the Dirichlet conditions: multiplier rows on every copy, or eliminated
+    /// inside the subdomains that carry them (hybrid).
+    #[serde(default)]
+    pub dirichlet: DirichletMode,
     /// How Gλ = e is kept: the oblique projector P̃ (one QP solve) or the orthogonal one with
     /// SMALSE-M's augmented-Lagrangian loop around the QP solver.
     #[serde(default)]
@@ -440,7 +444,7 @@ fn unit() -> f64 {
 
 impl Default for DecompositionSettings {
     fn default() -> Self {
-        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true }
+        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true }
     }
 }
 
@@ -468,6 +472,18 @@ pub enum Gluing {
     #[default]
     Orthonormal,
     Chain,
+}
+
+/// See [`DecompositionSettings::dirichlet`].
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum DirichletMode {
+    /// One multiplier row per held DOF of every copy: every subdomain floating (total FETI).
+    Multipliers,
+    /// Held inside the subdomains that carry them: the held DOFs leave K_s, its kernel keeps
+    /// the rigid motions they leave free (a subdomain that holds one only weakly keeps its rows).
+    #[default]
+    Eliminated,
 }
 
 /// See [`DecompositionSettings::projector`].

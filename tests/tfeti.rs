@@ -1,7 +1,8 @@
 //! TFETI against the monolithic dual: the same u (within 1e-8 relative at ε = 1e-12), the same
 //! open/stick/slip status, glued copies equal (jumps ≤ 1e-10) and Dirichlet values held, for
 //! the seed scene at N = 8 and 12 with S = 1, 2, 4, 8 subdomains per body, for a Gmsh-imported
-//! mesh, and without contact (CG on the dual against the direct solve). Subdomain-count
+//! mesh, and without contact (CG on the dual against the direct solve); Dirichlet conditions as
+//! multiplier rows and eliminated inside the subdomains alike (plane-strain slabs, seed). Subdomain-count
 //! independence per solver (SSN-BiCGSTAB, GIMSSN) at stated tolerances: u, the contact normal
 //! pressure, and the open/stick/slip counts of S = 1, 2, 4, 8 against the monolithic dual.
 
@@ -173,6 +174,38 @@ fn prescribed_nonzero_displacement_orthotropic_friction_and_chain_gluing() {
     let mut chain = seed(8, &extra);
     chain.push("decomposition.gluing=\"chain\"".into());
     equivalence("run/seed.toml", &chain, &[4]);
+}
+
+#[test]
+fn dirichlet_rows_and_eliminated_dirichlet_dofs_match_alike() {
+    // the plane-strain slabs (rollers on every y face: a third of the DOFs held, coarsened) and
+    // the seed: with every Dirichlet row kept, and with the held DOFs eliminated inside the
+    // subdomains (the default; partly, where the hold is firm enough)
+    let slabs = |mode: &str| {
+        let mut v: Vec<String> = ["body.0.box={min=[0.0, 0.0, 1.0], max=[4.0, 0.1, 2.0], nodes=[21, 2, 6]}", "body.1.box={min=[0.0, 0.0, 0.0], max=[4.0, 0.1, 1.0], nodes=[21, 2, 6]}", "solver.eps=1e-12"].map(String::from).to_vec();
+        v.push(format!("decomposition.dirichlet=\"{mode}\""));
+        v
+    };
+    for mode in ["multipliers", "eliminated"] {
+        equivalence("run/bench/plane_strain_rollers.toml", &slabs(mode), &[1, 4]);
+        equivalence("run/seed.toml", &seed(8, &[&format!("decomposition.dirichlet=\"{mode}\"")]), &[1, 4]);
+    }
+    // rows or elimination show in the multiplier count; S = 1: every held DOF eliminated
+    let count = |mode: &str, parts: usize| {
+        let (sol, _) = solve("run/bench/plane_strain_rollers.toml", &slabs(mode), parts);
+        let f = sol.tfeti.expect("TFETI figures");
+        (f.dirichlet_rows, f.eliminated_dofs, f.coarse_dim)
+    };
+    let (_, model) = load("run/bench/plane_strain_rollers.toml", &slabs("eliminated"));
+    let held = model.constraints.iter().map(|&(v, c, _)| (v, c)).collect::<std::collections::BTreeSet<_>>().len();
+    assert_eq!(count("multipliers", 1), (held, 0, 12));
+    assert_eq!(count("eliminated", 1), (0, held, 0));
+    let (_, elim, coarse) = count("eliminated", 4);
+    assert!(elim >= held && coarse < 48, "S = 4: {elim} eliminated, coarse {coarse}");
+    // the seed at S = 4: the subdomains that touch the clamped faces by a patch keep their rows
+    let (sol, _) = solve("run/seed.toml", &seed(8, &[]), 4);
+    let f = sol.tfeti.expect("TFETI figures");
+    assert!(f.dirichlet_rows > 0 && f.eliminated_dofs > 0, "seed S = 4: {} rows, {} eliminated", f.dirichlet_rows, f.eliminated_dofs);
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! The natural coarse space of TFETI: G = RᵀBᵀ (six rows per subdomain), e = Rᵀf, the coarse
+//! The natural coarse space of TFETI: G = RᵀBᵀ (a row per column of each subdomain's kernel:
+//! six for a floating one, fewer where held DOFs are eliminated), e = Rᵀf, the coarse
 //! matrix C = G_E G_Eᵀ (sparse, factorized once) and the oblique projector of DESIGN §2,
 //!
 //! ```text
@@ -10,9 +11,9 @@
 //! every body is held by Dirichlet conditions; otherwise C is singular and the factorization
 //! says so.
 //!
-//! G is small (6·nnz of the B rows' columns per subdomain) and depends only on coordinates and
+//! G is small (k_s·nnz of the B rows' columns per subdomain) and depends only on coordinates and
 //! the constraint rows, so every rank builds it whole and holds C factorized (replicated
-//! coarse problem): applying P̃ costs one reduction of G x (6 per subdomain, each entry from
+//! coarse problem): applying P̃ costs one reduction of G x (k_s per subdomain, each entry from
 //! the one rank that holds the subdomain), one C⁻¹ solve on every rank and Gᵀ on the rows
 //! the rank needs (its blocks and its neighbours'). Vectors are distributed
 //! ([`Distribution`]); the measurement behind keeping C replicated is in the README.
@@ -20,7 +21,7 @@
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use crate::comm::Comm;
-use super::subdomain::{rigid_modes, NR};
+use super::subdomain::held_kernel;
 use crate::feti::decomposition::Decomposition;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{Cholesky, Ordering, Symbolic};
@@ -28,14 +29,23 @@ use crate::linalg::ordering::nested_dissection;
 use crate::linalg::sparse::SymCsc;
 use crate::mesh::Mesh;
 
+/// One subdomain's part of G.
+struct Block {
+    /// The multipliers whose rows touch it (ascending).
+    rows: Vec<usize>,
+    /// G_s = R_sᵀB_sᵀ on them, column-major k × len (each row's k values together).
+    g: Vec<f64>,
+    /// Columns of its kernel R_s, and the first of its coarse unknowns.
+    k: usize,
+    off: usize,
+}
+
 /// G, e and the factorized C.
 pub struct Coarse {
-    /// Per subdomain: the multipliers whose rows touch it (ascending) and G_s = R_sᵀB_sᵀ on
-    /// them, column-major 6 × len (each row's six values together).
-    blocks: Vec<(Vec<usize>, Vec<f64>)>,
+    blocks: Vec<Block>,
     /// First λ_E index.
     e_start: usize,
-    /// e = Rᵀf, 6 per subdomain.
+    /// e = Rᵀf, k_s per subdomain.
     pub e: Vec<f64>,
     /// C = G_E G_Eᵀ factorized; `None` when a body is held by contact alone (orthogonal
     /// projector only: then GGᵀ over every row is what is regular).
@@ -58,20 +68,27 @@ struct Pattern {
     symbolic: Symbolic,
 }
 
-/// e = Rᵀf: the load's work in each subdomain's six rigid motions (`loads[s]` = f_s).
-pub fn rigid_loads(mesh: &Mesh, d: &Decomposition, loads: &[Vec<f64>]) -> Vec<f64> {
-    let mut e = vec![0.0; NR * d.subdomains.len()];
+/// e = Rᵀf: the load's work in each subdomain's kernel motions (`loads[s]` = f_s; the held
+/// DOFs `eliminated[s]`, where R_s vanishes: Rᵀf = Rᵀ(f − Kg)).
+pub fn rigid_loads(mesh: &Mesh, d: &Decomposition, loads: &[Vec<f64>], eliminated: &[Vec<usize>]) -> Vec<f64> {
+    let mut e = Vec::new();
     for (s, sd) in d.subdomains.iter().enumerate() {
-        let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-        e[NR * s..NR * (s + 1)].copy_from_slice(&rigid_work(&rigid_modes(&coords), &loads[s]));
+        let (r, _) = kernel(mesh, sd, &eliminated[s]);
+        e.extend(rigid_work(&r, &loads[s]));
     }
     e
 }
 
-/// R_sᵀ f_s for the modes `r` (NR columns of f's length, column-major).
-fn rigid_work(r: &[f64], f: &[f64]) -> [f64; NR] {
+/// R_s of `sd` with the held DOFs `held`.
+fn kernel(mesh: &Mesh, sd: &crate::feti::decomposition::Subdomain, held: &[usize]) -> (Vec<f64>, usize) {
+    let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
+    held_kernel(&coords, held).expect("eliminated only where the held DOFs leave an exact kernel")
+}
+
+/// R_sᵀ f_s for the modes `r` (columns of f's length, column-major).
+fn rigid_work(r: &[f64], f: &[f64]) -> Vec<f64> {
     let nd = f.len();
-    std::array::from_fn(|k| r[k * nd..(k + 1) * nd].iter().zip(f).map(|(a, b)| a * b).sum())
+    r.chunks_exact(nd).map(|c| c.iter().zip(f).map(|(a, b)| a * b).sum()).collect()
 }
 
 /// The coarse matrices a TFETI dual factorizes.
@@ -86,26 +103,27 @@ pub enum Kind {
 }
 
 impl Coarse {
-    /// Builds G and e for all subdomains (`loads[s]` = f_s) and factorizes what `kind` needs.
-    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], kind: Kind) -> Result<Coarse> {
+    /// Builds G and e for all subdomains (`loads[s]` = f_s, `eliminated[s]` its held DOFs) and
+    /// factorizes what `kind` needs.
+    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], kind: Kind, eliminated: &[Vec<usize>]) -> Result<Coarse> {
         let e_start = cons.e_start();
         let ns = d.subdomains.len();
-        let mut e = vec![0.0; NR * ns];
+        let mut e = Vec::new();
         let mut blocks = Vec::with_capacity(ns);
         for (s, sd) in d.subdomains.iter().enumerate() {
-            let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-            let r = rigid_modes(&coords);
+            let (r, k) = kernel(mesh, sd, &eliminated[s]);
             let nd = 3 * sd.nodes.len();
-            e[NR * s..NR * (s + 1)].copy_from_slice(&rigid_work(&r, &loads[s]));
+            let off = e.len();
+            e.extend(rigid_work(&r, &loads[s]));
             let rows = cons.sorted_rows(s);
-            let mut g = vec![0.0; NR * rows.len()];
+            let mut g = vec![0.0; k * rows.len()];
             for &(row, dof, coef) in &cons.rows[s] {
                 let p = rows.binary_search(&row).expect("row listed");
-                for k in 0..NR {
-                    g[p * NR + k] += coef * r[k * nd + dof];
+                for j in 0..k {
+                    g[p * k + j] += coef * r[j * nd + dof];
                 }
             }
-            blocks.push((rows, g));
+            blocks.push(Block { rows, g, k, off });
         }
         let full = match kind {
             Kind::Oblique => None,
@@ -118,9 +136,15 @@ impl Coarse {
         Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
 
-    /// Size of the coarse problem, 6 per subdomain.
+    /// Size of the coarse problem, k_s per subdomain.
     pub fn dim(&self) -> usize {
         self.e.len()
+    }
+
+    /// Subdomain `s`'s coarse unknowns (its α_s).
+    pub fn range(&self, s: usize) -> std::ops::Range<usize> {
+        let b = &self.blocks[s];
+        b.off..b.off + b.k
     }
 
     /// a = G x (G_E x_E when `e_only`) from `xl` on the local rows: this rank's subdomains'
@@ -128,18 +152,17 @@ impl Coarse {
     fn g_mul<C: Comm>(&self, dist: &Distribution<'_, C>, xl: &[f64], e_only: bool) -> Vec<f64> {
         let mut out = vec![0.0; self.dim()];
         for sr in &dist.subs {
-            let s = sr.index;
-            let (rows, g) = &self.blocks[s];
-            let mut acc = [0.0; NR];
-            for ((&r, gp), &l) in rows.iter().zip(g.chunks_exact(NR)).zip(&sr.rows) {
+            let b = &self.blocks[sr.index];
+            if b.k == 0 {
+                continue;
+            }
+            let acc = &mut out[b.off..b.off + b.k];
+            for ((&r, gp), &l) in b.rows.iter().zip(b.g.chunks_exact(b.k)).zip(&sr.rows) {
                 if !e_only || r >= self.e_start {
                     let x = xl[l];
-                    for k in 0..NR {
-                        acc[k] += gp[k] * x;
-                    }
+                    acc.iter_mut().zip(gp).for_each(|(a, g)| *a += g * x);
                 }
             }
-            out[NR * s..NR * (s + 1)].copy_from_slice(&acc);
         }
         dist.reduce(&mut out);
         out
@@ -153,8 +176,9 @@ impl Coarse {
                 continue;
             }
             for &(s, p) in dist.touching(l) {
-                let gp = &self.blocks[s].1[p * NR..(p + 1) * NR];
-                v[i] -= (0..NR).map(|k| gp[k] * a[NR * s + k]).sum::<f64>();
+                let b = &self.blocks[s];
+                let gp = &b.g[p * b.k..(p + 1) * b.k];
+                v[i] -= gp.iter().zip(&a[b.off..b.off + b.k]).map(|(g, x)| g * x).sum::<f64>();
             }
         }
     }
@@ -237,7 +261,7 @@ impl Coarse {
                 cols_push(&mut c, col);
             }
             let contact = by_row[..self.e_start].to_vec();
-            let symbolic = Symbolic::analyze(&c, block_nested_dissection(&c)).expect("a valid permutation of GGᵀ's pattern");
+            let symbolic = Symbolic::analyze(&c, block_nested_dissection(&self.blocks, &c)).expect("a valid permutation of GGᵀ's pattern");
             Pattern { c, contact, symbolic }
         })
     }
@@ -344,30 +368,31 @@ impl Coarse {
 }
 
 /// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
-fn coarse_matrix(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
-    let nc = NR * blocks.len();
+fn coarse_matrix(blocks: &[Block], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
+    let nc = blocks.last().map_or(0, |b| b.off + b.k);
     let cols = gram(&columns(blocks, first, dim), nc, |_| 1.0);
     let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
     for (j, col) in cols.iter().enumerate() {
         if !col.contains_key(&j) {
-            return Err(singular(d, j / NR, mesh));
+            return Err(singular(d, blocks.partition_point(|b| b.off + b.k <= j), mesh));
         }
         cols_push(&mut c, col);
     }
-    let chol = Cholesky::factorize(&c, block_nested_dissection(&c)).map_err(|_| {
+    let chol = Cholesky::factorize(&c, block_nested_dissection(blocks, &c)).map_err(|_| {
         Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
     })?;
     Ok((chol, c.nnz()))
 }
 
 /// METIS nested dissection of C's block graph (one vertex per subdomain, an edge where two
-/// subdomains' 6 × 6 blocks couple), expanded to the blocks' NR unknowns; AMD if METIS fails.
-fn block_nested_dissection(c: &SymCsc) -> Ordering {
-    let nb = c.n / NR;
+/// subdomains' k × k blocks couple), expanded to the blocks' unknowns; AMD if METIS fails.
+fn block_nested_dissection(blocks: &[Block], c: &SymCsc) -> Ordering {
+    let nb = blocks.len();
+    let block_of: Vec<usize> = blocks.iter().enumerate().flat_map(|(s, b)| std::iter::repeat_n(s, b.k)).collect();
     let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nb];
     for j in 0..c.n {
         for &i in &c.row_idx[c.col_ptr[j]..c.col_ptr[j + 1]] {
-            let (bi, bj) = (i / NR, j / NR);
+            let (bi, bj) = (block_of[i], block_of[j]);
             if bi != bj {
                 adj[bi].push(bj);
                 adj[bj].push(bi);
@@ -383,18 +408,18 @@ fn block_nested_dissection(c: &SymCsc) -> Ordering {
         xadj.push(adjncy.len());
     }
     match nested_dissection(&xadj, &adjncy) {
-        Ok(perm) => Ordering::Custom(perm.iter().flat_map(|&b| (0..NR).map(move |k| NR * b + k)).collect()),
+        Ok(perm) => Ordering::Custom(perm.iter().flat_map(|&b| blocks[b].off..blocks[b].off + blocks[b].k).collect()),
         Err(_) => Ordering::Amd,
     }
 }
 
 /// The columns of G per row from `first` on: (coarse index, value).
-fn columns(blocks: &[(Vec<usize>, Vec<f64>)], first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
+fn columns(blocks: &[Block], first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
     let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
-    for (s, (rows, g)) in blocks.iter().enumerate() {
-        for (p, &row) in rows.iter().enumerate().filter(|(_, &r)| r >= first) {
-            for k in 0..NR {
-                by_row[row - first].push((NR * s + k, g[p * NR + k]));
+    for b in blocks {
+        for (p, &row) in b.rows.iter().enumerate().filter(|(_, &r)| r >= first) {
+            for j in 0..b.k {
+                by_row[row - first].push((b.off + j, b.g[p * b.k + j]));
             }
         }
     }
@@ -451,7 +476,7 @@ mod tests {
     fn projector_identities() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Orthogonal).unwrap();
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Orthogonal, &vec![vec![]; d.subdomains.len()]).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();
@@ -520,7 +545,7 @@ mod tests {
     fn restricted_projector_maps_into_ker_g_on_w() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Oblique).unwrap();
+        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Oblique, &vec![vec![]; d.subdomains.len()]).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();

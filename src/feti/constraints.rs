@@ -11,7 +11,8 @@
 //!   Dirichlet rows (a tangent along a roller face: B loses rank, F turns singular there).
 //! - **Dirichlet**: a prescribed DOF gets one row e_dof on *every* copy of its node (c = the
 //!   value) and no gluing rows: each copy is held directly, the rows are orthonormal and
-//!   non-redundant.
+//!   non-redundant. A copy whose subdomain eliminates the DOF (hybrid, [`super::eliminated`])
+//!   gets no row: it is held inside K_s.
 //! - **Gluing** of a free DOF with k > 1 copies: k − 1 rows. [`Gluing::Orthonormal`] (default)
 //!   takes the Helmert basis of the complement of (1, …, 1) — row j = (1, …, 1, −j, 0, …)/√(j(j+1))
 //!   on copies 0..=j — so B_E B_Eᵀ = I (non-redundant, orthonormal: B_E adds nothing to the
@@ -53,8 +54,9 @@ impl Constraints {
 }
 
 /// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a
-/// later entry for the same DOF winning; `contact` the pairs (if contact is on).
-pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, gluing: Gluing) -> Constraints {
+/// later entry for the same DOF winning; `contact` the pairs (if contact is on); `eliminated`
+/// per subdomain the local DOFs held inside it (sorted; empty: all Dirichlet rows).
+pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, gluing: Gluing, eliminated: &[Vec<usize>]) -> Constraints {
     let (m, friction) = contact.map_or((0, false), |c| (c.len(), c.has_friction()));
     let mut layout = Layout::contact(m, friction);
     let mut rows = vec![Vec::new(); d.subdomains.len()];
@@ -95,6 +97,9 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
         for k in 0..3 {
             if let Some(&val) = prescribed.get(&(v, k)) {
                 for &(s, l) in copies {
+                    if eliminated.get(s).is_some_and(|e| e.binary_search(&(3 * l + k)).is_ok()) {
+                        continue;
+                    }
                     rows[s].push((c.len(), 3 * l + k, 1.0));
                     c.push(val);
                     dirichlet_rows += 1;
@@ -140,7 +145,7 @@ mod tests {
         let d = decompose(&mesh, 4).unwrap();
         let dirichlet: Vec<_> = (0..5).map(|v| (v, 2, 0.5)).collect();
         for gluing in [Gluing::Orthonormal, Gluing::Chain] {
-            let c = build(&d, &dirichlet, None, gluing);
+            let c = build(&d, &dirichlet, None, gluing, &[]);
             assert_eq!(c.layout.dim(), c.c.len());
             let n = c.layout.dim();
             // B Bᵀ as a dense matrix

@@ -3,7 +3,8 @@
 //! [`Distribution`]) on distributed dual vectors, and the
 //! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (DESIGN §2). The solvers minimize
 //! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`DualProblem::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
-//! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s, ũ = K⁺(f − Bᵀλ).
+//! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s (+ g_s on the DOFs held
+//! inside the subdomain), ũ = K⁺(f̂ − Bᵀλ).
 //! The gradient the solvers see is P̃(Fλ − d̃); its contact part is −(Bu − c)_I, as in the
 //! monolithic dual, so the contact status and KKT residuals read the same. The FETI
 //! preconditioner of the gluing and Dirichlet block ([`FetiPreconditioner`]) is built here too.
@@ -11,7 +12,7 @@
 use super::coarse::Coarse;
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
-use super::subdomain::{SubdomainSystem, NR};
+use super::subdomain::SubdomainSystem;
 use crate::comm::Comm;
 use crate::dual::{DualProblem, Recovered};
 use crate::error::{Error, Result};
@@ -76,13 +77,13 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         (dual, b)
     }
 
-    /// A new load state on the same subdomains and rows (a step of a load path): f_s of each
-    /// local subdomain, e = Rᵀf (all subdomains), c on every row, and the tangential rows of c
-    /// moved by `jump` (owned; B_T u of the last step, [`TfetiDual::jump`]): friction acts on
-    /// the slip increment. Returns b̃.
-    pub fn set_load(&mut self, f: Vec<Vec<f64>>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
-        for (s, fs) in self.subs.iter_mut().zip(f) {
-            s.sys.f = fs;
+    /// A new load state on the same subdomains and rows (a step of a load path): f_s and the
+    /// held values g_s of each local subdomain, e = Rᵀf (all subdomains), c on every row, and
+    /// the tangential rows of c moved by `jump` (owned; B_T u of the last step,
+    /// [`TfetiDual::jump`]): friction acts on the slip increment. Returns b̃.
+    pub fn set_load(&mut self, f: Vec<(Vec<f64>, Vec<f64>)>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
+        for (s, (fs, g)) in self.subs.iter_mut().zip(f) {
+            s.sys.set_load(fs, g);
         }
         self.coarse.e = e;
         self.c0 = self.dist.restrict(c);
@@ -199,8 +200,8 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw)
         };
         for (s, us) in self.subs.iter().zip(&mut u) {
-            let i = s.sys.index;
-            s.sys.add_r_mul(&alpha[NR * i..NR * (i + 1)], us);
+            s.sys.add_r_mul(&alpha[self.coarse.range(s.sys.index)], us);
+            s.sys.set_held(us);
         }
         let mut gap = vec![0.0; self.layout.dim()];
         self.gather(&u, &mut gap);
@@ -225,7 +226,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let mut pieces = Vec::with_capacity(self.subs.len());
         for s in &self.subs {
             let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();
-            let schur = Schur::new(&s.sys.k, &touched, form)
+            let schur = Schur::new(&s.sys.k_free(), &touched, form)
                 .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
             pieces.push(schur);
         }

@@ -17,6 +17,8 @@ pub mod smalse;
 pub mod subdomain;
 
 use crate::feti::decomposition::Decomposition;
+use crate::mesh::Mesh;
+use crate::scene::DirichletMode;
 
 /// f_s for every subdomain (per local DOF 3·l + c): each node's load goes to its first copy.
 pub fn subdomain_loads(d: &Decomposition, loads: &[f64]) -> Vec<Vec<f64>> {
@@ -26,6 +28,45 @@ pub fn subdomain_loads(d: &Decomposition, loads: &[f64]) -> Vec<Vec<f64>> {
         f[s][3 * l..3 * l + 3].copy_from_slice(&loads[3 * v..3 * v + 3]);
     }
     f
+}
+
+/// Per subdomain, the local DOFs (ascending) held inside it: with [`DirichletMode::Eliminated`]
+/// every prescribed DOF (`dirichlet`: node, component, value) of a subdomain whose held DOFs
+/// leave its rigid motions either free or firmly held ([`subdomain::held_kernel`]); none with
+/// [`DirichletMode::Multipliers`] or elsewhere (those copies keep their rows).
+pub fn eliminated(mesh: &Mesh, d: &Decomposition, dirichlet: &[(usize, usize, f64)], mode: DirichletMode) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new(); d.subdomains.len()];
+    if mode == DirichletMode::Multipliers {
+        return out;
+    }
+    for &(v, k, _) in dirichlet {
+        for &(s, l) in &d.copies[v] {
+            out[s].push(3 * l + k);
+        }
+    }
+    for (held, sd) in out.iter_mut().zip(&d.subdomains) {
+        held.sort_unstable();
+        held.dedup();
+        if !held.is_empty() {
+            let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
+            let interface: Vec<usize> = (0..3 * sd.nodes.len()).filter(|&dof| d.copies[sd.nodes[dof / 3]].len() > 1 && held.binary_search(&dof).is_err()).collect();
+            if subdomain::held_kernel(&coords, held).is_none() || subdomain::hold_ratio(&coords, held, &interface) < subdomain::HOLD_RATIO {
+                held.clear();
+            }
+        }
+    }
+    out
+}
+
+/// The values g of the held DOFs `eliminated` (per subdomain, as [`eliminated`] gives them)
+/// from the prescribed list `dirichlet` (a later entry for the same DOF winning).
+pub fn held_values(d: &Decomposition, eliminated: &[Vec<usize>], dirichlet: &[(usize, usize, f64)]) -> Vec<Vec<f64>> {
+    let value: std::collections::HashMap<(usize, usize), f64> = dirichlet.iter().map(|&(v, k, x)| ((v, k), x)).collect();
+    eliminated
+        .iter()
+        .zip(&d.subdomains)
+        .map(|(held, sd)| held.iter().map(|&dof| value[&(sd.nodes[dof / 3], dof % 3)]).collect())
+        .collect()
 }
 
 /// Rank of every subdomain: largest first onto the least loaded rank (by DOFs), deterministic.
@@ -50,6 +91,6 @@ pub(crate) fn seed_fixture(n: usize, parts: usize) -> (crate::model::Model, deco
     let ls = crate::scene::load(&path, &[format!("mesh.n={n}")]).unwrap();
     let model = crate::model::build(&ls).unwrap();
     let d = decomposition::decompose(&model.mesh, parts).unwrap();
-    let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal);
+    let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal, &[]);
     (model, d, cons)
 }

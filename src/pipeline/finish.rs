@@ -35,6 +35,9 @@ pub struct PieceSolution<'a> {
     pub nnz_l: usize,
     pub x: &'a [f64],
     pub rhs: &'a [f64],
+    /// Entries of x held by Dirichlet conditions inside K's DOFs (0 in x; their rows carry
+    /// reactions and are not checked).
+    pub held: &'a [usize],
     /// u at the layout's nodes (prescribed values included).
     pub nodal: Vec<[f64; 3]>,
 }
@@ -81,7 +84,8 @@ pub fn finish<C: Comm>(comm: &C, model: &Model, layout: &[PieceLayout], mine: &[
         let mut local = LocalFields::default();
         for ps in mine {
             let pl = &layout[ps.piece];
-            let kx = ps.k.mul(ps.x);
+            let mut kx = ps.k.mul(ps.x);
+            ps.held.iter().for_each(|&d| kx[d] = ps.rhs[d]);
             let rn = norm(&kx.iter().zip(ps.rhs).map(|(a, b)| a - b).collect::<Vec<_>>());
             let fnorm = norm(ps.rhs);
             let residual = if fnorm > 0.0 { rn / fnorm } else { rn };

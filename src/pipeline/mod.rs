@@ -222,7 +222,7 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
         .iter()
         .zip(u)
         .zip(rhs)
-        .map(|((lb, x), f)| finish::PieceSolution { piece: lb.body, k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, nodal: lb.dofs.expand(x) })
+        .map(|((lb, x), f)| finish::PieceSolution { piece: lb.body, k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, held: &[], nodal: lb.dofs.expand(x) })
         .collect();
     let hint = "the stiffness is singular or ill-conditioned; is the body held against rigid motion?";
     let (mut sol, stats, _) = finish::finish(comm, model, &layout, &mine, hint, t)?;
@@ -556,7 +556,9 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         tfeti: sol.tfeti.as_ref().map(|f| TfetiReport {
             subdomains_per_body: (0..mesh.bodies.len()).map(|b| f.subdomains.iter().filter(|s| s.piece.body == b).count()).collect(),
             gluing: dec.gluing,
+            dirichlet: dec.dirichlet,
             multipliers: Multipliers { contact: f.contact_rows, gluing: f.gluing_rows, dirichlet: f.dirichlet_rows },
+            eliminated_dofs: f.eliminated_dofs,
             coarse_dim: f.coarse_dim,
             nnz_c: f.nnz_c,
             gluing_jump: f.gluing_jump,

@@ -174,7 +174,8 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             continue;
         }
         let d = comm.agree(decompose_each(mesh, &parts))?;
-        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing);
+        let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
+        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
         // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the others
         // scaled from it by their node count (nested dissection of 3-D pieces: nnz(L) ~ n^4/3,
         // work ~ n²)
@@ -184,7 +185,10 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         let counted = fills(sampled.len(), &|i| {
             let sd = &d.subdomains[sampled[i]];
             let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
-            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &vec![3; sd.nodes.len()]))
+            // the DOFs held inside the subdomain cost no fill
+            let mut free = vec![3u8; sd.nodes.len()];
+            elim[sampled[i]].iter().for_each(|&dof| free[dof / 3] -= 1);
+            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
         })?;
         let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
         let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
@@ -280,7 +284,9 @@ mod tests {
         for w in tfeti.windows(2) {
             assert!(w[1].parts[0] > w[0].parts[0] && w[1].nnz_l < w[0].nnz_l && w[1].gluing_rows > w[0].gluing_rows);
         }
-        let (_, d, cons) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
+        let (_, d, _) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
+        let elim = crate::feti::eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
+        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), dec.gluing, &elim);
         assert_eq!((tfeti[0].gluing_rows, tfeti[0].dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
         assert_eq!(d.subdomains.len(), 2 * tfeti[0].parts[0]);
     }

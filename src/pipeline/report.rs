@@ -7,7 +7,7 @@ use super::tfeti::{DistributionStats, SubdomainStats};
 use super::BodyStats;
 use crate::feti::smalse::SmalseInfo;
 use crate::qp;
-use crate::scene::{Gluing, Projector};
+use crate::scene::{DirichletMode, Gluing, Projector};
 
 /// Everything a solve reports.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -90,7 +90,13 @@ pub struct SolverReport {
 pub struct TfetiReport {
     pub subdomains_per_body: Vec<usize>,
     pub gluing: Gluing,
+    /// How the Dirichlet conditions are held (`decomposition.dirichlet`).
+    #[serde(default)]
+    pub dirichlet: DirichletMode,
     pub multipliers: Multipliers,
+    /// Prescribed DOFs held inside their subdomains (over all copies): no multiplier rows.
+    #[serde(default)]
+    pub eliminated_dofs: usize,
     pub coarse_dim: usize,
     #[serde(rename = "nnz_C_lower")]
     pub nnz_c: usize,

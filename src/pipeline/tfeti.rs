@@ -15,7 +15,7 @@ use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::SubdomainSystem;
-use crate::feti::{assign_ranks, subdomain_loads};
+use crate::feti::{assign_ranks, eliminated, held_values, subdomain_loads};
 use crate::model::Model;
 use crate::qp::{self, Lambda, Operator, Qp, Space};
 use crate::contact::state::contact_state;
@@ -39,6 +39,8 @@ pub struct TfetiInfo {
     pub contact_rows: usize,
     pub gluing_rows: usize,
     pub dirichlet_rows: usize,
+    /// DOFs held inside their subdomains (hybrid Dirichlet), over all copies.
+    pub eliminated_dofs: usize,
     pub coarse_dim: usize,
     pub nnz_c: usize,
     /// max over nodes and copies of |u_copy − u_first| / max |u|.
@@ -110,6 +112,8 @@ impl DistributionStats {
 pub struct TfetiProblem<'c, C: Comm> {
     pub decomposition: Decomposition,
     pub constraints: constraints::Constraints,
+    /// Per subdomain, the DOFs held inside it (hybrid Dirichlet).
+    pub eliminated: Vec<Vec<usize>>,
     /// Rank of every subdomain.
     pub owner: Vec<usize>,
     pub dual: TfetiDual<'c, C>,
@@ -125,21 +129,23 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let mesh = &model.mesh;
     let dec = &ls.scene.decomposition;
     let contact = model.pairs.as_ref();
-    let (d, cons, owner) = t.phase(comm, "decompose", || {
+    let (d, cons, owner, elim) = t.phase(comm, "decompose", || {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = decompose_each(mesh, &parts)?;
-        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing);
+        let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
+        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
         let owner = assign_ranks(&d, comm.size());
-        Ok((d, cons, owner))
+        Ok((d, cons, owner, elim))
     })?;
     let dist = Distribution::new(comm, &cons, &owner);
     let loads = subdomain_loads(&d, &model.loads);
+    let held = held_values(&d, &elim, &model.constraints);
     let subs = t.phase(comm, "factorize", || {
         (0..d.subdomains.len())
             .filter(|&s| owner[s] == comm.rank())
             .map(|s| {
                 let sd = &d.subdomains[s];
-                SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone())
+                SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone(), elim[s].clone(), held[s].clone())
             })
             .collect::<Result<Vec<_>>>()
     })?;
@@ -149,7 +155,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         (true, true) => coarse::Kind::Orthogonal,
         (true, false) => coarse::Kind::ContactHeld,
     };
-    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, kind))?;
+    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, kind, &elim))?;
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
     let s = &super::solver_for(ls, model);
@@ -161,7 +167,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
         None => Lambda::unconstrained(dual.layout.free),
     };
-    Ok(TfetiProblem { decomposition: d, constraints: cons, owner, dual, b, set, coarse_dim, nnz_c })
+    Ok(TfetiProblem { decomposition: d, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c })
 }
 
 /// Δ_s = μ_min/μ_s per subdomain: the preconditioner's stiffness weighting (1 for one material).
@@ -180,7 +186,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, constraints: cons, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
+    let TfetiProblem { decomposition: d, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
@@ -192,9 +198,10 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             b = t.phase(comm, "load", || {
                 let (cons_k, loads) = model.state(k);
                 let f = subdomain_loads(&d, &loads);
-                let e = rigid_loads(mesh, &d, &f);
-                let c = constraints::build(&d, &cons_k, contact, dec.gluing).c;
-                let mine = dual.dist.subs.iter().map(|sr| f[sr.index].clone()).collect();
+                let e = rigid_loads(mesh, &d, &f, &elim);
+                let c = constraints::build(&d, &cons_k, contact, dec.gluing, &elim).c;
+                let g = held_values(&d, &elim, &cons_k);
+                let mine = dual.dist.subs.iter().map(|sr| (f[sr.index].clone(), g[sr.index].clone())).collect();
                 Ok(dual.set_load(mine, e, &c, &walk.jump))
             })?;
         }
@@ -246,6 +253,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         f.contact_rows = cons.e_start();
         f.gluing_rows = cons.gluing_rows;
         f.dirichlet_rows = cons.dirichlet_rows;
+        f.eliminated_dofs = elim.iter().map(Vec::len).sum();
         f.coarse_dim = coarse_dim;
         f.nnz_c = nnz_c;
         f.feasibility = feasibility;
@@ -304,7 +312,7 @@ fn held_rows(set: &Lambda, lambda: &[f64]) -> (Vec<bool>, Vec<(usize, [f64; 2])>
 }
 
 /// The post-solve path of the subdomains ([`finish`], one piece per subdomain): checks
-/// K_s u_s = f_s − B_sᵀλ, stresses, gather on rank 0 with the gluing jump; the bodies' figures
+/// K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ), stresses, gather on rank 0 with the gluing jump; the bodies' figures
 /// summed over their subdomains.
 #[allow(clippy::too_many_arguments)]
 fn finish_subdomains<C: Comm>(
@@ -330,17 +338,30 @@ fn finish_subdomains<C: Comm>(
             name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
         })
         .collect();
+    // u_s − g_s: zero on the held DOFs, whose rows (reactions) are not checked
+    let w: Vec<Vec<f64>> = dual
+        .subs
+        .iter()
+        .zip(u)
+        .map(|(ls, us)| {
+            let mut w = us.clone();
+            ls.sys.held.iter().for_each(|&d| w[d] = 0.0);
+            w
+        })
+        .collect();
     let mine: Vec<PieceSolution<'_>> = dual
         .subs
         .iter()
         .zip(u)
+        .zip(&w)
         .zip(rhs)
-        .map(|((ls, us), f)| PieceSolution {
+        .map(|(((ls, us), ws), f)| PieceSolution {
             piece: ls.sys.index,
             k: &ls.sys.k,
             nnz_l: ls.sys.nnz_l(),
-            x: us,
+            x: ws,
             rhs: f,
+            held: &ls.sys.held,
             nodal: us.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         })
         .collect();
