@@ -38,6 +38,8 @@ pub struct Clock {
     /// Whole projections onto Ker G ∩ W in the inner solves (exchange, G x, (GΠGᵀ)⁻¹, Gᵀa) and
     /// the factorizations of GΠGᵀ.
     pub restricted: Cell<f64>,
+    /// The part of `restricted` spent factorizing GΠGᵀ.
+    pub restricted_factor: Cell<f64>,
     /// Whole A-products.
     pub apply: Cell<f64>,
 }

@@ -386,7 +386,8 @@ impl<C: Comm> Preconditioner for DualPreconditioner<'_, '_, C> {
 impl<C: Comm> qp::Coarse for TfetiDual<'_, C> {
     fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn qp::CoarseProjector + 'a>> {
         let (free_all, slides_all) = self.global_pi(free, slides);
-        let chol = Clock::time(&self.dist.clock.restricted, || self.coarse.restricted(self.rows, &free_all, &slides_all))?;
+        let clock = &self.dist.clock;
+        let chol = Clock::time(&clock.restricted, || Clock::time(&clock.restricted_factor, || self.coarse.restricted(self.rows, &free_all, &slides_all)))?;
         Some(Box::new(Restricted { dual: self, chol }))
     }
 }

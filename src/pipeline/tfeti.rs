@@ -76,6 +76,9 @@ pub struct DistributionStats {
     /// A-products).
     #[serde(default)]
     pub restricted_s: f64,
+    /// The part of `restricted_s` spent factorizing GΠGᵀ.
+    #[serde(default)]
+    pub restricted_factor_s: f64,
     /// The least loaded rank's K⁺ time (load balance: pinv_min_s / pinv_s).
     pub pinv_min_s: f64,
 }
@@ -86,7 +89,7 @@ impl DistributionStats {
         let (owned, ghosts) = (dist.owned.len(), dist.local_len() - dist.owned.len());
         let (fwd, rev, nbrs) = dist.message_sizes();
         let c = &dist.clock;
-        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get()];
+        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get(), c.restricted_factor.get()];
         comm.max_f64(&mut mx);
         let mut sent = [(2 * fwd + rev) as u64];
         comm.sum_u64(&mut sent);
@@ -103,6 +106,7 @@ impl DistributionStats {
             coarse_solve_s: mx[8],
             pinv_min_s: -mx[9],
             restricted_s: mx[10],
+            restricted_factor_s: mx[11],
         }
     }
 }
