@@ -69,18 +69,92 @@ pub fn held_values(d: &Decomposition, eliminated: &[Vec<usize>], dirichlet: &[(u
         .collect()
 }
 
-/// Rank of every subdomain: largest first onto the least loaded rank (by DOFs), deterministic.
-pub fn assign_ranks(d: &Decomposition, ranks: usize) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..d.subdomains.len()).collect();
-    order.sort_by_key(|&s| (std::cmp::Reverse(d.subdomains[s].nodes.len()), s));
-    let mut load = vec![0usize; ranks];
-    let mut owner = vec![0; d.subdomains.len()];
+/// Rank of every subdomain: a METIS k-way partition of the subdomain graph (an edge where rows
+/// of B couple two subdomains, weighted by their number; vertices weighted by DOFs), so that a
+/// rank's subdomains lie together and its ghost rows are the ones across rank borders; the
+/// greedy assignment (largest first onto the least loaded rank) where METIS balances the DOFs
+/// worse than 1.05× of it, or there are fewer subdomains than ranks. Deterministic.
+pub fn assign_ranks(d: &Decomposition, cons: &constraints::Constraints, ranks: usize) -> Vec<usize> {
+    let ns = d.subdomains.len();
+    let dofs: Vec<usize> = d.subdomains.iter().map(|s| 3 * s.nodes.len()).collect();
+    let greedy = greedy_ranks(&dofs, ranks);
+    if ranks <= 1 || ns <= ranks {
+        return greedy;
+    }
+    let max_load = |owner: &[usize]| {
+        let mut load = vec![0usize; ranks];
+        owner.iter().zip(&dofs).for_each(|(&r, &n)| load[r] += n);
+        load.into_iter().max().unwrap_or(0)
+    };
+    match graph_ranks(ns, cons, &dofs, ranks) {
+        Some(owner) if (max_load(&owner) as f64) <= 1.05 * max_load(&greedy) as f64 => owner,
+        _ => greedy,
+    }
+}
+
+/// Largest first onto the least loaded rank (by DOFs).
+fn greedy_ranks(dofs: &[usize], ranks: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..dofs.len()).collect();
+    order.sort_by_key(|&s| (std::cmp::Reverse(dofs[s]), s));
+    let mut load = vec![0usize; ranks.max(1)];
+    let mut owner = vec![0; dofs.len()];
     for s in order {
-        let r = (0..ranks).min_by_key(|&r| (load[r], r)).expect("at least one rank");
+        let r = (0..ranks.max(1)).min_by_key(|&r| (load[r], r)).expect("at least one rank");
         owner[s] = r;
-        load[r] += d.subdomains[s].nodes.len();
+        load[r] += dofs[s];
     }
     owner
+}
+
+/// METIS k-way parts of the subdomain graph; `None` if METIS fails or leaves a rank empty.
+fn graph_ranks(ns: usize, cons: &constraints::Constraints, dofs: &[usize], ranks: usize) -> Option<Vec<usize>> {
+    let mut weight: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    let mut row_subs: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    for (s, rows) in cons.rows.iter().enumerate() {
+        for &(r, _, _) in rows {
+            let v = row_subs.entry(r).or_default();
+            if v.last() != Some(&s) {
+                v.push(s);
+            }
+        }
+    }
+    for subs in row_subs.values() {
+        for (i, &a) in subs.iter().enumerate() {
+            for &b in &subs[i + 1..] {
+                if a != b {
+                    *weight.entry((a.min(b), a.max(b))).or_default() += 1;
+                }
+            }
+        }
+    }
+    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ns];
+    for (&(a, b), &w) in &weight {
+        adj[a].push((b, w));
+        adj[b].push((a, w));
+    }
+    let idx = |v: usize| metis::Idx::try_from(v).ok();
+    let (mut xadj, mut adjncy, mut adjwgt) = (vec![0], Vec::new(), Vec::new());
+    for list in &mut adj {
+        list.sort_unstable();
+        for &(b, w) in list.iter() {
+            adjncy.push(idx(b)?);
+            adjwgt.push(idx(w)?);
+        }
+        xadj.push(idx(adjncy.len())?);
+    }
+    let vwgt: Vec<metis::Idx> = dofs.iter().map(|&n| idx(n)).collect::<Option<_>>()?;
+    let mut part = vec![0; ns];
+    metis::Graph::new(1, idx(ranks)?, &xadj, &adjncy)
+        .ok()?
+        .set_vwgt(&vwgt)
+        .set_adjwgt(&adjwgt)
+        .set_option(metis::option::Seed(1))
+        .part_kway(&mut part)
+        .ok()?;
+    let owner: Vec<usize> = part.into_iter().map(|p| p as usize).collect();
+    let mut used = vec![false; ranks];
+    owner.iter().for_each(|&r| used[r] = true);
+    used.iter().all(|&u| u).then_some(owner)
 }
 
 /// The seed scene at N = `n`, `parts` subdomains per body, and its constraint rows (orthonormal
@@ -93,4 +167,42 @@ pub(crate) fn seed_fixture(n: usize, parts: usize) -> (crate::model::Model, deco
     let d = decomposition::decompose(&model.mesh, parts).unwrap();
     let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal, &[]);
     (model, d, cons)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows of B whose subdomains lie on more than one rank, and the largest rank load (DOFs).
+    fn crossing_and_load(d: &Decomposition, cons: &constraints::Constraints, owner: &[usize], ranks: usize) -> (usize, usize) {
+        let mut rank_of_row: std::collections::HashMap<usize, std::collections::BTreeSet<usize>> = Default::default();
+        for (s, rows) in cons.rows.iter().enumerate() {
+            for &(r, _, _) in rows {
+                rank_of_row.entry(r).or_default().insert(owner[s]);
+            }
+        }
+        let mut load = vec![0; ranks];
+        d.subdomains.iter().zip(owner).for_each(|(sd, &r)| load[r] += 3 * sd.nodes.len());
+        (rank_of_row.values().filter(|v| v.len() > 1).count(), load.into_iter().max().unwrap())
+    }
+
+    #[test]
+    fn ranks_hold_neighbouring_subdomains_with_balanced_dofs() {
+        let (_, d, cons) = seed_fixture(8, 8);
+        let dofs: Vec<usize> = d.subdomains.iter().map(|s| 3 * s.nodes.len()).collect();
+        for ranks in [2, 3, 4] {
+            let owner = assign_ranks(&d, &cons, ranks);
+            let (cross, load) = crossing_and_load(&d, &cons, &owner, ranks);
+            let (cross_greedy, load_greedy) = crossing_and_load(&d, &cons, &greedy_ranks(&dofs, ranks), ranks);
+            // two ranks: one body each, only the contact rows cross
+            let factor = if ranks == 2 { 2 } else { 1 };
+            assert!(factor * cross < cross_greedy, "{ranks} ranks: {cross} rows cross ranks, greedy {cross_greedy}");
+            assert!(load as f64 <= 1.05 * load_greedy as f64, "{ranks} ranks: load {load} against {load_greedy}");
+            assert_eq!(owner, assign_ranks(&d, &cons, ranks), "deterministic");
+        }
+        assert_eq!(assign_ranks(&d, &cons, 1), vec![0; 16]);
+        // more ranks than subdomains: one subdomain per rank, the largest first
+        let owner = assign_ranks(&d, &cons, 20);
+        assert_eq!(owner.iter().collect::<std::collections::BTreeSet<_>>().len(), 16);
+    }
 }

@@ -1,7 +1,7 @@
 //! The TFETI path of the pipeline: phases `decompose` (METIS, constraint rows), `factorize`
 //! (assemble K_s and factorize K_s with its fixing DOFs, this rank's subdomains only), `coarse`
 //! (G, e, C), `dual` (b̃), `iterate`, `recover` (λ, α, u), `stress` and `gather`. Subdomains go
-//! to ranks by size (largest first to the least loaded rank); the dual vectors are distributed
+//! to ranks by a partition of the subdomain graph (`feti::assign_ranks`); the dual vectors are distributed
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own.
 
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
@@ -138,7 +138,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         let d = decompose_each(mesh, &parts)?;
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
         let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
-        let owner = assign_ranks(&d, comm.size());
+        let owner = assign_ranks(&d, &cons, comm.size());
         Ok((d, cons, owner, elim))
     })?;
     let dist = Distribution::new(comm, &cons, &owner);
