@@ -115,15 +115,18 @@ fn partition(mesh: &Mesh, elems: std::ops::Range<usize>, parts: usize) -> std::r
         }
         eptr.push(idx(eind.len())?);
     }
-    let dual = metis::mesh_to_dual(&eptr, &eind, 4).map_err(|e| format!("dual graph: {e}"))?;
-    let (xadj, adjncy) = (dual.xadj().to_vec(), dual.adjncy().to_vec());
     let mut part = vec![0; ne];
-    metis::Graph::new(1, idx(parts)?, &xadj, &adjncy)
-        .map_err(|e| format!("{e}"))?
-        .set_option(metis::option::Contig(true))
-        .set_option(metis::option::Seed(1))
-        .part_kway(&mut part)
-        .map_err(|e| format!("{e}"))?;
+    crate::linalg::ordering::metis_exclusive(|| -> std::result::Result<(), String> {
+        let dual = metis::mesh_to_dual(&eptr, &eind, 4).map_err(|e| format!("dual graph: {e}"))?;
+        let (xadj, adjncy) = (dual.xadj().to_vec(), dual.adjncy().to_vec());
+        metis::Graph::new(1, idx(parts)?, &xadj, &adjncy)
+            .map_err(|e| format!("{e}"))?
+            .set_option(metis::option::Contig(true))
+            .set_option(metis::option::Seed(1))
+            .part_kway(&mut part)
+            .map_err(|e| format!("{e}"))?;
+        Ok(())
+    })?;
     Ok(part.into_iter().map(|p| p as usize).collect())
 }
 

@@ -144,13 +144,16 @@ fn graph_ranks(ns: usize, cons: &constraints::Constraints, dofs: &[usize], ranks
     }
     let vwgt: Vec<metis::Idx> = dofs.iter().map(|&n| idx(n)).collect::<Option<_>>()?;
     let mut part = vec![0; ns];
-    metis::Graph::new(1, idx(ranks)?, &xadj, &adjncy)
-        .ok()?
-        .set_vwgt(&vwgt)
-        .set_adjwgt(&adjwgt)
-        .set_option(metis::option::Seed(1))
-        .part_kway(&mut part)
-        .ok()?;
+    let nparts = idx(ranks)?;
+    crate::linalg::ordering::metis_exclusive(|| {
+        metis::Graph::new(1, nparts, &xadj, &adjncy)
+            .ok()?
+            .set_vwgt(&vwgt)
+            .set_adjwgt(&adjwgt)
+            .set_option(metis::option::Seed(1))
+            .part_kway(&mut part)
+            .ok()
+    })?;
     let owner: Vec<usize> = part.into_iter().map(|p| p as usize).collect();
     let mut used = vec![false; ranks];
     owner.iter().for_each(|&r| used[r] = true);

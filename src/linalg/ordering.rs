@@ -3,6 +3,15 @@
 
 use crate::error::{Error, Result};
 
+/// Runs a METIS call alone in the process: METIS seeds one process-wide random state at the
+/// start of each call, so calls from several threads (the test harness runs tests in parallel)
+/// that interleave give the same graph different parts. Every METIS call goes through here.
+pub fn metis_exclusive<T>(f: impl FnOnce() -> T) -> T {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    f()
+}
+
 /// Nested-dissection permutation of an undirected graph given in CSR form without self loops.
 /// Returns `perm` with `perm[new] = old`.
 pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>> {
@@ -21,7 +30,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
     let mut iperm = vec![0i32; n];
     // SAFETY: METIS reads n+1 offsets and xadj[n] neighbours and writes n entries to perm/iperm;
     // all buffers have exactly those sizes and outlive the calls.
-    let status = unsafe {
+    let status = metis_exclusive(|| unsafe {
         metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         metis_sys::METIS_NodeND(
             &mut nv,
@@ -32,7 +41,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
             perm.as_mut_ptr(),
             iperm.as_mut_ptr(),
         )
-    };
+    });
     if status != metis_sys::rstatus_et_METIS_OK as i32 {
         return Err(Error::numerical("METIS ordering", format!("METIS_NodeND failed with status {status}")));
     }

@@ -152,6 +152,20 @@ pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, re
     result.map(|_| targets)
 }
 
+/// Replaces the JSON report beside `h5` (rank 0; written to a temporary file, then renamed):
+/// the report once the `output` phase it times is over.
+pub fn rewrite_report<C: Comm>(comm: &C, h5: &Path, report: &serde_json::Value) -> Result<()> {
+    comm.agree(if comm.is_root() {
+        let (path, temp) = (sibling(h5, "json"), tmp(&sibling(h5, "json")));
+        serde_json::to_string_pretty(report)
+            .map_err(|e| Error::output(path.display().to_string(), e.to_string()))
+            .and_then(|text| std::fs::write(&temp, text + "\n").map_err(|e| Error::io(temp.display().to_string(), e)))
+            .and_then(|()| std::fs::rename(&temp, &path).map_err(|e| Error::io(path.display().to_string(), e)))
+    } else {
+        Ok(())
+    })
+}
+
 /// Rank 0's part of [`write_all`]: the sidecars and the renames.
 fn finish(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>, targets: &[PathBuf], temps: &[PathBuf]) -> Result<()> {
     let mut i = 1;

@@ -501,6 +501,11 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         report.output_verified_values = Some(total[0]);
     }
     report.timings = t.times();
+    if ls.scene.output.report {
+        // the sidecar written with the file lacked the output phase's own time
+        let json = comm.agree(serde_json::to_value(&report).map_err(|e| Error::output(h5.display().to_string(), format!("report: {e}"))))?;
+        output::rewrite_report(comm, &h5, &json)?;
+    }
     Ok(Summary { report, files, solution: sol })
 }
 
