@@ -468,6 +468,23 @@ mod tests {
         }
     }
 
+    /// A cube glued on five faces: held on the sixth it is held firmly, held at one corner node
+    /// it is not; without an interface the ratio is infinite.
+    #[test]
+    fn hold_ratio_tells_a_face_from_a_patch() {
+        let coords: Vec<[f64; 3]> = (0..5).flat_map(|i| (0..5).flat_map(move |j| (0..5).map(move |k| [i as f64 / 4.0, j as f64 / 4.0, k as f64 / 4.0]))).collect();
+        let on = |pred: &dyn Fn([f64; 3]) -> bool| -> Vec<usize> { (0..coords.len()).filter(|&l| pred(coords[l])).flat_map(|l| (0..3).map(move |c| 3 * l + c)).collect() };
+        let face = on(&|p| p[0] == 0.0);
+        let node = on(&|p| p == [0.0, 0.0, 0.0]);
+        // glued on its five other faces
+        let interface: Vec<usize> = on(&|p| p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0 || p[2] == 0.0 || p[2] == 1.0).into_iter().filter(|d| !face.contains(d)).collect();
+        let firm = hold_ratio(&coords, &face, &interface);
+        let weak = hold_ratio(&coords, &node, &interface);
+        assert!(firm >= HOLD_RATIO, "a face: {firm:.2e}");
+        assert!(weak < HOLD_RATIO, "one node: {weak:.2e}");
+        assert_eq!(hold_ratio(&coords, &face, &[]), f64::INFINITY);
+    }
+
     #[test]
     fn collinear_nodes_have_no_fixing_dofs() {
         let coords: Vec<[f64; 3]> = (0..4).map(|i| [i as f64, 0.0, 0.0]).collect();
