@@ -252,15 +252,9 @@ impl Coarse {
 
     fn pattern(&self, dim: usize) -> &Pattern {
         self.pattern.get_or_init(|| {
-            let by_row = columns(&self.blocks, 0, dim);
-            let nc = self.dim();
             // the contact rows enter the pattern with weight 0
-            let cols = gram(&by_row, nc, |r| if r >= self.e_start { 1.0 } else { 0.0 });
-            let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
-            for col in &cols {
-                cols_push(&mut c, col);
-            }
-            let contact = by_row[..self.e_start].to_vec();
+            let (c, _) = gram(&self.blocks, 0, dim, |r| if r >= self.e_start { 1.0 } else { 0.0 });
+            let contact = columns(&self.blocks, self.e_start);
             let symbolic = Symbolic::analyze(&c, block_nested_dissection(&self.blocks, &c)).expect("a valid permutation of GGᵀ's pattern");
             Pattern { c, contact, symbolic }
         })
@@ -369,14 +363,9 @@ impl Coarse {
 
 /// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
 fn coarse_matrix(blocks: &[Block], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
-    let nc = blocks.last().map_or(0, |b| b.off + b.k);
-    let cols = gram(&columns(blocks, first, dim), nc, |_| 1.0);
-    let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
-    for (j, col) in cols.iter().enumerate() {
-        if !col.contains_key(&j) {
-            return Err(singular(d, blocks.partition_point(|b| b.off + b.k <= j), mesh));
-        }
-        cols_push(&mut c, col);
+    let (c, touched) = gram(blocks, first, dim, |_| 1.0);
+    if let Some(s) = (0..blocks.len()).find(|&s| blocks[s].k > 0 && !touched[s]) {
+        return Err(singular(d, s, mesh));
     }
     let chol = Cholesky::factorize(&c, block_nested_dissection(blocks, &c)).map_err(|_| {
         Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
@@ -413,42 +402,73 @@ fn block_nested_dissection(blocks: &[Block], c: &SymCsc) -> Ordering {
     }
 }
 
-/// The columns of G per row from `first` on: (coarse index, value).
-fn columns(blocks: &[Block], first: usize, dim: usize) -> Vec<Vec<(usize, f64)>> {
-    let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim - first];
+/// The columns of G of the rows below `last` (the contact rows): (coarse index, value) per row.
+fn columns(blocks: &[Block], last: usize) -> Vec<Vec<(usize, f64)>> {
+    let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); last];
     for b in blocks {
-        for (p, &row) in b.rows.iter().enumerate().filter(|(_, &r)| r >= first) {
-            for j in 0..b.k {
-                by_row[row - first].push((b.off + j, b.g[p * b.k + j]));
-            }
+        for (p, &row) in b.rows.iter().enumerate().take_while(|(_, &r)| r < last) {
+            by_row[row].extend((0..b.k).map(|j| (b.off + j, b.g[p * b.k + j])));
         }
     }
     by_row
 }
 
-/// Σ_r w(r) g_r g_rᵀ over the rows' G columns `by_row`: the lower triangle by columns.
-fn gram(by_row: &[Vec<(usize, f64)>], nc: usize, w: impl Fn(usize) -> f64) -> Vec<std::collections::BTreeMap<usize, f64>> {
-    let mut cols: Vec<std::collections::BTreeMap<usize, f64>> = vec![Default::default(); nc];
-    for (r, list) in by_row.iter().enumerate() {
-        let wr = w(r);
-        for &(i, x) in list {
-            for &(j, y) in list {
-                if i >= j {
-                    *cols[j].entry(i).or_insert(0.0) += wr * x * y;
+/// Σ_r w(r) g_r g_rᵀ over the rows from `first` on (g_r: row r's column of G), accumulated in
+/// k × k blocks of subdomain pairs (rows in ascending order, as a row-by-row sum would add
+/// them): the lower triangle, and per subdomain whether a row touched it (its diagonal block
+/// exists). Holds no per-row lists: the rows' (subdomain, position) pairs in one CSR array.
+fn gram(blocks: &[Block], first: usize, dim: usize, w: impl Fn(usize) -> f64) -> (SymCsc, Vec<bool>) {
+    let n = dim - first;
+    let mut ptr = vec![0usize; n + 1];
+    for b in blocks.iter().filter(|b| b.k > 0) {
+        b.rows.iter().filter(|&&r| r >= first).for_each(|&r| ptr[r - first + 1] += 1);
+    }
+    for i in 0..n {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut at = ptr.clone();
+    let mut ent = vec![(0usize, 0usize); ptr[n]];
+    for (s, b) in blocks.iter().enumerate().filter(|(_, b)| b.k > 0) {
+        for (p, &r) in b.rows.iter().enumerate().filter(|(_, &r)| r >= first) {
+            ent[at[r - first]] = (s, p);
+            at[r - first] += 1;
+        }
+    }
+    // (column block, row block) → k_row × k_col values, column-major
+    let mut acc: std::collections::BTreeMap<(usize, usize), Vec<f64>> = Default::default();
+    for r in 0..n {
+        let wr = w(r + first);
+        let list = &ent[ptr[r]..ptr[r + 1]];
+        for &(a, pa) in list {
+            for &(b, pb) in list.iter().filter(|x| x.0 <= a) {
+                let (ba, bb) = (&blocks[a], &blocks[b]);
+                let blk = acc.entry((b, a)).or_insert_with(|| vec![0.0; ba.k * bb.k]);
+                for jj in 0..bb.k {
+                    let y = bb.g[pb * bb.k + jj];
+                    for ii in (if a == b { jj } else { 0 })..ba.k {
+                        blk[jj * ba.k + ii] += wr * ba.g[pa * ba.k + ii] * y;
+                    }
                 }
             }
         }
     }
-    cols
-}
-
-/// Appends a column (lower triangle, the diagonal first) to `c`.
-fn cols_push(c: &mut SymCsc, col: &std::collections::BTreeMap<usize, f64>) {
-    for (&i, &v) in col {
-        c.row_idx.push(i);
-        c.values.push(v);
+    let nc = blocks.last().map_or(0, |b| b.off + b.k);
+    let mut c = SymCsc { n: nc, col_ptr: vec![0], row_idx: vec![], values: vec![] };
+    let mut touched = vec![false; blocks.len()];
+    for (b, bb) in blocks.iter().enumerate() {
+        touched[b] = acc.contains_key(&(b, b));
+        for jj in 0..bb.k {
+            for (&(_, a), blk) in acc.range((b, 0)..(b + 1, 0)) {
+                let ba = &blocks[a];
+                for ii in (if a == b { jj } else { 0 })..ba.k {
+                    c.row_idx.push(ba.off + ii);
+                    c.values.push(blk[jj * ba.k + ii]);
+                }
+            }
+            c.col_ptr.push(c.row_idx.len());
+        }
     }
-    c.col_ptr.push(c.row_idx.len());
+    (c, touched)
 }
 
 fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {

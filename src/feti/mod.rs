@@ -108,25 +108,19 @@ fn greedy_ranks(dofs: &[usize], ranks: usize) -> Vec<usize> {
 
 /// METIS k-way parts of the subdomain graph; `None` if METIS fails or leaves a rank empty.
 fn graph_ranks(ns: usize, cons: &constraints::Constraints, dofs: &[usize], ranks: usize) -> Option<Vec<usize>> {
+    // (row, subdomain) pairs, sorted: each row's subdomains together (one flat array)
+    let mut pairs: Vec<(usize, usize)> = cons.rows.iter().enumerate().flat_map(|(s, rows)| rows.iter().map(move |&(r, _, _)| (r, s))).collect();
+    pairs.sort_unstable();
+    pairs.dedup();
     let mut weight: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
-    let mut row_subs: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-    for (s, rows) in cons.rows.iter().enumerate() {
-        for &(r, _, _) in rows {
-            let v = row_subs.entry(r).or_default();
-            if v.last() != Some(&s) {
-                v.push(s);
+    for group in pairs.chunk_by(|x, y| x.0 == y.0) {
+        for (i, &(_, a)) in group.iter().enumerate() {
+            for &(_, b) in &group[i + 1..] {
+                *weight.entry((a, b)).or_default() += 1;
             }
         }
     }
-    for subs in row_subs.values() {
-        for (i, &a) in subs.iter().enumerate() {
-            for &b in &subs[i + 1..] {
-                if a != b {
-                    *weight.entry((a.min(b), a.max(b))).or_default() += 1;
-                }
-            }
-        }
-    }
+    drop(pairs);
     let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ns];
     for (&(a, b), &w) in &weight {
         adj[a].push((b, w));

@@ -40,6 +40,8 @@ pub use crate::dual::monolithic::LocalBody;
 #[derive(Clone, Debug, Default)]
 pub struct Timings {
     pub phases: Vec<(String, f64)>,
+    /// Peak resident memory (VmHWM) at the end of each phase, the maximum over the ranks.
+    pub peaks: Vec<(String, f64)>,
     pub live: monitor::Live,
 }
 
@@ -47,7 +49,7 @@ impl Timings {
     /// Timings that print each phase as it starts (and hand out a monitor that prints each
     /// outer iteration) when `live`: rank 0 of a run without `--quiet`.
     pub fn live(live: bool) -> Self {
-        Timings { phases: vec![], live: monitor::Live::new(live) }
+        Timings { phases: vec![], peaks: vec![], live: monitor::Live::new(live) }
     }
 
     /// The solvers' monitor: prints each outer iteration when live.
@@ -61,13 +63,17 @@ impl Timings {
         self.live.phase(name);
         let t0 = Instant::now();
         let r = f().and_then(|v| injected_fault(comm, name).map_or(Ok(v), Err));
-        let mut t = [t0.elapsed().as_secs_f64()];
+        let mut t = [t0.elapsed().as_secs_f64(), peak_rss_bytes()];
         let r = comm.agree(r);
         comm.max_f64(&mut t);
-        // a phase run once per load step: its total
+        // a phase run once per load step: its total (and its highest peak)
         match self.phases.iter_mut().find(|p| p.0 == name) {
             Some(p) => p.1 += t[0],
             None => self.phases.push((name.to_string(), t[0])),
+        }
+        match self.peaks.iter_mut().find(|p| p.0 == name) {
+            Some(p) => p.1 = p.1.max(t[1]),
+            None => self.peaks.push((name.to_string(), t[1])),
         }
         r
     }
@@ -480,7 +486,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let (mut peak_sum, mut peak_max) = ([peak_rss_bytes()], [peak_rss_bytes()]);
     comm.sum_f64(&mut peak_sum);
     comm.max_f64(&mut peak_max);
-    report.memory = Some(report::Memory { peak_rss_bytes_sum_over_ranks: peak_sum[0], peak_rss_bytes_max_rank: peak_max[0] });
+    let after_phase = t.peaks.iter().map(|(phase, bytes)| report::PhasePeak { phase: phase.clone(), bytes: *bytes }).collect();
+    report.memory = Some(report::Memory { peak_rss_bytes_sum_over_ranks: peak_sum[0], peak_rss_bytes_max_rank: peak_max[0], peak_rss_bytes_max_rank_after_phase: after_phase });
     let before_output = t.clone();
     // every rank writes its rows; the root attributes carry rank 0's report
     // collective: a failure on one rank must stop all of them before the broadcast below

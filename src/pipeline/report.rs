@@ -124,6 +124,16 @@ pub struct Multipliers {
 pub struct Memory {
     pub peak_rss_bytes_sum_over_ranks: f64,
     pub peak_rss_bytes_max_rank: f64,
+    /// The peak so far at the end of each phase (max over the ranks): where the memory grows.
+    #[serde(default)]
+    pub peak_rss_bytes_max_rank_after_phase: Vec<PhasePeak>,
+}
+
+/// [`Memory::peak_rss_bytes_max_rank_after_phase`]'s entries, in the order the phases ran.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct PhasePeak {
+    pub phase: String,
+    pub bytes: f64,
 }
 
 /// Phase times in the order they ran, written as a map with a `total`.
