@@ -168,6 +168,13 @@ fn written_file_reads_back_as_computed() {
     let umax = s.solution.displacement.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).fold(0.0, f64::max);
     assert_eq!(report["results"]["max_displacement"].as_f64().unwrap(), umax);
     assert_eq!(report["mesh"]["dofs"], 6 * 125);
+    // the JSON file is written after the output phase: it times it, and the peak memory per phase
+    assert!(report["timings"]["output"].as_f64().unwrap() > 0.0);
+    let total = report["timings"]["total"].as_f64().unwrap();
+    let sum: f64 = report["timings"].as_object().unwrap().iter().filter(|(k, _)| *k != "total").map(|(_, v)| v.as_f64().unwrap()).sum();
+    assert!((total - sum).abs() <= 1e-9 * total);
+    let peaks = report["memory"]["peak_rss_bytes_max_rank_after_phase"].as_array().unwrap();
+    assert!(peaks.iter().any(|p| p["phase"] == "factorize" && p["bytes"].as_f64().unwrap() > 0.0));
     // only the requested fields are written
     let h5b = dir.join("only_u.h5");
     solve(&scene_path, &["contact.enabled=false", "mesh.n=3", "output.fields=[\"displacement\"]", "output.xdmf=false", "output.report=false"], &h5b);
