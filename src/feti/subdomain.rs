@@ -241,23 +241,8 @@ impl SubdomainSystem {
         let k = sys.k;
         let mut zeroed: Vec<usize> = fixed.iter().chain(&held).copied().collect();
         zeroed.sort_unstable();
-        // K̂: K with the fixed and held rows and columns replaced by the identity (the held
-        // ones dropped from the pattern: they cost no fill)
-        let mut mask = vec![0u8; k.n];
-        fixed.iter().for_each(|&d| mask[d] = 1);
-        held.iter().for_each(|&d| mask[d] = 2);
-        let mut kh = SymCsc { n: k.n, col_ptr: vec![0], row_idx: Vec::with_capacity(k.nnz()), values: Vec::with_capacity(k.nnz()) };
-        for j in 0..k.n {
-            for p in k.col_ptr[j]..k.col_ptr[j + 1] {
-                let i = k.row_idx[p];
-                let v = if mask[i] == 0 && mask[j] == 0 { k.values[p] } else if i == j { 1.0 } else { 0.0 };
-                if i == j || (mask[i] != 2 && mask[j] != 2) {
-                    kh.row_idx.push(i);
-                    kh.values.push(v);
-                }
-            }
-            kh.col_ptr.push(kh.row_idx.len());
-        }
+        // K̂: K with the fixed and held rows and columns replaced by the identity
+        let kh = identity_on(&k, &fixed, &held);
         let ord = match ordering {
             OrderingKind::Metis => {
                 let (xadj, adj) = &sys.graph;
@@ -275,7 +260,7 @@ impl SubdomainSystem {
     /// A new load: f̂ = f − K g on the free DOFs, 0 on the held ones (`g`: their values).
     pub fn set_load(&mut self, mut f: Vec<f64>, g: Vec<f64>) {
         assert_eq!(g.len(), self.held.len(), "one value per held DOF");
-        if self.held.iter().zip(&g).any(|(_, &v)| v != 0.0) {
+        if g.iter().any(|&v| v != 0.0) {
             let mut full = vec![0.0; self.ndof()];
             self.held.iter().zip(&g).for_each(|(&d, &v)| full[d] = v);
             let kg = self.k.mul(&full);
@@ -326,18 +311,29 @@ impl SubdomainSystem {
         if self.held.is_empty() {
             return std::borrow::Cow::Borrowed(&self.k);
         }
-        let mut k = self.k.clone();
-        for j in 0..k.n {
-            let hj = self.held.binary_search(&j).is_ok();
-            for p in k.col_ptr[j]..k.col_ptr[j + 1] {
-                let i = k.row_idx[p];
-                if hj || self.held.binary_search(&i).is_ok() {
-                    k.values[p] = if i == j { 1.0 } else { 0.0 };
-                }
+        std::borrow::Cow::Owned(identity_on(&self.k, &[], &self.held))
+    }
+}
+
+/// `k` with the rows and columns of `fixed` and `held` replaced by the identity; the held
+/// ones' off-diagonal entries leave the pattern (they cost no fill), the fixed ones' stay.
+fn identity_on(k: &SymCsc, fixed: &[usize], held: &[usize]) -> SymCsc {
+    let mut mask = vec![0u8; k.n];
+    fixed.iter().for_each(|&d| mask[d] = 1);
+    held.iter().for_each(|&d| mask[d] = 2);
+    let mut out = SymCsc { n: k.n, col_ptr: vec![0], row_idx: Vec::with_capacity(k.nnz()), values: Vec::with_capacity(k.nnz()) };
+    for j in 0..k.n {
+        for p in k.col_ptr[j]..k.col_ptr[j + 1] {
+            let i = k.row_idx[p];
+            let v = if mask[i] == 0 && mask[j] == 0 { k.values[p] } else if i == j { 1.0 } else { 0.0 };
+            if i == j || (mask[i] != 2 && mask[j] != 2) {
+                out.row_idx.push(i);
+                out.values.push(v);
             }
         }
-        std::borrow::Cow::Owned(k)
+        out.col_ptr.push(out.row_idx.len());
     }
+    out
 }
 
 #[cfg(test)]

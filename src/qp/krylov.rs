@@ -53,6 +53,17 @@ impl InnerSystem for Subspace<'_> {
     }
 }
 
+/// M v into `buf` with a (right) preconditioner, v itself without one (no copy).
+fn right<'a>(m: &mut Option<&mut dyn FnMut(&[f64], &mut [f64])>, v: &'a [f64], buf: &'a mut [f64]) -> &'a [f64] {
+    match m {
+        Some(m) => {
+            m(v, buf);
+            buf
+        }
+        None => v,
+    }
+}
+
 /// z = P_W Π M̂ Π h: the preconditioner M on its block, `scale`·I on the other components,
 /// restricted to the system's subspace and projected onto Ker G ∩ W (`work`: scratch).
 pub(crate) fn precondition(m: &dyn Preconditioner, scale: f64, system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, h: &[f64], z: &mut [f64], work: &mut [f64]) {
@@ -294,14 +305,7 @@ impl Bicgstab {
             for i in 0..n {
                 self.p[i] = self.res[i] + beta * (self.p[i] - omega * self.v[i]);
             }
-            // M p (p itself without a preconditioner: no copy)
-            let mp: &[f64] = match precondition.as_mut() {
-                Some(m) => {
-                    m(&self.p, &mut self.mp);
-                    &self.mp
-                }
-                None => &self.p,
-            };
+            let mp = right(&mut precondition, &self.p, &mut self.mp);
             jacobian(mp, &mut self.v, &mut self.ap);
             let rv = sp.dot(&self.rhat, &self.v);
             if rv == 0.0 || !rv.is_finite() {
@@ -320,13 +324,7 @@ impl Bicgstab {
                 }
                 return Ok(it);
             }
-            let ms: &[f64] = match precondition.as_mut() {
-                Some(m) => {
-                    m(&self.s, &mut self.ms);
-                    &self.ms
-                }
-                None => &self.s,
-            };
+            let ms = right(&mut precondition, &self.s, &mut self.ms);
             jacobian(ms, &mut self.t, &mut self.as_);
             let tt = sp.dot(&self.t, &self.t);
             omega = if tt > 0.0 { sp.dot(&self.t, &self.s) / tt } else { 0.0 };
