@@ -435,6 +435,11 @@ pub struct DecompositionSettings {
     /// only); the FETI preconditioner acts there. Default true.
     #[serde(default = "yes")]
     pub projected_cg: bool,
+    /// H-TFETI: subdomains per cluster (METIS on each body's subdomain graph); a cluster's
+    /// subdomains are joined at a few corner nodes inside it and the coarse problem has six
+    /// unknowns per cluster. 1 (default): TFETI.
+    #[serde(default = "one")]
+    pub subdomains_per_cluster: usize,
 }
 
 fn unit() -> f64 {
@@ -444,7 +449,7 @@ fn unit() -> f64 {
 
 impl Default for DecompositionSettings {
     fn default() -> Self {
-        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true }
+        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true, subdomains_per_cluster: 1 }
     }
 }
 
@@ -860,6 +865,9 @@ impl Scene {
         }
         if self.decomposition.subdomains == Some(0) {
             return Err(Error::scene("decomposition.subdomains", "must be at least 1"));
+        }
+        if self.decomposition.subdomains_per_cluster == 0 {
+            return Err(Error::scene("decomposition.subdomains_per_cluster", "must be at least 1"));
         }
         if !(self.decomposition.penalty > 0.0 && self.decomposition.penalty.is_finite()) {
             return Err(Error::scene("decomposition.penalty", format!("must be a positive number, got {}", self.decomposition.penalty)));

@@ -461,22 +461,24 @@ fn one_two_three_ranks_give_identical_fields() {
 /// friction, with the symmetrized solver and with TSSN's projected CG and the FETI Dirichlet
 /// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step), and the preconditioner in
 /// SSN's BiCGSTAB, GIMSSN's CGMfeas and MPGP (whose face, and so GΠGᵀ, changes on one rank
-/// only: the decision to restrict anew is collective); each rank reads the parallel HDF5 file
-/// back.
+/// only: the decision to restrict anew is collective), and H-TFETI (clusters of 2, whole on a
+/// rank); each rank reads the parallel HDF5 file back.
 #[test]
 fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
-    for (name, method, pc) in [
-        ("tfeti-ssn", "ssn-bicgstab", "none"),
-        ("tfeti-gimssn", "gimssn", "none"),
-        ("tfeti-tssn-dirichlet", "tssn", "dirichlet"),
-        ("tfeti-ssn-lumped", "ssn-bicgstab", "lumped"),
-        ("tfeti-gimssn-dirichlet", "gimssn", "dirichlet"),
-        ("tfeti-mpgp-lumped", "mpgp", "lumped"),
+    for (name, method, pc, per_cluster) in [
+        ("tfeti-ssn", "ssn-bicgstab", "none", 1),
+        ("tfeti-gimssn", "gimssn", "none", 1),
+        ("tfeti-tssn-dirichlet", "tssn", "dirichlet", 1),
+        ("tfeti-ssn-lumped", "ssn-bicgstab", "lumped", 1),
+        ("tfeti-gimssn-dirichlet", "gimssn", "dirichlet", 1),
+        ("tfeti-mpgp-lumped", "mpgp", "lumped", 1),
+        ("htfeti-tssn-lumped", "tssn", "lumped", 2),
     ] {
         let m = format!("solver.method=\"{method}\"");
         let p = format!("solver.preconditioner=\"{pc}\"");
+        let c = format!("decomposition.subdomains_per_cluster={per_cluster}");
         // ε = 1e-6: GIMSSN stalls near 5e-8 on this TFETI dual (README)
-        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "solver.eps=1e-6", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, "output.verify=true"]);
+        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "solver.eps=1e-6", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, &c, "output.verify=true"]);
         for (n, (stdout, _)) in runs.iter().enumerate() {
             assert!(stdout.contains(&format!("values on {} ranks match the fields in memory", n + 1)), "{stdout}");
         }

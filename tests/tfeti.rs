@@ -208,6 +208,28 @@ fn dirichlet_rows_and_eliminated_dirichlet_dofs_match_alike() {
     assert!(f.dirichlet_rows > 0 && f.eliminated_dofs > 0, "seed S = 4: {} rows, {} eliminated", f.dirichlet_rows, f.eliminated_dofs);
 }
 
+/// H-TFETI: 8 subdomains per body in clusters of 4 (two per body) and 8 (one per body; the
+/// coarse problem is then six unknowns per floating cluster at most): the monolithic u, with
+/// the default TSSN + lumped, with the Dirichlet preconditioner, SMALSE-M's orthogonal
+/// projector, and without contact.
+#[test]
+fn htfeti_clusters_match_the_monolithic_dual() {
+    for extra in [
+        vec!["decomposition.subdomains_per_cluster=4"],
+        vec!["decomposition.subdomains_per_cluster=8", "solver.preconditioner=\"dirichlet\""],
+        vec!["decomposition.subdomains_per_cluster=4", "decomposition.projector=\"orthogonal\""],
+        vec!["decomposition.subdomains_per_cluster=4", "contact.enabled=false"],
+    ] {
+        equivalence("run/seed.toml", &seed(8, &extra), &[8]);
+    }
+    for (per, clusters) in [(1, 16), (4, 4), (8, 2)] {
+        let (sol, _) = solve("run/seed.toml", &seed(8, &[&format!("decomposition.subdomains_per_cluster={per}")]), 8);
+        let f = sol.tfeti.expect("TFETI figures");
+        assert_eq!((f.subdomains.len(), f.clusters), (16, clusters));
+        assert!(f.coarse_dim <= 6 * clusters && (per == 1) == (f.corner_rows == 0), "{per} per cluster: coarse {}, {} corner rows", f.coarse_dim, f.corner_rows);
+    }
+}
+
 #[test]
 fn gmsh_mesh_matches_the_monolithic_dual() {
     equivalence("run/gmsh_blocks.toml", &["solver.eps=1e-12".to_string()], &[1, 2, 4]);

@@ -21,15 +21,12 @@
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use crate::comm::Comm;
-use super::subdomain::held_kernel;
-use crate::feti::decomposition::Decomposition;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{Cholesky, Ordering, Symbolic};
 use crate::linalg::ordering::nested_dissection;
 use crate::linalg::sparse::SymCsc;
-use crate::mesh::Mesh;
 
-/// One subdomain's part of G.
+/// One piece's part of G (a subdomain's, or a cluster's: [`super::cluster`]).
 struct Block {
     /// The multipliers whose rows touch it (ascending).
     rows: Vec<usize>,
@@ -68,21 +65,10 @@ struct Pattern {
     symbolic: Symbolic,
 }
 
-/// e = Rᵀf: the load's work in each subdomain's kernel motions (`loads[s]` = f_s; the held
-/// DOFs `eliminated[s]`, where R_s vanishes: Rᵀf = Rᵀ(f − Kg)).
-pub fn rigid_loads(mesh: &Mesh, d: &Decomposition, loads: &[Vec<f64>], eliminated: &[Vec<usize>]) -> Vec<f64> {
-    let mut e = Vec::new();
-    for (s, sd) in d.subdomains.iter().enumerate() {
-        let (r, _) = kernel(mesh, sd, &eliminated[s]);
-        e.extend(rigid_work(&r, &loads[s]));
-    }
-    e
-}
-
-/// R_s of `sd` with the held DOFs `held`.
-fn kernel(mesh: &Mesh, sd: &crate::feti::decomposition::Subdomain, held: &[usize]) -> (Vec<f64>, usize) {
-    let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-    held_kernel(&coords, held).expect("eliminated only where the held DOFs leave an exact kernel")
+/// e = Rᵀf: the load's work in each piece's kernel motions (`kernels[s]` = (R_s, k_s),
+/// `loads[s]` = f_s; R_s vanishes on held DOFs: Rᵀf = Rᵀ(f − Kg)).
+pub fn rigid_loads(kernels: &[(Vec<f64>, usize)], loads: &[Vec<f64>]) -> Vec<f64> {
+    kernels.iter().zip(loads).flat_map(|((r, _), f)| rigid_work(r, f)).collect()
 }
 
 /// R_sᵀ f_s for the modes `r` (columns of f's length, column-major).
@@ -103,18 +89,17 @@ pub enum Kind {
 }
 
 impl Coarse {
-    /// Builds G and e for all subdomains (`loads[s]` = f_s, `eliminated[s]` its held DOFs) and
-    /// factorizes what `kind` needs.
-    pub fn new(mesh: &Mesh, d: &Decomposition, cons: &Constraints, loads: &[Vec<f64>], kind: Kind, eliminated: &[Vec<usize>]) -> Result<Coarse> {
+    /// Builds G and e for all pieces — subdomains or clusters, whose rows `cons` lists —
+    /// (`kernels[s]` = (R_s, k_s), `loads[s]` = f_s) and factorizes what `kind` needs; `body`
+    /// names a piece's body in errors.
+    pub fn new(kernels: &[(Vec<f64>, usize)], cons: &Constraints, loads: &[Vec<f64>], kind: Kind, body: &dyn Fn(usize) -> String) -> Result<Coarse> {
         let e_start = cons.e_start();
-        let ns = d.subdomains.len();
         let mut e = Vec::new();
-        let mut blocks = Vec::with_capacity(ns);
-        for (s, sd) in d.subdomains.iter().enumerate() {
-            let (r, k) = kernel(mesh, sd, &eliminated[s]);
-            let nd = 3 * sd.nodes.len();
+        let mut blocks = Vec::with_capacity(kernels.len());
+        for (s, (r, k)) in kernels.iter().enumerate() {
+            let (k, nd) = (*k, loads[s].len());
             let off = e.len();
-            e.extend(rigid_work(&r, &loads[s]));
+            e.extend(rigid_work(r, &loads[s]));
             let rows = cons.sorted_rows(s);
             let mut g = vec![0.0; k * rows.len()];
             for &(row, dof, coef) in &cons.rows[s] {
@@ -127,11 +112,11 @@ impl Coarse {
         }
         let full = match kind {
             Kind::Oblique => None,
-            _ => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), d, mesh)?.0),
+            _ => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), body)?.0),
         };
         let (c, nnz_c) = match kind {
             Kind::ContactHeld => (None, 0),
-            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), d, mesh).map(|(c, nnz)| (Some(c), nnz))?,
+            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), body).map(|(c, nnz)| (Some(c), nnz))?,
         };
         Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
@@ -362,10 +347,13 @@ impl Coarse {
 }
 
 /// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
-fn coarse_matrix(blocks: &[Block], first: usize, dim: usize, d: &Decomposition, mesh: &Mesh) -> Result<(Cholesky, usize)> {
+fn coarse_matrix(blocks: &[Block], first: usize, dim: usize, body: &dyn Fn(usize) -> String) -> Result<(Cholesky, usize)> {
     let (c, touched) = gram(blocks, first, dim, |_| 1.0);
     if let Some(s) = (0..blocks.len()).find(|&s| blocks[s].k > 0 && !touched[s]) {
-        return Err(singular(d, s, mesh));
+        return Err(Error::numerical(
+            "TFETI coarse problem",
+            format!("C = G_E G_Eᵀ is singular (body \"{}\"): every body needs Dirichlet conditions that stop its rigid motion", body(s)),
+        ));
     }
     let chol = Cholesky::factorize(&c, block_nested_dissection(blocks, &c)).map_err(|_| {
         Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
@@ -471,18 +459,16 @@ fn gram(blocks: &[Block], first: usize, dim: usize, w: impl Fn(usize) -> f64) ->
     (c, touched)
 }
 
-fn singular(d: &Decomposition, s: usize, mesh: &Mesh) -> Error {
-    let body = &mesh.bodies[d.subdomains[s].body].name;
-    Error::numerical(
-        "TFETI coarse problem",
-        format!("C = G_E G_Eᵀ is singular (body \"{body}\"): every body needs Dirichlet conditions that stop its rigid motion"),
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::feti::decomposition::Decomposition;
     use crate::feti::subdomain_loads;
+
+    /// The subdomains' kernels, nothing held.
+    fn kernels(model: &crate::model::Model, d: &Decomposition) -> Vec<(Vec<f64>, usize)> {
+        crate::feti::cluster::Clustering::singletons(d).kernels(&model.mesh, d, &vec![vec![]; d.subdomains.len()])
+    }
 
     fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -496,7 +482,7 @@ mod tests {
     fn projector_identities() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Orthogonal, &vec![vec![]; d.subdomains.len()]).unwrap();
+        let c = Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Orthogonal, &|_| String::new()).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();
@@ -565,7 +551,7 @@ mod tests {
     fn restricted_projector_maps_into_ker_g_on_w() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
         let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&model.mesh, &d, &cons, &loads, Kind::Oblique, &vec![vec![]; d.subdomains.len()]).unwrap();
+        let c = Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Oblique, &|_| String::new()).unwrap();
         let comm = crate::comm::SerialComm;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let n = cons.layout.dim();

@@ -12,7 +12,7 @@
 use super::coarse::Coarse;
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
-use super::subdomain::SubdomainSystem;
+use super::cluster::ClusterSystem;
 use crate::comm::Comm;
 use crate::dual::{DualProblem, Recovered};
 use crate::error::{Error, Result};
@@ -21,10 +21,11 @@ use super::precond::Scaling;
 use crate::qp::{self, Layout, Operator, Preconditioner, ProductCounter};
 use crate::scene::Preconditioner as PreconditionerKind;
 
-/// A subdomain of this rank with its B entries (position in its sorted rows, local DOF,
-/// coefficient).
-pub struct LocalSubdomain {
-    pub sys: SubdomainSystem,
+/// A piece of this rank — a cluster of subdomains ([`super::cluster`]; one subdomain unless
+/// `decomposition.subdomains_per_cluster` > 1) — with its B entries (position in its sorted
+/// rows, DOF in the cluster, coefficient).
+pub struct LocalPiece {
+    pub sys: ClusterSystem,
     pub entries: Vec<(usize, usize, f64)>,
     /// Number of its rows.
     pub nrows: usize,
@@ -35,7 +36,7 @@ pub struct TfetiDual<'c, C: Comm> {
     pub dist: Distribution<'c, C>,
     /// The layout of this rank's components.
     pub layout: Layout,
-    pub subs: Vec<LocalSubdomain>,
+    pub pieces: Vec<LocalPiece>,
     pub coarse: Coarse,
     /// c on the owned rows (+ the last load step's tangential jump, [`TfetiDual::set_load`]).
     c: Vec<f64>,
@@ -53,37 +54,40 @@ pub struct TfetiDual<'c, C: Comm> {
     rows: usize,
     /// The preconditioner's scaling and its S_s (one per local subdomain), once built.
     precond: Option<(Scaling, Vec<Schur>)>,
+    /// H-TFETI: the null space W of F (the B_c rows as combinations of B's rows), owned
+    /// indices, orthonormal; products, preconditioner and b̃ are kept orthogonal to it.
+    null: Vec<Vec<(usize, f64)>>,
 }
 
 impl<'c, C: Comm> TfetiDual<'c, C> {
-    /// The operator over this rank's factorized subdomains `subs` (ascending global index
-    /// `sys.index`, as in `dist`), and b̃ on the owned rows.
-    pub fn new(dist: Distribution<'c, C>, cons: &Constraints, subs: Vec<SubdomainSystem>, coarse: Coarse) -> (Self, Vec<f64>) {
-        let subs: Vec<LocalSubdomain> = subs
+    /// The operator over this rank's factorized pieces `pieces` (ascending global index
+    /// `sys.index`, as in `dist`; `cons`: the rows of B per piece), and b̃ on the owned rows.
+    pub fn new(dist: Distribution<'c, C>, cons: &Constraints, pieces: Vec<ClusterSystem>, coarse: Coarse) -> (Self, Vec<f64>) {
+        let pieces: Vec<LocalPiece> = pieces
             .into_iter()
             .zip(&dist.subs)
             .map(|(sys, sr)| {
                 assert_eq!(sys.index, sr.index, "subdomains in the distribution's order");
                 let rows = cons.sorted_rows(sys.index);
                 let entries = cons.rows[sys.index].iter().map(|&(r, j, c)| (rows.binary_search(&r).expect("row"), j, c)).collect();
-                LocalSubdomain { sys, entries, nrows: rows.len() }
+                LocalPiece { sys, entries, nrows: rows.len() }
             })
             .collect();
         let c = dist.restrict(&cons.c);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, subs, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None };
+        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None, null: vec![] };
         let b = dual.rhs();
         (dual, b)
     }
 
     /// A new load state on the same subdomains and rows (a step of a load path): f_s and the
-    /// held values g_s of each local subdomain, e = Rᵀf (all subdomains), c on every row, and
+    /// held values g_s of each member of each local piece, e = Rᵀf (all pieces), c on every row, and
     /// the tangential rows of c moved by `jump` (owned; B_T u of the last step,
     /// [`TfetiDual::jump`]): friction acts on the slip increment. Returns b̃.
-    pub fn set_load(&mut self, f: Vec<(Vec<f64>, Vec<f64>)>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
-        for (s, (fs, g)) in self.subs.iter_mut().zip(f) {
-            s.sys.set_load(fs, g);
+    pub fn set_load(&mut self, f: Vec<Vec<(Vec<f64>, Vec<f64>)>>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
+        for (s, fs) in self.pieces.iter_mut().zip(f) {
+            s.sys.set_load(fs);
         }
         self.coarse.e = e;
         self.c0 = self.dist.restrict(c);
@@ -96,6 +100,26 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// c − Bu of a recovered solution: what the next load step's slip is measured from.
     pub fn jump(&self, gap: &[f64]) -> Vec<f64> {
         crate::dual::tangential_jump(self.layout, &self.c, &self.c0, gap)
+    }
+
+    /// Sets the null space W of F (H-TFETI: [`super::cluster::Clustering::null`], global rows;
+    /// each vector's rows lie on one rank) and returns b̃ with it deflated.
+    pub fn set_null(&mut self, null: &[Vec<(usize, f64)>], b: &mut [f64]) {
+        let owned = &self.dist.owned;
+        self.null = null
+            .iter()
+            .filter(|w| owned.binary_search(&w[0].0).is_ok())
+            .map(|w| w.iter().map(|&(r, x)| (owned.binary_search(&r).expect("a null vector's rows lie on one rank"), x)).collect())
+            .collect();
+        self.deflate(b);
+    }
+
+    /// y ← y − W Wᵀ y (no communication: each vector of W lies on one rank).
+    fn deflate(&self, y: &mut [f64]) {
+        for w in &self.null {
+            let h: f64 = w.iter().map(|&(i, x)| x * y[i]).sum();
+            w.iter().for_each(|&(i, x)| y[i] -= h * x);
+        }
     }
 
     /// λ̂ and d̃ − Fλ̂ = B K⁺ (f − Bᵀλ̂) − c from the current f, e and c; returns b̃ = P̃(d̃ − Fλ̂),
@@ -115,6 +139,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         } else {
             self.coarse.project(&self.dist, &mut b);
         }
+        self.deflate(&mut b);
         b
     }
 
@@ -156,9 +181,15 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             self.coarse.close_local(&self.dist, &mut lambda);
         }
         let feasibility = self.coarse.feasibility(&self.dist, &lambda);
-        let rhs = self.rhs_of(&lambda);
+        let mut rhs = self.rhs_of(&lambda);
         let mut u: Vec<Vec<f64>> = rhs.clone();
-        self.pinv_all(&mut u);
+        // ũ = K⁺(f̂ − Bᵀλ); a cluster's corner forces join its members' right-hand sides
+        Clock::time(&self.dist.clock.pinv, || {
+            for ((s, us), fs) in self.pieces.iter().zip(&mut u).zip(&mut rhs) {
+                let mu = s.sys.pinv_corners(us);
+                s.sys.sub_corner_forces(&mu, fs);
+            }
+        });
         // w = c − B ũ; its E part (and Π's contact rows) enter α
         let mut w = vec![0.0; self.layout.dim()];
         self.gather(&u, &mut w);
@@ -199,7 +230,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             }
             self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw)
         };
-        for (s, us) in self.subs.iter().zip(&mut u) {
+        for (s, us) in self.pieces.iter().zip(&mut u) {
             s.sys.add_r_mul(&alpha[self.coarse.range(s.sys.index)], us);
             s.sys.set_held(us);
         }
@@ -223,8 +254,8 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
             }
         };
         let scaling = Scaling::new(cons, weight, &self.dist.owned)?;
-        let mut pieces = Vec::with_capacity(self.subs.len());
-        for s in &self.subs {
+        let mut pieces = Vec::with_capacity(self.pieces.len());
+        for s in &self.pieces {
             let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();
             let schur = Schur::new(&s.sys.k_free(), &touched, form)
                 .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
@@ -236,7 +267,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// Bᵀ_s x for each local subdomain, x on the local rows.
     fn scatter(&self, xl: &[f64]) -> Vec<Vec<f64>> {
-        self.subs
+        self.pieces
             .iter()
             .zip(&self.dist.subs)
             .map(|(s, sr)| {
@@ -252,7 +283,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// y = Σ over subdomains and ranks of B_s z_s, on the owned rows.
     fn gather(&self, z: &[Vec<f64>], y: &mut [f64]) {
         let v: Vec<Vec<f64>> = self
-            .subs
+            .pieces
             .iter()
             .zip(z)
             .map(|(s, zs)| {
@@ -269,7 +300,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// z_s ← K_s⁺ z_s for each local subdomain.
     fn pinv_all(&self, z: &mut [Vec<f64>]) {
         Clock::time(&self.dist.clock.pinv, || {
-            for (s, zs) in self.subs.iter().zip(z) {
+            for (s, zs) in self.pieces.iter().zip(z) {
                 s.sys.pinv_in_place(zs);
             }
         });
@@ -285,7 +316,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// f_s − B_sᵀλ for each local subdomain (λ on the local rows).
     fn rhs_of(&self, lambda_local: &[f64]) -> Vec<Vec<f64>> {
         let mut z = self.scatter(lambda_local);
-        for (s, zs) in self.subs.iter().zip(&mut z) {
+        for (s, zs) in self.pieces.iter().zip(&mut z) {
             zs.iter_mut().zip(&s.sys.f).for_each(|(v, f)| *v = f - *v);
         }
         z
@@ -334,6 +365,7 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
             self.coarse.project_t_local(&self.dist, &mut wl);
             self.apply_f_local(&wl, y);
             self.coarse.project(&self.dist, y);
+            self.deflate(y);
         });
     }
 
@@ -344,12 +376,18 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     /// F x: for x ∈ Ker G, P̃ᵀx = x and A x = P̃ F x = F x − Gᵀ(…).
     fn apply_kernel(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
-        Clock::time(&self.dist.clock.apply, || self.apply_f(x, y));
+        Clock::time(&self.dist.clock.apply, || {
+            self.apply_f(x, y);
+            self.deflate(y);
+        });
     }
 
     /// y ← P̃ y.
     fn finish_kernel(&self, y: &mut [f64]) {
-        Clock::time(&self.dist.clock.apply, || self.coarse.project(&self.dist, y));
+        Clock::time(&self.dist.clock.apply, || {
+            self.coarse.project(&self.dist, y);
+            self.deflate(y);
+        });
     }
 }
 
@@ -371,13 +409,14 @@ impl<C: Comm> Preconditioner for DualPreconditioner<'_, '_, C> {
         let mut xs = x.to_vec();
         self.scaling.apply(&d.dist, &mut xs);
         let mut z = d.scatter(&d.dist.ghosted(&xs));
-        for ((zs, schur), s) in z.iter_mut().zip(self.schur).zip(&d.subs) {
+        for ((zs, schur), s) in z.iter_mut().zip(self.schur).zip(&d.pieces) {
             schur.apply_in_place(zs);
             let w = self.scaling.weight[s.sys.index];
             zs.iter_mut().for_each(|v| *v *= w * w);
         }
         d.gather(&z, y);
         self.scaling.apply(&d.dist, y);
+        d.deflate(y);
     }
 }
 

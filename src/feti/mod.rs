@@ -7,6 +7,7 @@
 //! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
 //! feasible multipliers, and `DualProblem::recover` of [`dual::TfetiDual`] maps the solution back to λ, α and u.
 
+pub mod cluster;
 pub mod coarse;
 pub mod constraints;
 pub mod decomposition;
@@ -69,24 +70,24 @@ pub fn held_values(d: &Decomposition, eliminated: &[Vec<usize>], dirichlet: &[(u
         .collect()
 }
 
-/// Rank of every subdomain: a METIS k-way partition of the subdomain graph (an edge where rows
-/// of B couple two subdomains, weighted by their number; vertices weighted by DOFs), so that a
-/// rank's subdomains lie together and its ghost rows are the ones across rank borders; the
-/// greedy assignment (largest first onto the least loaded rank) where METIS balances the DOFs
-/// worse than 1.05× of it, or there are fewer subdomains than ranks. Deterministic.
-pub fn assign_ranks(d: &Decomposition, cons: &constraints::Constraints, ranks: usize) -> Vec<usize> {
-    let ns = d.subdomains.len();
-    let dofs: Vec<usize> = d.subdomains.iter().map(|s| 3 * s.nodes.len()).collect();
+/// Rank of every piece (subdomain, or cluster of them) with `dofs[s]` DOFs and the rows `cons`:
+/// a METIS k-way partition of the piece graph (an edge where rows of B couple two pieces,
+/// weighted by their number; vertices weighted by DOFs), so that a rank's pieces lie together
+/// and its ghost rows are the ones across rank borders; the greedy assignment (largest first
+/// onto the least loaded rank) where METIS balances the DOFs worse than 1.05× of it, or there
+/// are fewer pieces than ranks. Deterministic.
+pub fn assign_ranks(dofs: &[usize], cons: &constraints::Constraints, ranks: usize) -> Vec<usize> {
+    let ns = dofs.len();
     let greedy = greedy_ranks(&dofs, ranks);
     if ranks <= 1 || ns <= ranks {
         return greedy;
     }
     let max_load = |owner: &[usize]| {
         let mut load = vec![0usize; ranks];
-        owner.iter().zip(&dofs).for_each(|(&r, &n)| load[r] += n);
+        owner.iter().zip(dofs).for_each(|(&r, &n)| load[r] += n);
         load.into_iter().max().unwrap_or(0)
     };
-    match graph_ranks(ns, cons, &dofs, ranks) {
+    match graph_ranks(ns, cons, dofs, ranks) {
         Some(owner) if (max_load(&owner) as f64) <= 1.05 * max_load(&greedy) as f64 => owner,
         _ => greedy,
     }
@@ -188,18 +189,18 @@ mod tests {
         let (_, d, cons) = seed_fixture(8, 8);
         let dofs: Vec<usize> = d.subdomains.iter().map(|s| 3 * s.nodes.len()).collect();
         for ranks in [2, 3, 4] {
-            let owner = assign_ranks(&d, &cons, ranks);
+            let owner = assign_ranks(&dofs, &cons, ranks);
             let (cross, load) = crossing_and_load(&d, &cons, &owner, ranks);
             let (cross_greedy, load_greedy) = crossing_and_load(&d, &cons, &greedy_ranks(&dofs, ranks), ranks);
             // two ranks: one body each, only the contact rows cross
             let factor = if ranks == 2 { 2 } else { 1 };
             assert!(factor * cross < cross_greedy, "{ranks} ranks: {cross} rows cross ranks, greedy {cross_greedy}");
             assert!(load as f64 <= 1.05 * load_greedy as f64, "{ranks} ranks: load {load} against {load_greedy}");
-            assert_eq!(owner, assign_ranks(&d, &cons, ranks), "deterministic");
+            assert_eq!(owner, assign_ranks(&dofs, &cons, ranks), "deterministic");
         }
-        assert_eq!(assign_ranks(&d, &cons, 1), vec![0; 16]);
+        assert_eq!(assign_ranks(&dofs, &cons, 1), vec![0; 16]);
         // more ranks than subdomains: one subdomain per rank, the largest first
-        let owner = assign_ranks(&d, &cons, 20);
+        let owner = assign_ranks(&dofs, &cons, 20);
         assert_eq!(owner.iter().collect::<std::collections::BTreeSet<_>>().len(), 16);
     }
 }

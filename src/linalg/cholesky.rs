@@ -119,6 +119,19 @@ impl Cholesky {
         let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
         LltRef::new(&self.symbolic.0, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
     }
+
+    /// Solves A X = B in place for the `ncols` columns of `b` (column-major, n × ncols).
+    pub fn solve_many_in_place(&self, b: &mut [f64], ncols: usize) {
+        let n = self.n();
+        assert_eq!(b.len(), n * ncols);
+        if ncols == 0 {
+            return;
+        }
+        let par = Par::Seq;
+        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f64>(ncols, par));
+        let rhs = MatMut::from_column_major_slice_mut(b, n, ncols);
+        LltRef::new(&self.symbolic.0, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+    }
 }
 
 #[cfg(test)]

@@ -201,7 +201,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
                 Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
             })
             .collect();
-        let owner = assign_ranks(&d, &cons, ranks);
+        let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, ranks);
         let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
         let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
         let rows = (cons.gluing_rows, cons.dirichlet_rows);

@@ -14,6 +14,7 @@ use crate::feti::constraints;
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
+use crate::feti::cluster::{ClusterSystem, Clustering};
 use crate::feti::subdomain::SubdomainSystem;
 use crate::feti::{assign_ranks, eliminated, held_values, subdomain_loads};
 use crate::model::Model;
@@ -41,6 +42,10 @@ pub struct TfetiInfo {
     pub dirichlet_rows: usize,
     /// DOFs held inside their subdomains (hybrid Dirichlet), over all copies.
     pub eliminated_dofs: usize,
+    /// H-TFETI: clusters and the gluing rows of their corner nodes (held inside the clusters,
+    /// not in `gluing_rows`); as many clusters as subdomains and no corner rows without.
+    pub clusters: usize,
+    pub corner_rows: usize,
     pub coarse_dim: usize,
     pub nnz_c: usize,
     /// max over nodes and copies of |u_copy − u_first| / max |u|.
@@ -81,15 +86,21 @@ pub struct DistributionStats {
     pub restricted_factor_s: f64,
     /// The least loaded rank's K⁺ time (load balance: pinv_min_s / pinv_s).
     pub pinv_min_s: f64,
+    /// H-TFETI: the part of `pinv_s` spent in the clusters' corner problems (outside the
+    /// subdomains' K_s⁺ solves).
+    #[serde(default)]
+    pub corner_s: f64,
 }
 
 impl DistributionStats {
-    fn new<C: Comm>(dist: &Distribution<'_, C>) -> Self {
+    fn new<C: Comm>(dual: &TfetiDual<'_, C>) -> Self {
+        let dist = &dual.dist;
         let comm = dist.comm();
+        let corner: f64 = dual.pieces.iter().map(|p| p.sys.corner_s.get()).sum();
         let (owned, ghosts) = (dist.owned.len(), dist.local_len() - dist.owned.len());
         let (fwd, rev, nbrs) = dist.message_sizes();
         let c = &dist.clock;
-        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get(), c.restricted_factor.get()];
+        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get(), c.restricted_factor.get(), corner];
         comm.max_f64(&mut mx);
         let mut sent = [(2 * fwd + rev) as u64];
         comm.sum_u64(&mut sent);
@@ -107,6 +118,7 @@ impl DistributionStats {
             pinv_min_s: -mx[9],
             restricted_s: mx[10],
             restricted_factor_s: mx[11],
+            corner_s: mx[12],
         }
     }
 }
@@ -115,10 +127,13 @@ impl DistributionStats {
 /// the operator F (with the preconditioner TSSN asks for) and b̃, this rank's part of Λ.
 pub struct TfetiProblem<'c, C: Comm> {
     pub decomposition: Decomposition,
+    /// The subdomains' clusters (one subdomain each unless H-TFETI).
+    pub clusters: Clustering,
+    /// The outer dual's rows of B, per cluster (B without the corner rows).
     pub constraints: constraints::Constraints,
     /// Per subdomain, the DOFs held inside it (hybrid Dirichlet).
     pub eliminated: Vec<Vec<usize>>,
-    /// Rank of every subdomain.
+    /// Rank of every cluster.
     pub owner: Vec<usize>,
     pub dual: TfetiDual<'c, C>,
     pub b: Vec<f64>,
@@ -133,23 +148,32 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     let mesh = &model.mesh;
     let dec = &ls.scene.decomposition;
     let contact = model.pairs.as_ref();
-    let (d, cons, owner, elim) = t.phase(comm, "decompose", || {
+    let (d, sub_cons, clusters, cons, owner, elim) = t.phase(comm, "decompose", || {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = decompose_each(mesh, &parts)?;
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
-        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
-        let owner = assign_ranks(&d, &cons, comm.size());
-        Ok((d, cons, owner, elim))
+        let sub_cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
+        let clusters = Clustering::new(mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
+        let cons = clusters.outer(&sub_cons);
+        let dofs: Vec<usize> = clusters.members.iter().map(|m| m.iter().map(|&s| 3 * d.subdomains[s].nodes.len()).sum()).collect();
+        let owner = assign_ranks(&dofs, &cons, comm.size());
+        Ok((d, sub_cons, clusters, cons, owner, elim))
     })?;
     let dist = Distribution::new(comm, &cons, &owner);
     let loads = subdomain_loads(&d, &model.loads);
     let held = held_values(&d, &elim, &model.constraints);
-    let subs = t.phase(comm, "factorize", || {
-        (0..d.subdomains.len())
-            .filter(|&s| owner[s] == comm.rank())
-            .map(|s| {
-                let sd = &d.subdomains[s];
-                SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone(), elim[s].clone(), held[s].clone())
+    let pieces = t.phase(comm, "factorize", || {
+        (0..clusters.len())
+            .filter(|&c| owner[c] == comm.rank())
+            .map(|c| {
+                let subs = clusters.members[c]
+                    .iter()
+                    .map(|&s| {
+                        let sd = &d.subdomains[s];
+                        SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone(), elim[s].clone(), held[s].clone())
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                ClusterSystem::new(c, subs, clusters.bc[c].0.clone(), clusters.bc[c].1)
             })
             .collect::<Result<Vec<_>>>()
     })?;
@@ -159,26 +183,33 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         (true, true) => coarse::Kind::Orthogonal,
         (true, false) => coarse::Kind::ContactHeld,
     };
-    let coarse = t.phase(comm, "coarse", || Coarse::new(mesh, &d, &cons, &loads, kind, &elim))?;
+    let body = |c: usize| mesh.bodies[d.subdomains[clusters.members[c][0]].body].name.clone();
+    let coarse = t.phase(comm, "coarse", || Coarse::new(&clusters.kernels(mesh, &d, &elim), &cons, &clusters.concat(&loads), kind, &body))?;
+    drop(sub_cons);
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
-    let (mut dual, b) = t.phase(comm, "dual", || Ok(TfetiDual::new(dist, &cons, subs, coarse)))?;
+    let (mut dual, b) = t.phase(comm, "dual", || {
+        let (mut dual, mut b) = TfetiDual::new(dist, &cons, pieces, coarse);
+        dual.set_null(&clusters.null, &mut b);
+        Ok((dual, b))
+    })?;
     let s = &super::solver_for(ls, model);
     if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
-        t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, stiffness_weights(model, &d)))?;
+        t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, piece_weights(model, &d, &clusters)))?;
     }
     // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
         Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
         None => Lambda::unconstrained(dual.layout.free),
     };
-    Ok(TfetiProblem { decomposition: d, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c })
+    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c })
 }
 
-/// Δ_s = μ_min/μ_s per subdomain: the preconditioner's stiffness weighting (1 for one material).
-pub fn stiffness_weights(model: &Model, d: &Decomposition) -> Vec<f64> {
+/// Δ_s = μ_min/μ_s per piece (a cluster lies in one body): the preconditioner's stiffness
+/// weighting (1 for one material).
+pub fn piece_weights(model: &Model, d: &Decomposition, clusters: &Clustering) -> Vec<f64> {
     let mu = |s: &crate::feti::decomposition::Subdomain| model.lame[s.body].mu;
     let min = d.subdomains.iter().map(mu).fold(f64::INFINITY, f64::min);
-    d.subdomains.iter().map(|s| min / mu(s)).collect()
+    clusters.members.iter().map(|m| min / mu(&d.subdomains[m[0]])).collect()
 }
 
 /// Decomposes, factorizes, then for each load step (one without `[load]`) sets the load
@@ -190,7 +221,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
+    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
@@ -202,10 +233,11 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             b = t.phase(comm, "load", || {
                 let (cons_k, loads) = model.state(k);
                 let f = subdomain_loads(&d, &loads);
-                let e = rigid_loads(mesh, &d, &f, &elim);
-                let c = constraints::build(&d, &cons_k, contact, dec.gluing, &elim).c;
+                let sub_cons = constraints::build(&d, &cons_k, contact, dec.gluing, &elim);
+                let e = rigid_loads(&clusters.kernels(mesh, &d, &elim), &clusters.concat(&f));
+                let c = sub_cons.c;
                 let g = held_values(&d, &elim, &cons_k);
-                let mine = dual.dist.subs.iter().map(|sr| (f[sr.index].clone(), g[sr.index].clone())).collect();
+                let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[s].clone(), g[s].clone())).collect()).collect();
                 Ok(dual.set_load(mine, e, &c, &walk.jump))
             })?;
         }
@@ -249,8 +281,9 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
             })
         })?;
         let feasibility = rec.feasibility;
-        let distribution = DistributionStats::new(&dual.dist);
-        let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &owner, t)?;
+        let distribution = DistributionStats::new(&dual);
+        let sub_owner: Vec<usize> = clusters.cluster_of.iter().map(|&c| owner[c]).collect();
+        let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &sub_owner, t)?;
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
         f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
@@ -258,6 +291,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         f.gluing_rows = cons.gluing_rows;
         f.dirichlet_rows = cons.dirichlet_rows;
         f.eliminated_dofs = elim.iter().map(Vec::len).sum();
+        f.clusters = clusters.len();
+        f.corner_rows = clusters.corner_rows();
         f.coarse_dim = coarse_dim;
         f.nnz_c = nnz_c;
         f.feasibility = feasibility;
@@ -342,30 +377,35 @@ fn finish_subdomains<C: Comm>(
             name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
         })
         .collect();
-    // u_s − g_s: zero on the held DOFs, whose rows (reactions) are not checked
-    let w: Vec<Vec<f64>> = dual
-        .subs
+    // per subdomain (the members of this rank's pieces): u_s − g_s, zero on the held DOFs, whose
+    // rows (reactions) are not checked
+    // (finish takes each rank's pieces in ascending order)
+    let mut members: Vec<(&SubdomainSystem, &[f64], &[f64])> = dual
+        .pieces
         .iter()
         .zip(u)
-        .map(|(ls, us)| {
-            let mut w = us.clone();
-            ls.sys.held.iter().for_each(|&d| w[d] = 0.0);
+        .zip(rhs)
+        .flat_map(|((p, us), f)| p.sys.subs.iter().enumerate().map(move |(m, sub)| (sub, p.sys.part(us, m), p.sys.part(f, m))))
+        .collect();
+    members.sort_by_key(|x| x.0.index);
+    let w: Vec<Vec<f64>> = members
+        .iter()
+        .map(|(sub, us, _)| {
+            let mut w = us.to_vec();
+            sub.held.iter().for_each(|&d| w[d] = 0.0);
             w
         })
         .collect();
-    let mine: Vec<PieceSolution<'_>> = dual
-        .subs
+    let mine: Vec<PieceSolution<'_>> = members
         .iter()
-        .zip(u)
         .zip(&w)
-        .zip(rhs)
-        .map(|(((ls, us), ws), f)| PieceSolution {
-            piece: ls.sys.index,
-            k: &ls.sys.k,
-            nnz_l: ls.sys.nnz_l(),
+        .map(|(&(sub, us, f), ws)| PieceSolution {
+            piece: sub.index,
+            k: &sub.k,
+            nnz_l: sub.nnz_l(),
             x: ws,
             rhs: f,
-            held: &ls.sys.held,
+            held: &sub.held,
             nodal: us.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         })
         .collect();

@@ -273,16 +273,19 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                 let Solver::Dual(c) = solver else { continue };
                 let t0 = Instant::now();
                 let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true })?;
-                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, crate::pipeline::tfeti::stiffness_weights(&tmodel, &prob.decomposition))?;
+                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, crate::pipeline::tfeti::piece_weights(&tmodel, &prob.decomposition, &prob.clusters))?;
                 let pc_s = t0.elapsed().as_secs_f64();
                 let (dual_t, d) = (&prob.dual, &prob.decomposition);
                 let measure = |sol: &QpSolution| {
                     let rec = dual_t.recover(&sol.lambda);
                     let mut e = 0.0f64;
-                    for (ls, us) in dual_t.subs.iter().zip(&rec.u) {
-                        for (l, &v) in d.subdomains[ls.sys.index].nodes.iter().enumerate() {
-                            for c in 0..3 {
-                                e = e.max((us[3 * l + c] - u_nodes[v][c]).abs());
+                    for (ls, uc) in dual_t.pieces.iter().zip(&rec.u) {
+                        for (m, sub) in ls.sys.subs.iter().enumerate() {
+                            let us = ls.sys.part(uc, m);
+                            for (l, &v) in d.subdomains[sub.index].nodes.iter().enumerate() {
+                                for c in 0..3 {
+                                    e = e.max((us[3 * l + c] - u_nodes[v][c]).abs());
+                                }
                             }
                         }
                     }
