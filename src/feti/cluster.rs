@@ -114,56 +114,70 @@ impl Clustering {
                 o += dofs[s];
             }
         }
-        // the gluing row of each free component of a node with two copies
+        // the gluing rows of every free component of the nodes whose copies all lie in one
+        // cluster: (node, component) → rows, each with its entries (subdomain, local DOF, coefficient)
         let e_start = cons.e_start();
-        // (and its coefficient on the first copy)
-        let mut entries = vec![0u32; cons.layout.dim()];
-        cons.rows.iter().flatten().for_each(|&(r, _, _)| entries[r] += 1);
-        let mut row_of: std::collections::HashMap<(usize, usize), (usize, f64)> = Default::default();
+        let mut count = vec![0u32; cons.layout.dim()];
+        cons.rows.iter().flatten().for_each(|&(r, _, _)| count[r] += 1);
+        let inside = |v: usize| d.copies[v].len() > 1 && d.copies[v].iter().all(|&(s, _)| cluster_of[s] == cluster_of[d.copies[v][0].0]);
+        let mut glue: std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<usize, Vec<(usize, usize, f64)>>> = Default::default();
         for (s, rows) in cons.rows.iter().enumerate() {
             // gluing rows: E rows with two entries or more (a Dirichlet row has one)
-            for &(r, dof, coef) in rows.iter().filter(|x| x.0 >= e_start && entries[x.0] >= 2) {
+            for &(r, dof, coef) in rows.iter().filter(|x| x.0 >= e_start && count[x.0] >= 2) {
                 let v = d.subdomains[s].nodes[dof / 3];
-                if d.copies[v].len() == 2 && d.copies[v][0].0 == s && cluster_of[s] == cluster_of[d.copies[v][1].0] {
-                    row_of.insert((v, dof % 3), (r, coef));
+                if inside(v) {
+                    glue.entry((v, dof % 3)).or_default().entry(r).or_default().push((s, dof, coef));
                 }
             }
         }
-        // per pair of members: its face, the nodes of exactly these two copies
+        // per pair of members: the nodes they share (all copies in the cluster)
         let mut face: std::collections::BTreeMap<(usize, usize), Vec<usize>> = Default::default();
-        for (v, copies) in d.copies.iter().enumerate().filter(|(_, c)| c.len() == 2) {
-            if cluster_of[copies[0].0] == cluster_of[copies[1].0] {
-                face.entry((copies[0].0, copies[1].0)).or_default().push(v);
+        for (v, copies) in d.copies.iter().enumerate().filter(|&(v, c)| c.len() == 2 && inside(v)) {
+            for (i, &(a, _)) in copies.iter().enumerate() {
+                for &(b, _) in &copies[i + 1..] {
+                    face.entry((a.min(b), a.max(b))).or_default().push(v);
+                }
             }
         }
-        // B_c: per face, the moments of the jump u_a − u_b against the face's rigid motions —
-        // combinations w of its gluing rows (Bᵀw = B_cᵀe_j), which stay in B: F's null space
-        let mut bc: Vec<(Vec<Vec<(usize, usize, f64)>>, usize)> = members.iter().map(|m| (vec![Vec::new(); m.len()], 0)).collect();
-        let mut null = Vec::new();
-        let pos = |s: usize| members[cluster_of[s]].binary_search(&s).expect("member");
+        // W: per face, the moments of the jump u_a − u_b against the face's rigid motions as
+        // combinations of the gluing rows (per node and component, λ with Σ λ_r B_r = e_a − e_b),
+        // orthonormalized per cluster (dependent ones dropped)
+        let mut raw: Vec<Vec<Vec<(usize, f64)>>> = vec![Vec::new(); members.len()];
         for (&(a, b), nodes) in &face {
-            let dofs: Vec<(usize, usize)> = nodes.iter().flat_map(|&v| (0..3).map(move |k| (v, k))).filter(|x| row_of.contains_key(x)).collect();
-            let modes = face_modes(&dofs, &mesh.nodes);
-            if modes.len() < NR {
-                // a face too small to average over (its pair joins through other faces)
-                continue;
-            }
-            let (la, lb) = (|v: usize| d.subdomains[a].local(v).expect("face node"), |v: usize| d.subdomains[b].local(v).expect("face node"));
-            let (c, pa, pb) = (cluster_of[a], pos(a), pos(b));
-            let (lists, rows) = &mut bc[c];
-            for q in modes {
-                let mut w: Vec<(usize, f64)> = Vec::with_capacity(dofs.len());
-                for (&(v, k), &x) in dofs.iter().zip(&q) {
-                    lists[pa].push((*rows, 3 * la(v) + k, x * std::f64::consts::FRAC_1_SQRT_2));
-                    lists[pb].push((*rows, 3 * lb(v) + k, -x * std::f64::consts::FRAC_1_SQRT_2));
-                    let (r, coef) = row_of[&(v, k)];
-                    w.push((r, x * std::f64::consts::FRAC_1_SQRT_2 / coef));
+            let dofs: Vec<(usize, usize)> = nodes.iter().flat_map(|&v| (0..3).map(move |k| (v, k))).filter(|x| glue.contains_key(x)).collect();
+            let jumps: Vec<Vec<(usize, f64)>> = dofs.iter().map(|&(v, k)| jump_rows(&glue[&(v, k)], a, b)).collect();
+            for q in face_modes(&dofs, &mesh.nodes) {
+                let mut w: std::collections::BTreeMap<usize, f64> = Default::default();
+                for (jr, &x) in jumps.iter().zip(&q) {
+                    jr.iter().for_each(|&(r, l)| *w.entry(r).or_default() += x * l);
                 }
-                let nrm = w.iter().map(|x| x.1 * x.1).sum::<f64>().sqrt();
-                w.iter_mut().for_each(|x| x.1 /= nrm);
-                w.sort_by_key(|x| x.0);
+                raw[cluster_of[a]].push(w.into_iter().collect());
+            }
+        }
+        // B_c = Wᵀ B on the cluster's subdomains
+        let mut bc: Vec<(Vec<Vec<(usize, usize, f64)>>, usize)> = members.iter().map(|m| (vec![Vec::new(); m.len()], 0)).collect();
+        let mut entries_of: std::collections::HashMap<usize, &Vec<(usize, usize, f64)>> = Default::default();
+        for rows in glue.values() {
+            for (&r, list) in rows {
+                entries_of.insert(r, list);
+            }
+        }
+        let mut null = Vec::new();
+        for (c, ws) in raw.into_iter().enumerate() {
+            let (lists, nc) = &mut bc[c];
+            for w in orthonormalize(ws) {
+                let mut row: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+                for &(r, x) in &w {
+                    for &(s, dof, coef) in entries_of[&r] {
+                        *row.entry((s, dof)).or_default() += x * coef;
+                    }
+                }
+                for ((s, dof), v) in row {
+                    let p = members[c].binary_search(&s).expect("a member");
+                    lists[p].push((*nc, dof, v));
+                }
+                *nc += 1;
                 null.push(w);
-                *rows += 1;
             }
         }
         Ok(Clustering { members, cluster_of, offset, bc, null })
@@ -293,6 +307,49 @@ fn face_modes(dofs: &[(usize, usize)], coords: &[[f64; 3]]) -> Vec<Vec<f64>> {
         if nrm > 1e-6 * before {
             x.iter_mut().for_each(|v| *v /= nrm);
             out.push(x);
+        }
+    }
+    out
+}
+
+/// λ on the gluing rows `rows` of one node and component (row → its entries (subdomain, DOF,
+/// coefficient)) with Σ_r λ_r B_r = e_a − e_b on the node's copies: (HHᵀ)λ = H(e_a − e_b), H
+/// the rows on the copies (a basis of the complement of (1, …, 1)).
+fn jump_rows(rows: &std::collections::BTreeMap<usize, Vec<(usize, usize, f64)>>, a: usize, b: usize) -> Vec<(usize, f64)> {
+    let ids: Vec<usize> = rows.keys().copied().collect();
+    let coef = |r: usize, s: usize| rows[&r].iter().find(|x| x.0 == s).map_or(0.0, |x| x.2);
+    let copies: std::collections::BTreeSet<usize> = rows.values().flatten().map(|x| x.0).collect();
+    let m = ids.len();
+    let hh = faer::Mat::<f64>::from_fn(m, m, |i, j| copies.iter().map(|&s| coef(ids[i], s) * coef(ids[j], s)).sum());
+    let rhs = faer::Mat::<f64>::from_fn(m, 1, |i, _| coef(ids[i], a) - coef(ids[i], b));
+    use faer::linalg::solvers::Solve;
+    let lam = hh.llt(faer::Side::Lower).expect("gluing rows of a node are independent").solve(&rhs);
+    ids.iter().enumerate().map(|(i, &r)| (r, lam[(i, 0)] * std::f64::consts::FRAC_1_SQRT_2)).collect()
+}
+
+/// Modified Gram–Schmidt (twice) on sparse vectors (row, value), sorted; a vector that keeps
+/// less than 1e-8 of its norm is dropped.
+fn orthonormalize(ws: Vec<Vec<(usize, f64)>>) -> Vec<Vec<(usize, f64)>> {
+    let mut out: Vec<Vec<(usize, f64)>> = Vec::new();
+    let mut by_row: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    for w in ws {
+        let mut x: std::collections::BTreeMap<usize, f64> = w.into_iter().collect();
+        let before = x.values().map(|v| v * v).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            let mut near: Vec<usize> = x.keys().filter_map(|r| by_row.get(r)).flatten().copied().collect();
+            near.sort_unstable();
+            near.dedup();
+            for &j in &near {
+                let h: f64 = out[j].iter().map(|&(r, q)| q * x.get(&r).copied().unwrap_or(0.0)).sum();
+                out[j].iter().for_each(|&(r, q)| *x.entry(r).or_default() -= h * q);
+            }
+        }
+        let nrm = x.values().map(|v| v * v).sum::<f64>().sqrt();
+        if nrm > 1e-8 * before {
+            let j = out.len();
+            let v: Vec<(usize, f64)> = x.into_iter().filter(|x| x.1 != 0.0).map(|(r, v)| (r, v / nrm)).collect();
+            v.iter().for_each(|&(r, _)| by_row.entry(r).or_default().push(j));
+            out.push(v);
         }
     }
     out

@@ -571,6 +571,8 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             dirichlet: dec.dirichlet,
             multipliers: Multipliers { contact: f.contact_rows, gluing: f.gluing_rows, dirichlet: f.dirichlet_rows },
             eliminated_dofs: f.eliminated_dofs,
+            clusters: f.clusters,
+            corner_rows: f.corner_rows,
             coarse_dim: f.coarse_dim,
             nnz_c: f.nnz_c,
             gluing_jump: f.gluing_jump,

@@ -97,6 +97,12 @@ pub struct TfetiReport {
     /// Prescribed DOFs held inside their subdomains (over all copies): no multiplier rows.
     #[serde(default)]
     pub eliminated_dofs: usize,
+    /// H-TFETI (`decomposition.subdomains_per_cluster`): clusters, and the rows of their B_c
+    /// (face moments, held inside the clusters; as many clusters as subdomains and none without).
+    #[serde(default)]
+    pub clusters: usize,
+    #[serde(default)]
+    pub corner_rows: usize,
     pub coarse_dim: usize,
     #[serde(rename = "nnz_C_lower")]
     pub nnz_c: usize,
