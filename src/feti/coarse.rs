@@ -1,5 +1,6 @@
-//! The natural coarse space of TFETI: G = RᵀBᵀ (a row per column of each subdomain's kernel:
-//! six for a floating one, fewer where held DOFs are eliminated), e = Rᵀf, the coarse
+//! The natural coarse space of TFETI: G = RᵀBᵀ (a row per column of each piece's kernel — a
+//! subdomain's, or an H-TFETI cluster's: six for a floating one, fewer where held DOFs are
+//! eliminated), e = Rᵀf, the coarse
 //! matrix C = G_E G_Eᵀ (sparse, factorized once) and the oblique projector of DESIGN §2,
 //!
 //! ```text
@@ -42,7 +43,7 @@ pub struct Coarse {
     blocks: Vec<Block>,
     /// First λ_E index.
     e_start: usize,
-    /// e = Rᵀf, k_s per subdomain.
+    /// e = Rᵀf, k_s per piece.
     pub e: Vec<f64>,
     /// C = G_E G_Eᵀ factorized; `None` when a body is held by contact alone (orthogonal
     /// projector only: then GGᵀ over every row is what is regular).
@@ -121,7 +122,7 @@ impl Coarse {
         Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
 
-    /// Size of the coarse problem, k_s per subdomain.
+    /// Size of the coarse problem, k_s per piece.
     pub fn dim(&self) -> usize {
         self.e.len()
     }

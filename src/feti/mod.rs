@@ -1,6 +1,7 @@
 //! Total FETI (DESIGN §2): every body split into floating subdomains (the METIS partition,
-//! [`decomposition`]; [`subdomain`]: K_s, R_s, K_s⁺), the constraint rows B = [B_I; B_E] and c
-//! ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors
+//! [`decomposition`]; [`subdomain`]: K_s, R_s, K_s⁺), optionally grouped into H-TFETI clusters
+//! that the outer dual treats as its pieces ([`cluster`]: K_c⁺, R_c), the constraint rows
+//! B = [B_I; B_E] and c ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors
 //! ([`coarse`]; also the inner solves' coarse space restricted to a Newton step), the dual
 //! operator on which the QP solvers run unchanged ([`dual`]) and the FETI preconditioner of the
 //! whole dual ([`precond`]). It is a
