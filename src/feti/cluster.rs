@@ -249,30 +249,7 @@ fn body_parts(first: usize, last: usize, weight: &std::collections::BTreeMap<(us
             adj[b - first].push((a - first, w));
         }
     }
-    let idx = |v: usize| metis::Idx::try_from(v).ok();
-    let (mut xadj, mut adjncy, mut adjwgt) = (vec![0], Vec::new(), Vec::new());
-    for list in &mut adj {
-        list.sort_unstable();
-        for &(b, w) in list.iter() {
-            adjncy.push(idx(b)?);
-            adjwgt.push(idx(w)?);
-        }
-        xadj.push(idx(adjncy.len())?);
-    }
-    let vwgt: Vec<metis::Idx> = dofs[first..last].iter().map(|&n| idx(n)).collect::<Option<_>>()?;
-    let mut part = vec![0; nb];
-    let nparts = idx(parts)?;
-    crate::linalg::ordering::metis_exclusive(|| {
-        metis::Graph::new(1, nparts, &xadj, &adjncy)
-            .ok()?
-            .set_vwgt(&vwgt)
-            .set_adjwgt(&adjwgt)
-            .set_option(metis::option::Contig(true))
-            .set_option(metis::option::Seed(1))
-            .part_kway(&mut part)
-            .ok()
-    })?;
-    Some(part.into_iter().map(|p| p as usize).collect())
+    super::kway(adj, &dofs[first..last], parts, true)
 }
 
 /// The rigid motions of a face (translations, rotations about its centroid) on its DOFs

@@ -103,7 +103,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// Sets the null space W of F (H-TFETI: [`super::cluster::Clustering::null`], global rows;
-    /// each vector's rows lie on one rank) and returns b̃ with it deflated.
+    /// each vector's rows lie on one rank; empty for TFETI) and deflates it from b̃ (`b`).
     pub fn set_null(&mut self, null: &[Vec<(usize, f64)>], b: &mut [f64]) {
         let owned = &self.dist.owned;
         self.null = null

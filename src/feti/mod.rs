@@ -128,6 +128,16 @@ fn graph_ranks(ns: usize, cons: &constraints::Constraints, dofs: &[usize], ranks
         adj[a].push((b, w));
         adj[b].push((a, w));
     }
+    let owner = kway(adj, dofs, ranks, false)?;
+    let mut used = vec![false; ranks];
+    owner.iter().for_each(|&r| used[r] = true);
+    used.iter().all(|&u| u).then_some(owner)
+}
+
+/// METIS k-way parts of a weighted graph (`adj[v]`: (neighbour, edge weight); `vwgt`: vertex
+/// weights), `contig`: connected parts; `None` if METIS fails. Serialized and seeded: the same
+/// parts on every rank.
+pub(crate) fn kway(mut adj: Vec<Vec<(usize, usize)>>, vwgt: &[usize], parts: usize, contig: bool) -> Option<Vec<usize>> {
     let idx = |v: usize| metis::Idx::try_from(v).ok();
     let (mut xadj, mut adjncy, mut adjwgt) = (vec![0], Vec::new(), Vec::new());
     for list in &mut adj {
@@ -138,22 +148,20 @@ fn graph_ranks(ns: usize, cons: &constraints::Constraints, dofs: &[usize], ranks
         }
         xadj.push(idx(adjncy.len())?);
     }
-    let vwgt: Vec<metis::Idx> = dofs.iter().map(|&n| idx(n)).collect::<Option<_>>()?;
-    let mut part = vec![0; ns];
-    let nparts = idx(ranks)?;
+    let vwgt: Vec<metis::Idx> = vwgt.iter().map(|&n| idx(n)).collect::<Option<_>>()?;
+    let mut part = vec![0; adj.len()];
+    let nparts = idx(parts)?;
     crate::linalg::ordering::metis_exclusive(|| {
         metis::Graph::new(1, nparts, &xadj, &adjncy)
             .ok()?
             .set_vwgt(&vwgt)
             .set_adjwgt(&adjwgt)
+            .set_option(metis::option::Contig(contig))
             .set_option(metis::option::Seed(1))
             .part_kway(&mut part)
             .ok()
     })?;
-    let owner: Vec<usize> = part.into_iter().map(|p| p as usize).collect();
-    let mut used = vec![false; ranks];
-    owner.iter().for_each(|&r| used[r] = true);
-    used.iter().all(|&u| u).then_some(owner)
+    Some(part.into_iter().map(|p| p as usize).collect())
 }
 
 /// The seed scene at N = `n`, `parts` subdomains per body, and its constraint rows (orthonormal
