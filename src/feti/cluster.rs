@@ -620,16 +620,8 @@ impl Hybrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::feti::subdomain::tests::{lcg, norm};
     use crate::scene::OrderingKind;
-
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-
-    fn norm(v: &[f64]) -> f64 {
-        v.iter().map(|x| x * x).sum::<f64>().sqrt()
-    }
 
     /// The seed at N = 6, 4 subdomains per body in one cluster per body (nothing eliminated): a
     /// cluster floats with six rigid motions (K_s R_c = 0 on every member, B_c R_c = 0, R_cᵀR_c =

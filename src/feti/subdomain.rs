@@ -349,17 +349,18 @@ fn identity_on(k: &SymCsc, fixed: &[usize], held: &[usize]) -> SymCsc {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::feti::decomposition::decompose;
     use crate::mesh::boxgen;
 
-    fn lcg(seed: &mut u64) -> f64 {
+    /// A reproducible uniform value in [−1, 1).
+    pub(crate) fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 
-    fn norm(v: &[f64]) -> f64 {
+    pub(crate) fn norm(v: &[f64]) -> f64 {
         v.iter().map(|x| x * x).sum::<f64>().sqrt()
     }
 
