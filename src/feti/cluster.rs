@@ -32,6 +32,12 @@ use crate::mesh::Mesh;
 /// motion of the whole cluster.
 const KERNEL_SHARE: f64 = 1e-10;
 
+/// B_c of one cluster, one entry list per member: (corner row, local DOF, coefficient).
+pub type CornerEntries = Vec<Vec<(usize, usize, f64)>>;
+/// The gluing rows of one node and component: row → its entries (subdomain, local DOF,
+/// coefficient).
+type NodeRows = std::collections::BTreeMap<usize, Vec<(usize, usize, f64)>>;
+
 /// The clusters of a decomposition and the rows of B that join their subdomains.
 #[derive(Clone, Debug)]
 pub struct Clustering {
@@ -42,7 +48,7 @@ pub struct Clustering {
     pub offset: Vec<usize>,
     /// Per cluster: B_c, one entry list per member (corner row, local DOF, coefficient), and
     /// its number of rows.
-    pub bc: Vec<(Vec<Vec<(usize, usize, f64)>>, usize)>,
+    pub bc: Vec<(CornerEntries, usize)>,
     /// The null space of F = B K_c⁺ Bᵀ: per corner row, the combination w of B's gluing rows
     /// with Bᵀw = B_cᵀe_j, (row, value), unit, rows ascending; together orthonormal.
     pub null: Vec<Vec<(usize, f64)>>,
@@ -120,7 +126,7 @@ impl Clustering {
         let mut count = vec![0u32; cons.layout.dim()];
         cons.rows.iter().flatten().for_each(|&(r, _, _)| count[r] += 1);
         let inside = |v: usize| d.copies[v].len() > 1 && d.copies[v].iter().all(|&(s, _)| cluster_of[s] == cluster_of[d.copies[v][0].0]);
-        let mut glue: std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<usize, Vec<(usize, usize, f64)>>> = Default::default();
+        let mut glue: std::collections::BTreeMap<(usize, usize), NodeRows> = Default::default();
         for (s, rows) in cons.rows.iter().enumerate() {
             // gluing rows: E rows with two entries or more (a Dirichlet row has one)
             for &(r, dof, coef) in rows.iter().filter(|x| x.0 >= e_start && count[x.0] >= 2) {
@@ -155,7 +161,7 @@ impl Clustering {
             }
         }
         // B_c = Wᵀ B on the cluster's subdomains
-        let mut bc: Vec<(Vec<Vec<(usize, usize, f64)>>, usize)> = members.iter().map(|m| (vec![Vec::new(); m.len()], 0)).collect();
+        let mut bc: Vec<(CornerEntries, usize)> = members.iter().map(|m| (vec![Vec::new(); m.len()], 0)).collect();
         let mut entries_of: std::collections::HashMap<usize, &Vec<(usize, usize, f64)>> = Default::default();
         for rows in glue.values() {
             for (&r, list) in rows {
@@ -292,7 +298,7 @@ fn face_modes(dofs: &[(usize, usize)], coords: &[[f64; 3]]) -> Vec<Vec<f64>> {
 /// λ on the gluing rows `rows` of one node and component (row → its entries (subdomain, DOF,
 /// coefficient)) with Σ_r λ_r B_r = e_a − e_b on the node's copies: (HHᵀ)λ = H(e_a − e_b), H
 /// the rows on the copies (a basis of the complement of (1, …, 1)).
-fn jump_rows(rows: &std::collections::BTreeMap<usize, Vec<(usize, usize, f64)>>, a: usize, b: usize) -> Vec<(usize, f64)> {
+fn jump_rows(rows: &NodeRows, a: usize, b: usize) -> Vec<(usize, f64)> {
     let ids: Vec<usize> = rows.keys().copied().collect();
     let coef = |r: usize, s: usize| rows[&r].iter().find(|x| x.0 == s).map_or(0.0, |x| x.2);
     let copies: std::collections::BTreeSet<usize> = rows.values().flatten().map(|x| x.0).collect();
@@ -380,7 +386,7 @@ fn expand(members: &[(&[f64], usize, usize)], n: &[f64], kc: usize) -> Vec<f64> 
 /// `m` rows: faer's product, sequential.
 fn gemv(y: &mut [f64], a: &[f64], m: usize, x: &[f64], alpha: f64, add: bool, transpose: bool) {
     use faer::{linalg::matmul::matmul, Accum, MatMut, MatRef, Par};
-    let n = if m == 0 { 0 } else { a.len() / m };
+    let n = a.len().checked_div(m).unwrap_or(0);
     let a = MatRef::from_column_major_slice(a, m, n);
     let accum = if add { Accum::Add } else { Accum::Replace };
     let (x, y) = (MatRef::from_column_major_slice(x, x.len(), 1), MatMut::from_column_major_slice_mut(y, y.len(), 1));
@@ -414,7 +420,7 @@ struct Hybrid {
     nc: usize,
     /// Per member: B_c entries (corner index, local DOF, coefficient), the corner indices of
     /// its columns of K⁺B_cᵀ, and those columns (column-major).
-    entries: Vec<Vec<(usize, usize, f64)>>,
+    entries: CornerEntries,
     cols: Vec<Vec<usize>>,
     z: Vec<Vec<f64>>,
     /// Per member: first of its amplitudes β_s; Σk last.
@@ -428,7 +434,7 @@ struct Hybrid {
 impl ClusterSystem {
     /// Cluster `index` of the factorized subdomains `subs` (ascending) joined by the corner
     /// entries `corners` (per member, as [`Clustering::corner_entries`]) of `nc` corner rows.
-    pub fn new(index: usize, subs: Vec<SubdomainSystem>, corners: Vec<Vec<(usize, usize, f64)>>, nc: usize) -> Result<Self> {
+    pub fn new(index: usize, subs: Vec<SubdomainSystem>, corners: CornerEntries, nc: usize) -> Result<Self> {
         let mut off = vec![0];
         subs.iter().for_each(|s| off.push(off.last().unwrap() + s.ndof()));
         let f = subs.iter().flat_map(|s| s.f.iter().copied()).collect();
@@ -564,7 +570,7 @@ impl ClusterSystem {
 }
 
 impl Hybrid {
-    fn new(index: usize, subs: &[SubdomainSystem], entries: Vec<Vec<(usize, usize, f64)>>, nc: usize) -> Result<Self> {
+    fn new(index: usize, subs: &[SubdomainSystem], entries: CornerEntries, nc: usize) -> Result<Self> {
         let members: Vec<(&[f64], usize, usize)> = subs.iter().map(|s| (s.r.as_slice(), s.kdim, s.ndof())).collect();
         let (g, roff, n, k) = kernel_basis(&members, &entries, nc);
         let r = expand(&members, &n, k);

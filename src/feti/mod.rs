@@ -79,7 +79,7 @@ pub fn held_values(d: &Decomposition, eliminated: &[Vec<usize>], dirichlet: &[(u
 /// are fewer pieces than ranks. Deterministic.
 pub fn assign_ranks(dofs: &[usize], cons: &constraints::Constraints, ranks: usize) -> Vec<usize> {
     let ns = dofs.len();
-    let greedy = greedy_ranks(&dofs, ranks);
+    let greedy = greedy_ranks(dofs, ranks);
     if ranks <= 1 || ns <= ranks {
         return greedy;
     }
