@@ -67,6 +67,8 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("both-subdomains-and-target", SEED, &["--set", "decomposition.subdomains=2", "--set", "decomposition.target_dofs=1000"], &["decomposition.target_dofs", "not both"]);
     assert_clean_failure("bad-penalty", SEED, &["--set", "decomposition.penalty=-1"], &["decomposition.penalty"]);
     assert_clean_failure("bad-clusters", SEED, &["--set", "decomposition.subdomains_per_cluster=0"], &["decomposition.subdomains_per_cluster"]);
+    // a cluster whose dense corner problem would be too large: refused before any factorization
+    assert_clean_failure("huge-cluster", SEED, &["--set", "mesh.n=16", "--set", "decomposition.subdomains=512", "--set", "decomposition.subdomains_per_cluster=512"], &["decomposition.subdomains_per_cluster", "smaller clusters"]);
     assert_clean_failure("bad-projector", SEED, &["--set", "decomposition.projector=\"skew\""], &["decomposition.projector"]);
     assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);

@@ -28,6 +28,9 @@ use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;
 use crate::mesh::Mesh;
 
+/// Most unknowns of a cluster's corner problem (corner rows + the members' kernel columns): it
+/// is inverted densely once (≈ 128 MB and a few tens of seconds at this size).
+pub const MAX_CORNER_SYSTEM: usize = 4000;
 /// Share of the largest eigenvalue of (B_c R)ᵀ(B_c R) at or below which a direction is a rigid
 /// motion of the whole cluster.
 const KERNEL_SHARE: f64 = 1e-10;
@@ -120,30 +123,26 @@ impl Clustering {
                 o += dofs[s];
             }
         }
-        // the gluing rows of every free component of the nodes whose copies all lie in one
-        // cluster: (node, component) → rows, each with its entries (subdomain, local DOF, coefficient)
+        // the gluing row of every free component of the face nodes (two copies, both in one
+        // cluster): (node, component) → rows with their entries (subdomain, local DOF, coefficient)
         let e_start = cons.e_start();
         let mut count = vec![0u32; cons.layout.dim()];
         cons.rows.iter().flatten().for_each(|&(r, _, _)| count[r] += 1);
-        let inside = |v: usize| d.copies[v].len() > 1 && d.copies[v].iter().all(|&(s, _)| cluster_of[s] == cluster_of[d.copies[v][0].0]);
+        let face_node = |v: usize| d.copies[v].len() == 2 && cluster_of[d.copies[v][0].0] == cluster_of[d.copies[v][1].0];
         let mut glue: std::collections::BTreeMap<(usize, usize), NodeRows> = Default::default();
         for (s, rows) in cons.rows.iter().enumerate() {
             // gluing rows: E rows with two entries or more (a Dirichlet row has one)
             for &(r, dof, coef) in rows.iter().filter(|x| x.0 >= e_start && count[x.0] >= 2) {
                 let v = d.subdomains[s].nodes[dof / 3];
-                if inside(v) {
+                if face_node(v) {
                     glue.entry((v, dof % 3)).or_default().entry(r).or_default().push((s, dof, coef));
                 }
             }
         }
-        // per pair of members: the nodes they share (all copies in the cluster)
+        // per pair of members: their face nodes (copies ascending by subdomain)
         let mut face: std::collections::BTreeMap<(usize, usize), Vec<usize>> = Default::default();
-        for (v, copies) in d.copies.iter().enumerate().filter(|&(v, c)| c.len() == 2 && inside(v)) {
-            for (i, &(a, _)) in copies.iter().enumerate() {
-                for &(b, _) in &copies[i + 1..] {
-                    face.entry((a.min(b), a.max(b))).or_default().push(v);
-                }
-            }
+        for v in (0..d.copies.len()).filter(|&v| face_node(v)) {
+            face.entry((d.copies[v][0].0, d.copies[v][1].0)).or_default().push(v);
         }
         // W: per face, the moments of the jump u_a − u_b against the face's rigid motions as
         // combinations of the gluing rows (per node and component, λ with Σ λ_r B_r = e_a − e_b),
@@ -184,6 +183,16 @@ impl Clustering {
                 }
                 *nc += 1;
                 null.push(w);
+            }
+        }
+        // the corner problem is solved densely: refuse one too large to hold and invert
+        for (c, (_, nc)) in bc.iter().enumerate() {
+            let n2 = nc + NR * members[c].len();
+            if n2 > MAX_CORNER_SYSTEM {
+                return Err(Error::scene(
+                    "decomposition.subdomains_per_cluster",
+                    format!("cluster {c} of {} subdomains has a corner problem of {n2} unknowns (at most {MAX_CORNER_SYSTEM}, held dense); use smaller clusters", members[c].len()),
+                ));
             }
         }
         Ok(Clustering { members, cluster_of, offset, bc, null })

@@ -180,7 +180,7 @@ pub fn fixing_dofs(coords: &[[f64; 3]], r: &[f64], k: usize, held: &[usize]) -> 
 
 /// `k` of the `candidates` DOFs on which the `k` modes `r` are regular: Gram–Schmidt with
 /// pivoting on the largest row norm.
-pub(crate) fn pivoted(r: &[f64], nd: usize, k: usize, candidates: &[usize]) -> Option<Vec<usize>> {
+fn pivoted(r: &[f64], nd: usize, k: usize, candidates: &[usize]) -> Option<Vec<usize>> {
     let mut rows: Vec<(usize, Vec<f64>)> = candidates.iter().map(|&dof| (dof, (0..k).map(|j| r[j * nd + dof]).collect())).collect();
     let norm = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
     let first = rows.iter().map(|x| norm(&x.1)).fold(0.0, f64::max);
