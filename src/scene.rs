@@ -440,6 +440,11 @@ pub struct DecompositionSettings {
     /// unknowns per cluster. 1 (default): TFETI.
     #[serde(default = "one")]
     pub subdomains_per_cluster: usize,
+    /// How the coarse problems C = G_E G_Eᵀ (and SMALSE-M's GGᵀ) are solved: factorized on
+    /// every rank, or as the rows of their inverses each rank reads (TSSN's restricted GΠGᵀ
+    /// stays factorized).
+    #[serde(default)]
+    pub coarse_solve: CoarseSolve,
 }
 
 fn unit() -> f64 {
@@ -449,7 +454,7 @@ fn unit() -> f64 {
 
 impl Default for DecompositionSettings {
     fn default() -> Self {
-        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true, subdomains_per_cluster: 1 }
+        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true, subdomains_per_cluster: 1, coarse_solve: CoarseSolve::Factor }
     }
 }
 
@@ -498,6 +503,19 @@ pub enum Projector {
     #[default]
     Oblique,
     Orthogonal,
+}
+
+/// See [`DecompositionSettings::coarse_solve`].
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CoarseSolve {
+    /// Every rank factorizes C and solves with the whole factor (replicated).
+    #[default]
+    Factor,
+    /// Every rank holds the rows of C⁻¹ of its own pieces, computed once from the factor,
+    /// which is then dropped: a solve is those dense rows times the reduced G x, and one more
+    /// reduction of the result.
+    Explicit,
 }
 
 /// Fill-reducing ordering of the sparse Cholesky factorizations.

@@ -69,6 +69,7 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("bad-clusters", SEED, &["--set", "decomposition.subdomains_per_cluster=0"], &["decomposition.subdomains_per_cluster"]);
     // a cluster whose dense corner problem would be too large: refused before any factorization
     assert_clean_failure("huge-cluster", SEED, &["--set", "mesh.n=16", "--set", "decomposition.subdomains=512", "--set", "decomposition.subdomains_per_cluster=512"], &["decomposition.subdomains_per_cluster", "smaller clusters"]);
+    assert_clean_failure("bad-coarse-solve", SEED, &["--set", "decomposition.coarse_solve=\"fast\""], &["decomposition.coarse_solve", "explicit"]);
     assert_clean_failure("bad-projector", SEED, &["--set", "decomposition.projector=\"skew\""], &["decomposition.projector"]);
     assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
@@ -464,8 +465,9 @@ fn one_two_three_ranks_give_identical_fields() {
 /// friction, with the symmetrized solver and with TSSN's projected CG and the FETI Dirichlet
 /// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step), and the preconditioner in
 /// SSN's BiCGSTAB, GIMSSN's CGMfeas and MPGP (whose face, and so GΠGᵀ, changes on one rank
-/// only: the decision to restrict anew is collective), and H-TFETI (clusters of 2, whole on a
-/// rank); each rank reads the parallel HDF5 file back.
+/// only: the decision to restrict anew is collective), H-TFETI (clusters of 2, whole on a
+/// rank), and TSSN on the oblique operator with the explicit coarse inverse (each rank its
+/// pieces' rows of C⁻¹); each rank reads the parallel HDF5 file back.
 #[test]
 fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
     for (name, method, pc, per_cluster) in [
@@ -476,12 +478,17 @@ fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
         ("tfeti-gimssn-dirichlet", "gimssn", "dirichlet", 1),
         ("tfeti-mpgp-lumped", "mpgp", "lumped", 1),
         ("htfeti-tssn-lumped", "tssn", "lumped", 2),
+        ("tfeti-tssn-explicit", "tssn", "none", 1),
     ] {
         let m = format!("solver.method=\"{method}\"");
         let p = format!("solver.preconditioner=\"{pc}\"");
         let c = format!("decomposition.subdomains_per_cluster={per_cluster}");
+        let mut sets = vec!["mesh.n=8", "solver.eps=1e-6", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, &c, "output.verify=true"];
+        if name.ends_with("explicit") {
+            sets.extend(["decomposition.projected_cg=false", "decomposition.coarse_solve=\"explicit\""]);
+        }
         // ε = 1e-6: GIMSSN stalls near 5e-8 on this TFETI dual (README)
-        let runs = on_1_2_3_ranks(name, &["mesh.n=8", "solver.eps=1e-6", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, &c, "output.verify=true"]);
+        let runs = on_1_2_3_ranks(name, &sets);
         for (n, (stdout, _)) in runs.iter().enumerate() {
             assert!(stdout.contains(&format!("values on {} ranks match the fields in memory", n + 1)), "{stdout}");
         }

@@ -230,6 +230,25 @@ fn htfeti_clusters_match_the_monolithic_dual() {
     }
 }
 
+/// The explicit coarse inverse (each rank the rows of C⁻¹ and (GGᵀ)⁻¹ of its pieces) where the
+/// coarse problem is solved in the iterations: TSSN on the oblique operator, SMALSE-M, and
+/// H-TFETI clusters; the same solution as the monolithic dual.
+#[test]
+fn explicit_coarse_inverse_matches_the_monolithic_dual() {
+    for extra in [
+        vec!["decomposition.projected_cg=false"],
+        vec!["decomposition.projector=\"orthogonal\""],
+        vec!["decomposition.projected_cg=false", "decomposition.subdomains_per_cluster=4"],
+    ] {
+        let mut sets = seed(8, &extra);
+        sets.push("decomposition.coarse_solve=\"explicit\"".into());
+        equivalence("run/seed.toml", &sets, &[8]);
+        let (sol, _) = solve("run/seed.toml", &sets, 8);
+        let f = sol.tfeti.expect("TFETI figures");
+        assert!(f.coarse_explicit_bytes >= 8 * f.coarse_dim * f.coarse_dim, "{extra:?}: {} bytes for dimension {}", f.coarse_explicit_bytes, f.coarse_dim);
+    }
+}
+
 #[test]
 fn gmsh_mesh_matches_the_monolithic_dual() {
     equivalence("run/gmsh_blocks.toml", &["solver.eps=1e-12".to_string()], &[1, 2, 4]);

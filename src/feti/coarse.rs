@@ -13,11 +13,14 @@
 //! says so.
 //!
 //! G is small (k_s·nnz of the B rows' columns per subdomain) and depends only on coordinates and
-//! the constraint rows, so every rank builds it whole and holds C factorized (replicated
-//! coarse problem): applying P̃ costs one reduction of G x (k_s per subdomain, each entry from
-//! the one rank that holds the subdomain), one C⁻¹ solve on every rank and Gᵀ on the rows
-//! the rank needs (its blocks and its neighbours'). Vectors are distributed
-//! ([`Distribution`]); the measurement behind keeping C replicated is in the README.
+//! the constraint rows, so every rank builds it whole and factorizes C (replicated coarse
+//! problem): applying P̃ costs one reduction of G x (k_s per subdomain, each entry from the one
+//! rank that holds the subdomain), one C⁻¹ solve and Gᵀ on the rows the rank needs (its blocks
+//! and its neighbours'). With [`Coarse::make_explicit`] a rank keeps instead only the rows of
+//! C⁻¹ (and (GGᵀ)⁻¹) of its own pieces — ESPRESO's explicit coarse inverse, held distributed —
+//! and a C⁻¹ solve becomes those rows' products with the reduced G x and a second reduction
+//! of the result: no triangular solve of dimension 6S on every rank. Vectors are distributed ([`Distribution`]);
+//! the measurements behind both are in the README.
 
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
@@ -38,6 +41,60 @@ struct Block {
     off: usize,
 }
 
+/// How this rank applies X⁻¹ for a coarse matrix X (C, or GGᵀ).
+enum Inverse {
+    /// X factorized, held whole by every rank.
+    Factor(Cholesky),
+    /// The rows of X⁻¹ of this rank's pieces ([`Coarse::make_explicit`]).
+    Explicit(Rows),
+}
+
+/// Rows of X⁻¹: per piece (ascending), its k rows, each of the coarse dimension (row-major).
+struct Rows {
+    pieces: Vec<(usize, Vec<f64>)>,
+}
+
+impl Rows {
+    /// The rows of `pieces` from X's factor: X⁻¹'s columns (X is symmetric) by one solve with
+    /// the k unit vectors of each piece, so a piece's rows are the same digits on every rank.
+    fn new(chol: &Cholesky, blocks: &[Block], pieces: &[usize]) -> Rows {
+        let n = chol.n();
+        let pieces = pieces
+            .iter()
+            .map(|&s| {
+                let b = &blocks[s];
+                let mut x = vec![0.0; n * b.k];
+                (0..b.k).for_each(|j| x[j * n + b.off + j] = 1.0);
+                chol.solve_many_in_place(&mut x, b.k);
+                (s, x)
+            })
+            .collect();
+        Rows { pieces }
+    }
+
+    fn bytes(&self) -> usize {
+        self.pieces.iter().map(|(_, r)| 8 * r.len()).sum()
+    }
+
+    /// x ← X⁻¹x on the entries of the rows held (zero elsewhere); each a dot product in index
+    /// order, so independent of the rank that takes it.
+    fn solve_mine(&self, blocks: &[Block], x: &mut [f64]) {
+        let n = x.len();
+        let mut out = vec![0.0; n];
+        for (s, r) in &self.pieces {
+            let b = &blocks[*s];
+            for (j, row) in r.chunks_exact(n).enumerate() {
+                out[b.off + j] = row.iter().zip(x.iter()).map(|(a, v)| a * v).sum();
+            }
+        }
+        x.copy_from_slice(&out);
+    }
+}
+
+/// The most bytes of explicit coarse-inverse rows a rank may hold
+/// (`decomposition.coarse_solve = "explicit"`).
+pub const MAX_EXPLICIT_BYTES: usize = 1 << 30;
+
 /// G, e and the factorized C.
 pub struct Coarse {
     blocks: Vec<Block>,
@@ -45,11 +102,11 @@ pub struct Coarse {
     e_start: usize,
     /// e = Rᵀf, k_s per piece.
     pub e: Vec<f64>,
-    /// C = G_E G_Eᵀ factorized; `None` when a body is held by contact alone (orthogonal
+    /// C = G_E G_Eᵀ's inverse; `None` when a body is held by contact alone (orthogonal
     /// projector only: then GGᵀ over every row is what is regular).
-    chol: Option<Cholesky>,
-    /// GGᵀ factorized, for the orthogonal projector (SMALSE-M) only.
-    full: Option<Cholesky>,
+    chol: Option<Inverse>,
+    /// GGᵀ's inverse, for the orthogonal projector (SMALSE-M) only.
+    full: Option<Inverse>,
     /// Nonzeros of the lower triangle of C.
     pub nnz_c: usize,
     /// The pattern of GGᵀ with C's values and G's contact columns, built at the first
@@ -113,11 +170,11 @@ impl Coarse {
         }
         let full = match kind {
             Kind::Oblique => None,
-            _ => Some(coarse_matrix(&blocks, 0, cons.layout.dim(), body)?.0),
+            _ => Some(Inverse::Factor(coarse_matrix(&blocks, 0, cons.layout.dim(), body)?.0)),
         };
         let (c, nnz_c) = match kind {
             Kind::ContactHeld => (None, 0),
-            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), body).map(|(c, nnz)| (Some(c), nnz))?,
+            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), body).map(|(c, nnz)| (Some(Inverse::Factor(c)), nnz))?,
         };
         Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
     }
@@ -179,10 +236,61 @@ impl Coarse {
         (0..dist.local_len()).map(|l| (l, l))
     }
 
-    /// x ← C⁻¹ x, timed on `dist`'s clock.
+    /// x ← X⁻¹ x on every rank, timed on `dist`'s clock: with X's factor, or with the rows of
+    /// this rank's pieces followed by a reduction (one contributor per entry: exact, so the
+    /// digits do not depend on the rank count).
+    fn inverse<C: Comm>(&self, dist: &Distribution<'_, C>, inv: &Inverse, x: &mut [f64]) {
+        match inv {
+            Inverse::Factor(chol) => Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(x)),
+            Inverse::Explicit(rows) => {
+                Clock::time(&dist.clock.coarse_solve, || rows.solve_mine(&self.blocks, x));
+                dist.reduce(x);
+            }
+        }
+    }
+
+    /// x ← C⁻¹ x.
     fn c_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
-        let chol = self.chol.as_ref().expect("C = G_E G_Eᵀ is regular (every body held by Dirichlet conditions)");
-        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(x));
+        let inv = self.chol.as_ref().expect("C = G_E G_Eᵀ is regular (every body held by Dirichlet conditions)");
+        self.inverse(dist, inv, x);
+    }
+
+    /// x ← (GGᵀ)⁻¹ x.
+    fn full_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
+        let inv = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
+        self.inverse(dist, inv, x);
+    }
+
+    /// Replaces the factors of C (and GGᵀ) by the rows of their inverses of this rank's pieces
+    /// and drops the factors. Fails on every rank, naming `decomposition.coarse_solve`, when a
+    /// rank would hold more than `max_bytes` ([`MAX_EXPLICIT_BYTES`] in the pipeline). Returns
+    /// the bytes held (max over the ranks).
+    pub fn make_explicit<C: Comm>(&mut self, dist: &Distribution<'_, C>, max_bytes: usize) -> Result<usize> {
+        let pieces: Vec<usize> = dist.subs.iter().map(|sr| sr.index).filter(|&s| self.blocks[s].k > 0).collect();
+        let per: usize = pieces.iter().map(|&s| 8 * self.blocks[s].k * self.dim()).sum();
+        let held = usize::from(self.chol.is_some()) + usize::from(self.full.is_some());
+        let mut mx = [(per * held) as f64];
+        dist.comm().max_f64(&mut mx);
+        let bytes = mx[0] as usize;
+        if bytes > max_bytes {
+            return Err(Error::scene(
+                "decomposition.coarse_solve",
+                format!(
+                    "\"explicit\" would hold {:.2} GB of coarse-inverse rows on a rank (coarse dimension {}; at most {:.2} GB); use \"factor\", more ranks or larger clusters",
+                    bytes as f64 / 1e9,
+                    self.dim(),
+                    max_bytes as f64 / 1e9
+                ),
+            ));
+        }
+        for inv in [&mut self.chol, &mut self.full].into_iter().flatten() {
+            if let Inverse::Factor(chol) = inv {
+                *inv = Inverse::Explicit(Rows::new(chol, &self.blocks, &pieces));
+            }
+        }
+        let mut mine = [[&self.chol, &self.full].into_iter().flatten().map(|inv| if let Inverse::Explicit(r) = inv { r.bytes() } else { 0 }).sum::<usize>() as f64];
+        dist.comm().max_f64(&mut mine);
+        Ok(mine[0] as usize)
     }
 
     /// Whether the orthogonal projector's GGᵀ was built (SMALSE-M).
@@ -229,10 +337,9 @@ impl Coarse {
     /// x ← P x = x − Gᵀ(GGᵀ)⁻¹G x, the orthogonal projector onto Ker G (built with
     /// `orthogonal = true` only; x owned).
     pub fn project_orthogonal<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
-        let full = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
         let xl = dist.ghosted(x);
         let mut a = self.g_mul(dist, &xl, false);
-        full.solve_in_place(&mut a);
+        self.full_solve(dist, &mut a);
         self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
     }
 
@@ -302,9 +409,8 @@ impl Coarse {
     /// λ_e = Gᵀ(GGᵀ)⁻¹e on the local rows (every row: with bodies held by contact alone part of
     /// e is the contact's to carry): the least-norm solution of Gλ = e (orthogonal projector).
     pub fn lambda_e_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {
-        let full = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
         let mut a = self.e.clone();
-        Clock::time(&dist.clock.coarse_solve, || full.solve_in_place(&mut a));
+        self.full_solve(dist, &mut a);
         let mut l = vec![0.0; dist.local_len()];
         self.sub_gt(dist, &a, &mut l, Self::local_rows(dist), false);
         l.iter_mut().for_each(|v| *v = -*v);
@@ -537,6 +643,38 @@ mod tests {
         c.project(&dist, &mut f1);
         c.project(&dist, &mut f2);
         assert!(f1.iter().zip(&f2).all(|(a, b)| (a - b).abs() < 1e-12 * norm(&f1).max(1.0)));
+    }
+
+    /// The explicit rows of C⁻¹ and (GGᵀ)⁻¹ give the factors' projections (to rounding), and a
+    /// rank that would hold more than the limit is refused naming the key.
+    #[test]
+    fn explicit_inverse_rows_agree_with_the_factors() {
+        let (model, d, cons) = crate::feti::seed_fixture(5, 3);
+        let loads = subdomain_loads(&d, &model.loads);
+        let new = || Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Orthogonal, &|_| String::new()).unwrap();
+        let comm = crate::comm::SerialComm;
+        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
+        let (f, mut x) = (new(), new());
+        let bytes = x.make_explicit(&dist, usize::MAX).unwrap();
+        // both inverses whole on one rank
+        assert_eq!(bytes, 2 * 8 * f.dim() * f.dim());
+        assert!(matches!(x.chol, Some(Inverse::Explicit(_))) && matches!(x.full, Some(Inverse::Explicit(_))));
+        let n = cons.layout.dim();
+        let mut s = 11u64;
+        let y: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max) <= 1e-12 * norm(b).max(1.0);
+        for project in [Coarse::project::<crate::comm::SerialComm>, Coarse::project_orthogonal, Coarse::project_e] {
+            let (mut a, mut b) = (y.clone(), y.clone());
+            project(&f, &dist, &mut a);
+            project(&x, &dist, &mut b);
+            assert!(close(&b, &a) && a != y);
+        }
+        assert!(close(&x.lambda_hat_local(&dist), &f.lambda_hat_local(&dist)));
+        assert!(close(&x.lambda_e_local(&dist), &f.lambda_e_local(&dist)));
+        let mut small = new();
+        let e = small.make_explicit(&dist, 1000).unwrap_err().to_string();
+        assert!(e.contains("decomposition.coarse_solve") && e.contains("\"factor\""), "{e}");
     }
 
     /// Gᵀα on every row.

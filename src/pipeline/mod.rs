@@ -575,6 +575,8 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             corner_rows: f.corner_rows,
             coarse_dim: f.coarse_dim,
             nnz_c: f.nnz_c,
+            coarse_solve: dec.coarse_solve,
+            coarse_explicit_bytes_max_rank: f.coarse_explicit_bytes,
             gluing_jump: f.gluing_jump,
             feasibility: f.feasibility,
             projector: dec.projector,

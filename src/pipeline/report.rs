@@ -7,7 +7,7 @@ use super::tfeti::{DistributionStats, SubdomainStats};
 use super::BodyStats;
 use crate::feti::smalse::SmalseInfo;
 use crate::qp;
-use crate::scene::{DirichletMode, Gluing, Projector};
+use crate::scene::{CoarseSolve, DirichletMode, Gluing, Projector};
 
 /// Everything a solve reports.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -106,6 +106,12 @@ pub struct TfetiReport {
     pub coarse_dim: usize,
     #[serde(rename = "nnz_C_lower")]
     pub nnz_c: usize,
+    /// `decomposition.coarse_solve`, and the bytes of C⁻¹'s (and (GGᵀ)⁻¹'s) rows the rank
+    /// holding most holds when explicit.
+    #[serde(default)]
+    pub coarse_solve: CoarseSolve,
+    #[serde(default)]
+    pub coarse_explicit_bytes_max_rank: usize,
     /// max over nodes and copies of |u_copy − u_first| / max |u|.
     #[serde(rename = "gluing_jump_relative")]
     pub gluing_jump: f64,

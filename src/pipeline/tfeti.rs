@@ -20,7 +20,7 @@ use crate::feti::{assign_ranks, eliminated, held_values, subdomain_loads};
 use crate::model::Model;
 use crate::qp::{self, Lambda, Operator, Qp, Space};
 use crate::contact::state::contact_state;
-use crate::scene::{LoadedScene, Projector};
+use crate::scene::{CoarseSolve, LoadedScene, Projector};
 
 /// Figures of one subdomain: those of every piece, and its interface.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -48,6 +48,9 @@ pub struct TfetiInfo {
     pub corner_rows: usize,
     pub coarse_dim: usize,
     pub nnz_c: usize,
+    /// Bytes of explicit coarse-inverse rows (`decomposition.coarse_solve = "explicit"`; max
+    /// over the ranks; 0 with the factor).
+    pub coarse_explicit_bytes: usize,
     /// max over nodes and copies of |u_copy − u_first| / max |u|.
     pub gluing_jump: f64,
     /// ‖Gλ − e‖/‖e‖ at the solution.
@@ -140,6 +143,7 @@ pub struct TfetiProblem<'c, C: Comm> {
     pub set: Lambda,
     pub coarse_dim: usize,
     pub nnz_c: usize,
+    pub coarse_explicit_bytes: usize,
 }
 
 /// Phases `decompose`, `factorize`, `coarse`, `dual` (and `preconditioner` when TSSN runs with
@@ -184,7 +188,14 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         (true, false) => coarse::Kind::ContactHeld,
     };
     let body = |c: usize| mesh.bodies[d.subdomains[clusters.members[c][0]].body].name.clone();
-    let coarse = t.phase(comm, "coarse", || Coarse::new(&clusters.kernels(mesh, &d, &elim), &cons, &clusters.concat(&loads), kind, &body))?;
+    let (coarse, explicit_bytes) = t.phase(comm, "coarse", || {
+        let mut coarse = Coarse::new(&clusters.kernels(mesh, &d, &elim), &cons, &clusters.concat(&loads), kind, &body)?;
+        let bytes = match dec.coarse_solve {
+            CoarseSolve::Factor => 0,
+            CoarseSolve::Explicit => coarse.make_explicit(&dist, coarse::MAX_EXPLICIT_BYTES)?,
+        };
+        Ok((coarse, bytes))
+    })?;
     drop(sub_cons);
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || {
@@ -201,7 +212,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
         None => Lambda::unconstrained(dual.layout.free),
     };
-    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c })
+    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
 }
 
 /// Δ_s = μ_min/μ_s per piece (a cluster lies in one body): the preconditioner's stiffness
@@ -221,7 +232,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c } = setup(comm, ls, model, t)?;
+    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c, coarse_explicit_bytes } = setup(comm, ls, model, t)?;
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
@@ -295,6 +306,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         f.corner_rows = clusters.corner_rows();
         f.coarse_dim = coarse_dim;
         f.nnz_c = nnz_c;
+        f.coarse_explicit_bytes = coarse_explicit_bytes;
         f.feasibility = feasibility;
         f.smalse = smalse;
         f.distribution = distribution;
