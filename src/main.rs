@@ -161,6 +161,25 @@ enum Cmd {
         #[arg(long, default_value_t = 100.0)]
         kkt_factor: f64,
     },
+    /// The coarse problem's cost as the subdomain count grows: for each S, C = G_E G_Eᵀ of the
+    /// scene's decomposition (clusters too), one solve with its factor (what every rank pays
+    /// today) against one rank's explicit inverse rows (`decomposition.coarse_solve =
+    /// "explicit"`) for each pieces-per-rank; one process. The cost model's inputs.
+    BenchCoarse {
+        #[arg(long, default_value = "run/seed.toml")]
+        scene: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Subdomains per body, one row each.
+        #[arg(long, value_delimiter = ',', default_value = "64,256,1024,2048")]
+        subdomains: Vec<usize>,
+        /// Pieces (subdomains or clusters) one rank holds, one column group each.
+        #[arg(long, value_delimiter = ',', default_value = "1,16")]
+        pieces: Vec<usize>,
+        /// Solves timed; the fastest counts.
+        #[arg(long, default_value_t = 20)]
+        repeat: usize,
+    },
     /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
     Check {
         scene: PathBuf,
@@ -430,6 +449,10 @@ fn main() -> ExitCode {
         }
         Cmd::Stability { dir, set, out, kkt_factor } => stability(&comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
+        Cmd::BenchCoarse { scene, set, subdomains, pieces, repeat } => {
+            let args = tresca_feti::studies::coarse_cost::Args { scene, sets: set, subdomains, pieces, repeat };
+            bench_coarse(&comm, &args)
+        }
         Cmd::Check { scene, set, ranks } => {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
             let r = match ranks {
@@ -452,6 +475,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `bench-coarse`: one table row per subdomain count, printed as it is measured (rank 0 runs it).
+fn bench_coarse<C: Comm>(comm: &C, args: &tresca_feti::studies::coarse_cost::Args) -> tresca_feti::Result<()> {
+    if !comm.is_root() {
+        return Ok(());
+    }
+    let mut head = "     S  pieces  coarse dim     nnz(C)     nnz(L)  build [s]  factor solve [ms]".to_string();
+    for m in &args.pieces {
+        head += &format!(" | {m:>3}/rank: rows [MB] setup [s] product [ms]");
+    }
+    println!("{head}");
+    tresca_feti::studies::coarse_cost::run(args, |r| {
+        let mut line = format!("{:>6} {:>7} {:>11} {:>10} {:>10} {:>10.3} {:>18.3}", r.subdomains, r.pieces, r.dim, r.nnz_c, r.nnz_l, r.build_s, 1e3 * r.factor_solve_s);
+        for &(setup, product, bytes) in &r.rows {
+            line += &format!(" | {:>19.2} {:>9.3} {:>12.4}", bytes as f64 / 1e6, setup, 1e3 * product);
+        }
+        println!("{line}");
+    })?;
+    Ok(())
 }
 
 fn print_summary(s: &pipeline::Summary) {

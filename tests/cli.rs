@@ -536,6 +536,25 @@ fn failure_on_one_rank_or_no_convergence_stops_all_ranks() {
     }
 }
 
+/// `bench-coarse`: one row per subdomain count, the coarse dimension growing with it, the
+/// explicit rows of more pieces per rank taking more bytes; a bad count is one line.
+#[test]
+fn bench_coarse_prints_one_row_per_subdomain_count() {
+    let scene = root().join("run/seed.toml");
+    let o = run(&["bench-coarse", "--scene", scene.to_str().unwrap(), "--set", "mesh.n=8", "--subdomains", "4,16", "--pieces", "1,4", "--repeat", "2"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: Vec<Vec<f64>> = stdout.lines().skip(1).map(|l| l.split(|c: char| c.is_whitespace() || c == '|').filter_map(|x| x.parse().ok()).collect()).collect();
+    assert_eq!(rows.len(), 2, "{stdout}");
+    // S, pieces, dim, nnz(C), nnz(L), build, factor solve, then (MB, setup, product) per pieces
+    assert!(rows.iter().all(|r| r.len() == 13), "{stdout}");
+    assert_eq!((rows[0][0], rows[1][0]), (8.0, 32.0));
+    assert!(rows[1][2] > rows[0][2] && rows[1][10] > rows[1][7], "{stdout}");
+    let o = run(&["bench-coarse", "--scene", scene.to_str().unwrap(), "--subdomains", "0"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.trim().lines().count() == 1 && e.contains("decomposition.subdomains"), "{e}");
+}
+
 #[test]
 fn table1_prints_the_table_and_writes_the_csv() {
     let dir = tmpdir("table1");

@@ -95,6 +95,16 @@ impl Rows {
 /// (`decomposition.coarse_solve = "explicit"`).
 pub const MAX_EXPLICIT_BYTES: usize = 1 << 30;
 
+/// [`Coarse::inverse_costs`]: C's factor and one solve with it; one rank's explicit rows.
+#[derive(Clone, Copy, Debug)]
+pub struct InverseCosts {
+    pub nnz_l: usize,
+    pub factor_solve_s: f64,
+    pub rows_setup_s: f64,
+    pub rows_solve_s: f64,
+    pub rows_bytes: usize,
+}
+
 /// G, e and the factorized C.
 pub struct Coarse {
     blocks: Vec<Block>,
@@ -291,6 +301,39 @@ impl Coarse {
         let mut mine = [[&self.chol, &self.full].into_iter().flatten().map(|inv| if let Inverse::Explicit(r) = inv { r.bytes() } else { 0 }).sum::<usize>() as f64];
         dist.comm().max_f64(&mut mine);
         Ok(mine[0] as usize)
+    }
+
+    /// What C⁻¹ costs one rank that holds `pieces` pieces (the first ones with a kernel), for
+    /// the `bench-coarse` study: one solve with C's factor, and that rank's explicit rows —
+    /// their setup from the factor, one product with them (without the reductions around it),
+    /// their bytes. Times are the fastest of `repeat`. `None` without C's factor.
+    pub fn inverse_costs(&self, pieces: usize, repeat: usize) -> Option<InverseCosts> {
+        let Some(Inverse::Factor(chol)) = &self.chol else { return None };
+        let n = self.dim();
+        let x0: Vec<f64> = (0..n).map(|i| ((i * 7919) % 13) as f64 - 6.0).collect();
+        let fastest = |f: &mut dyn FnMut()| {
+            (0..repeat.max(1))
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut x = x0.clone();
+        let factor_solve_s = fastest(&mut || {
+            x.copy_from_slice(&x0);
+            chol.solve_in_place(&mut x)
+        });
+        let mine: Vec<usize> = (0..self.blocks.len()).filter(|&s| self.blocks[s].k > 0).take(pieces).collect();
+        let t = std::time::Instant::now();
+        let rows = Rows::new(chol, &self.blocks, &mine);
+        let rows_setup_s = t.elapsed().as_secs_f64();
+        let rows_solve_s = fastest(&mut || {
+            x.copy_from_slice(&x0);
+            rows.solve_mine(&self.blocks, &mut x)
+        });
+        Some(InverseCosts { nnz_l: chol.nnz_l(), factor_solve_s, rows_setup_s, rows_solve_s, rows_bytes: rows.bytes() })
     }
 
     /// Whether the orthogonal projector's GGᵀ was built (SMALSE-M).
