@@ -19,8 +19,8 @@
 //! and its neighbours'). With [`Coarse::make_explicit`] a rank keeps instead only the rows of
 //! C⁻¹ (and (GGᵀ)⁻¹) of its own pieces — ESPRESO's explicit coarse inverse, held distributed —
 //! and a C⁻¹ solve becomes those rows' products with the reduced G x and a second reduction
-//! of the result: no triangular solve of dimension 6S on every rank. Vectors are distributed ([`Distribution`]);
-//! the measurements behind both are in the README.
+//! of the result: no triangular solve of dimension 6S on every rank. Vectors are distributed
+//! ([`Distribution`]); the measurements behind both are in the README.
 
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
