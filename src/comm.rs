@@ -24,6 +24,8 @@ pub trait Comm {
     fn broadcast_bytes(&self, root: usize, buf: &mut Vec<u8>);
     /// The `local` slices of all ranks, in rank order, on `root` (None elsewhere).
     fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>>;
+    /// The `local` slices of all ranks, in rank order, on every rank.
+    fn all_gather_f64(&self, local: &[f64]) -> Vec<Vec<f64>>;
     /// Neighbour exchange: sends `send[k].1` to rank `send[k].0` and fills each `recv[k].1`
     /// (sized by the caller) from rank `recv[k].0`. Ranks list each neighbour once; both
     /// sides must agree on the sizes. Only the ranks named take part (no collective).
@@ -93,6 +95,9 @@ impl Comm for SerialComm {
     fn broadcast_bytes(&self, _: usize, _: &mut Vec<u8>) {}
     fn gather_f64(&self, _: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
         Some(vec![local.to_vec()])
+    }
+    fn all_gather_f64(&self, local: &[f64]) -> Vec<Vec<f64>> {
+        vec![local.to_vec()]
     }
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
         // one rank has no neighbours
@@ -184,6 +189,22 @@ impl Comm for MpiComm {
             r.gather_varcount_into(local);
             None
         }
+    }
+    fn all_gather_f64(&self, local: &[f64]) -> Vec<Vec<f64>> {
+        let count = |n: usize| Count::try_from(n).expect("all_gather_f64: more than 2^31 values");
+        let mut counts = vec![0 as Count; self.size()];
+        self.world.all_gather_into(&count(local.len()), &mut counts[..]);
+        let displs: Vec<Count> = counts.iter().scan(0usize, |acc, &n| { let d = *acc; *acc += n as usize; Some(count(d)) }).collect();
+        let total: usize = counts.iter().map(|&n| n as usize).sum();
+        if total == 0 {
+            return vec![Vec::new(); self.size()];
+        }
+        let mut all = vec![0.0; total];
+        {
+            let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+            self.world.all_gather_varcount_into(local, &mut part);
+        }
+        counts.iter().zip(&displs).map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec()).collect()
     }
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
         mpi::request::scope(|scope| {

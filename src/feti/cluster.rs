@@ -231,26 +231,34 @@ impl Clustering {
     }
 
     /// R_c of every cluster (column-major, the cluster's DOFs × k_c) from the members' kernels
-    /// with their held DOFs `eliminated`: every rank builds them all (G is replicated).
+    /// with their held DOFs `eliminated`.
     pub fn kernels(&self, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>]) -> Vec<(Vec<f64>, usize)> {
-        (0..self.len())
-            .map(|c| {
-                let rs: Vec<(Vec<f64>, usize, usize)> = self.members[c]
-                    .iter()
-                    .map(|&s| {
-                        let coords: Vec<[f64; 3]> = d.subdomains[s].nodes.iter().map(|&v| mesh.nodes[v]).collect();
-                        let (r, k) = held_kernel(&coords, &eliminated[s]).expect("eliminated only where the held DOFs leave an exact kernel");
-                        (r, k, 3 * coords.len())
-                    })
-                    .collect();
-                if self.is_single(c) {
-                    return rs.into_iter().next().map(|(r, k, _)| (r, k)).expect("one member");
-                }
-                let members: Vec<(&[f64], usize, usize)> = rs.iter().map(|(r, k, nd)| (r.as_slice(), *k, *nd)).collect();
-                let (_, _, n, kc) = kernel_basis(&members, &self.bc[c].0, self.bc[c].1);
-                (expand(&members, &n, kc), kc)
+        (0..self.len()).map(|c| self.kernel(c, mesh, d, eliminated)).collect()
+    }
+
+    /// R_c of the clusters `pieces` only (None for the others): what a rank's blocks of G need.
+    pub fn kernels_of(&self, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>], pieces: &[usize]) -> Vec<Option<(Vec<f64>, usize)>> {
+        let mut out = vec![None; self.len()];
+        pieces.iter().for_each(|&c| out[c] = Some(self.kernel(c, mesh, d, eliminated)));
+        out
+    }
+
+    /// R_c of cluster `c` (see [`Clustering::kernels`]).
+    fn kernel(&self, c: usize, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>]) -> (Vec<f64>, usize) {
+        let rs: Vec<(Vec<f64>, usize, usize)> = self.members[c]
+            .iter()
+            .map(|&s| {
+                let coords: Vec<[f64; 3]> = d.subdomains[s].nodes.iter().map(|&v| mesh.nodes[v]).collect();
+                let (r, k) = held_kernel(&coords, &eliminated[s]).expect("eliminated only where the held DOFs leave an exact kernel");
+                (r, k, 3 * coords.len())
             })
-            .collect()
+            .collect();
+        if self.is_single(c) {
+            return rs.into_iter().next().map(|(r, k, _)| (r, k)).expect("one member");
+        }
+        let members: Vec<(&[f64], usize, usize)> = rs.iter().map(|(r, k, nd)| (r.as_slice(), *k, *nd)).collect();
+        let (_, _, n, kc) = kernel_basis(&members, &self.bc[c].0, self.bc[c].1);
+        (expand(&members, &n, kc), kc)
     }
 }
 

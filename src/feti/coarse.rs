@@ -12,11 +12,12 @@
 //! every body is held by Dirichlet conditions; otherwise C is singular and the factorization
 //! says so.
 //!
-//! G is small (k_s·nnz of the B rows' columns per subdomain) and depends only on coordinates and
-//! the constraint rows, so every rank builds it whole and factorizes C (replicated coarse
-//! problem): applying P̃ costs one reduction of G x (k_s per subdomain, each entry from the one
-//! rank that holds the subdomain), one C⁻¹ solve and Gᵀ on the rows the rank needs (its blocks
-//! and its neighbours'). With [`Coarse::make_explicit`] a rank keeps instead only the rows of
+//! Each rank builds the blocks of G it reads — its own pieces' and those of the pieces touching
+//! its rows (the halo) — and the column blocks of C = G_E G_Eᵀ of its own pieces (each block
+//! summed over its rows in ascending order, as a whole G would); the blocks are gathered and
+//! every rank factorizes C (replicated coarse problem): applying P̃ costs one reduction of G x
+//! (k_s per piece, each entry from the one rank that holds the piece), one C⁻¹ solve and Gᵀ on
+//! the rows the rank needs. With [`Coarse::make_explicit`] a rank keeps instead only the rows of
 //! C⁻¹ (and (GGᵀ)⁻¹) of its own pieces — ESPRESO's explicit coarse inverse, held distributed —
 //! and a C⁻¹ solve becomes those rows' products with the reduced G x and a second reduction
 //! of the result: no triangular solve of dimension 6S on every rank. Vectors are distributed
@@ -30,7 +31,8 @@ use crate::linalg::cholesky::{Cholesky, Ordering, Symbolic};
 use crate::linalg::ordering::nested_dissection;
 use crate::linalg::sparse::SymCsc;
 
-/// One piece's part of G (a subdomain's, or a cluster's: [`super::cluster`]).
+/// One piece's part of G (a subdomain's, or a cluster's: [`super::cluster`]); `rows` and `g`
+/// are empty for a piece this rank does not read.
 struct Block {
     /// The multipliers whose rows touch it (ascending).
     rows: Vec<usize>,
@@ -133,12 +135,6 @@ struct Pattern {
     symbolic: Symbolic,
 }
 
-/// e = Rᵀf: the load's work in each piece's kernel motions (`kernels[s]` = (R_s, k_s),
-/// `loads[s]` = f_s; R_s vanishes on held DOFs: Rᵀf = Rᵀ(f − Kg)).
-pub fn rigid_loads(kernels: &[(Vec<f64>, usize)], loads: &[Vec<f64>]) -> Vec<f64> {
-    kernels.iter().zip(loads).flat_map(|((r, _), f)| rigid_work(r, f)).collect()
-}
-
 /// R_sᵀ f_s for the modes `r` (columns of f's length, column-major).
 fn rigid_work(r: &[f64], f: &[f64]) -> Vec<f64> {
     let nd = f.len();
@@ -157,36 +153,75 @@ pub enum Kind {
 }
 
 impl Coarse {
-    /// Builds G and e for all pieces — subdomains or clusters, whose rows `cons` lists —
-    /// (`kernels[s]` = (R_s, k_s), `loads[s]` = f_s) and factorizes what `kind` needs; `body`
-    /// names a piece's body in errors.
-    pub fn new(kernels: &[(Vec<f64>, usize)], cons: &Constraints, loads: &[Vec<f64>], kind: Kind, body: &dyn Fn(usize) -> String) -> Result<Coarse> {
+    /// The pieces whose blocks of G this rank reads: its own and those touching its local rows
+    /// (ascending). `kernels` of [`Coarse::new`] needs these.
+    pub fn pieces_read<C: Comm>(dist: &Distribution<'_, C>) -> Vec<usize> {
+        let mut p: Vec<usize> = dist.subs.iter().map(|sr| sr.index).collect();
+        (0..dist.local_len()).for_each(|l| p.extend(dist.touching(l).iter().map(|&(s, _)| s)));
+        p.sort_unstable();
+        p.dedup();
+        p
+    }
+
+    /// Builds this rank's blocks of G and e for the pieces — subdomains or clusters, whose rows
+    /// `cons` lists — (`kernels[s]` = (R_s, k_s), at least for [`Coarse::pieces_read`];
+    /// `loads[s]` = f_s for this rank's pieces) and factorizes what `kind` needs; `body` names
+    /// a piece's body in errors. Collective.
+    pub fn new<C: Comm>(dist: &Distribution<'_, C>, kernels: &[Option<(Vec<f64>, usize)>], cons: &Constraints, loads: &[Vec<f64>], kind: Kind, body: &dyn Fn(usize) -> String) -> Result<Coarse> {
         let e_start = cons.e_start();
-        let mut e = Vec::new();
-        let mut blocks = Vec::with_capacity(kernels.len());
-        for (s, (r, k)) in kernels.iter().enumerate() {
-            let (k, nd) = (*k, loads[s].len());
-            let off = e.len();
-            e.extend(rigid_work(r, &loads[s]));
-            let rows = cons.sorted_rows(s);
-            let mut g = vec![0.0; k * rows.len()];
-            for &(row, dof, coef) in &cons.rows[s] {
-                let p = rows.binary_search(&row).expect("row listed");
-                for j in 0..k {
-                    g[p * k + j] += coef * r[j * nd + dof];
-                }
-            }
-            blocks.push(Block { rows, g, k, off });
+        // k of every piece, from the ranks that hold them (one contributor per entry)
+        let mut ks = vec![0.0; kernels.len()];
+        for sr in &dist.subs {
+            ks[sr.index] = kernels[sr.index].as_ref().expect("a kernel for every piece of this rank").1 as f64;
         }
-        let full = match kind {
-            Kind::Oblique => None,
-            _ => Some(Inverse::Factor(coarse_matrix(&blocks, 0, cons.layout.dim(), body)?.0)),
-        };
-        let (c, nnz_c) = match kind {
-            Kind::ContactHeld => (None, 0),
-            _ => coarse_matrix(&blocks, e_start, cons.layout.dim(), body).map(|(c, nnz)| (Some(Inverse::Factor(c)), nnz))?,
-        };
-        Ok(Coarse { blocks, e_start, e, chol: c, full, nnz_c, pattern: Default::default() })
+        dist.reduce(&mut ks);
+        let mut blocks = Vec::with_capacity(kernels.len());
+        let mut off = 0;
+        for (s, kernel) in kernels.iter().enumerate() {
+            let k = ks[s] as usize;
+            let block = match kernel {
+                Some((r, kr)) => {
+                    debug_assert_eq!(*kr, k);
+                    let rows = cons.sorted_rows(s);
+                    let nd = if k > 0 { r.len() / k } else { 0 };
+                    let mut g = vec![0.0; k * rows.len()];
+                    for &(row, dof, coef) in &cons.rows[s] {
+                        let p = rows.binary_search(&row).expect("row listed");
+                        for j in 0..k {
+                            g[p * k + j] += coef * r[j * nd + dof];
+                        }
+                    }
+                    Block { rows, g, k, off }
+                }
+                None => Block { rows: vec![], g: vec![], k, off },
+            };
+            off += k;
+            blocks.push(block);
+        }
+        let mut coarse = Coarse { blocks, e_start, e: vec![0.0; off], chol: None, full: None, nnz_c: 0, pattern: Default::default() };
+        coarse.e = coarse.rigid_loads(dist, kernels, loads);
+        if kind != Kind::Oblique {
+            coarse.full = Some(Inverse::Factor(coarse_matrix(&coarse.blocks, dist, 0, body)?.0));
+        }
+        if kind != Kind::ContactHeld {
+            let (c, nnz) = coarse_matrix(&coarse.blocks, dist, e_start, body)?;
+            (coarse.chol, coarse.nnz_c) = (Some(Inverse::Factor(c)), nnz);
+        }
+        Ok(coarse)
+    }
+
+    /// e = Rᵀf: the load's work in each piece's kernel motions (`kernels[s]` = (R_s, k_s) and
+    /// `loads[s]` = f_s for this rank's pieces; R_s vanishes on held DOFs: Rᵀf = Rᵀ(f − Kg)),
+    /// reduced over the ranks (one contributor per entry). Collective.
+    pub fn rigid_loads<C: Comm>(&self, dist: &Distribution<'_, C>, kernels: &[Option<(Vec<f64>, usize)>], loads: &[Vec<f64>]) -> Vec<f64> {
+        let mut e = vec![0.0; self.dim()];
+        for sr in &dist.subs {
+            let (r, _) = kernels[sr.index].as_ref().expect("a kernel for every piece of this rank");
+            let b = &self.blocks[sr.index];
+            e[b.off..b.off + b.k].copy_from_slice(&rigid_work(r, &loads[sr.index]));
+        }
+        dist.reduce(&mut e);
+        e
     }
 
     /// Size of the coarse problem, k_s per piece.
@@ -386,11 +421,11 @@ impl Coarse {
         self.sub_gt(dist, &a, x, Self::owned_rows(dist), false);
     }
 
-    fn pattern(&self, dim: usize) -> &Pattern {
+    fn pattern<C: Comm>(&self, dist: &Distribution<'_, C>) -> &Pattern {
         self.pattern.get_or_init(|| {
             // the contact rows enter the pattern with weight 0
-            let (c, _) = gram(&self.blocks, 0, dim, |r| if r >= self.e_start { 1.0 } else { 0.0 });
-            let contact = columns(&self.blocks, self.e_start);
+            let (c, _) = gram(&self.blocks, dist, 0, |r| if r >= self.e_start { 1.0 } else { 0.0 });
+            let contact = columns(&self.blocks, dist, self.e_start);
             let symbolic = Symbolic::analyze(&c, block_nested_dissection(&self.blocks, &c)).expect("a valid permutation of GGᵀ's pattern");
             Pattern { c, contact, symbolic }
         })
@@ -399,8 +434,9 @@ impl Coarse {
     /// G Π Gᵀ factorized, Π = I on the E rows, and on the contact rows: the rows where
     /// `weight` is 1 (free), the combination t₀g_k + t₁g_{k+1} for the sliding pairs (first
     /// row k, t) of `slides`, nothing for the others (global row indices). `None` if singular.
-    pub fn restricted(&self, dim: usize, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Cholesky> {
-        let pat = self.pattern(dim);
+    /// Collective (the first call gathers the pattern).
+    pub fn restricted<C: Comm>(&self, dist: &Distribution<'_, C>, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Cholesky> {
+        let pat = self.pattern(dist);
         let mut c = pat.c.clone();
         let mut add = |list: &[(usize, f64)]| {
             for &(i, x) in list {
@@ -497,8 +533,8 @@ impl Coarse {
 }
 
 /// G_F G_Fᵀ over the rows from `first` on (λ_E: C; all: GGᵀ), factorized; with its nnz.
-fn coarse_matrix(blocks: &[Block], first: usize, dim: usize, body: &dyn Fn(usize) -> String) -> Result<(Cholesky, usize)> {
-    let (c, touched) = gram(blocks, first, dim, |_| 1.0);
+fn coarse_matrix<C: Comm>(blocks: &[Block], dist: &Distribution<'_, C>, first: usize, body: &dyn Fn(usize) -> String) -> Result<(Cholesky, usize)> {
+    let (c, touched) = gram(blocks, dist, first, |_| 1.0);
     if let Some(s) = (0..blocks.len()).find(|&s| blocks[s].k > 0 && !touched[s]) {
         return Err(Error::numerical(
             "TFETI coarse problem",
@@ -540,47 +576,57 @@ fn block_nested_dissection(blocks: &[Block], c: &SymCsc) -> Ordering {
     }
 }
 
-/// The columns of G of the rows below `last` (the contact rows): (coarse index, value) per row.
-fn columns(blocks: &[Block], last: usize) -> Vec<Vec<(usize, f64)>> {
+/// The columns of G of the rows below `last` (the contact rows): (coarse index, value) per row,
+/// the pieces in ascending order; each rank builds its owned rows' and they are gathered.
+fn columns<C: Comm>(blocks: &[Block], dist: &Distribution<'_, C>, last: usize) -> Vec<Vec<(usize, f64)>> {
+    // per owned row: row, count, then (index, value) pairs
+    let mut mine = Vec::new();
+    for (&row, &l) in dist.owned.iter().zip(&dist.owned_pos).take_while(|(&r, _)| r < last) {
+        let at = mine.len();
+        mine.extend([row as f64, 0.0]);
+        for &(s, p) in dist.touching(l) {
+            let b = &blocks[s];
+            for j in 0..b.k {
+                mine.extend([(b.off + j) as f64, b.g[p * b.k + j]]);
+            }
+        }
+        mine[at + 1] = ((mine.len() - at - 2) / 2) as f64;
+    }
     let mut by_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); last];
-    for b in blocks {
-        for (p, &row) in b.rows.iter().enumerate().take_while(|(_, &r)| r < last) {
-            by_row[row].extend((0..b.k).map(|j| (b.off + j, b.g[p * b.k + j])));
+    for part in dist.comm().all_gather_f64(&mine) {
+        let mut i = 0;
+        while i < part.len() {
+            let (row, n) = (part[i] as usize, part[i + 1] as usize);
+            by_row[row] = (0..n).map(|q| (part[i + 2 + 2 * q] as usize, part[i + 3 + 2 * q])).collect();
+            i += 2 + 2 * n;
         }
     }
     by_row
 }
 
-/// Σ_r w(r) g_r g_rᵀ over the rows from `first` on (g_r: row r's column of G), accumulated in
-/// k × k blocks of subdomain pairs (rows in ascending order, as a row-by-row sum would add
-/// them): the lower triangle, and per subdomain whether a row touched it (its diagonal block
-/// exists). Holds no per-row lists: the rows' (subdomain, position) pairs in one CSR array.
-fn gram(blocks: &[Block], first: usize, dim: usize, w: impl Fn(usize) -> f64) -> (SymCsc, Vec<bool>) {
-    let n = dim - first;
-    let mut ptr = vec![0usize; n + 1];
-    for b in blocks.iter().filter(|b| b.k > 0) {
-        b.rows.iter().filter(|&&r| r >= first).for_each(|&r| ptr[r - first + 1] += 1);
-    }
-    for i in 0..n {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut at = ptr.clone();
-    let mut ent = vec![(0usize, 0usize); ptr[n]];
-    for (s, b) in blocks.iter().enumerate().filter(|(_, b)| b.k > 0) {
-        for (p, &r) in b.rows.iter().enumerate().filter(|(_, &r)| r >= first) {
-            ent[at[r - first]] = (s, p);
-            at[r - first] += 1;
+/// Σ_r w(r) g_r g_rᵀ over the rows from `first` on (g_r: row r's column of G), in k × k blocks
+/// of piece pairs (b, a), b ≤ a: the rank holding a sums block (b, a) over a's rows in ascending
+/// order (every row that touches both is a's, and b is in its halo), and the blocks are
+/// gathered — the same sums in the same order whatever the rank count. Returns the lower
+/// triangle, and per piece whether a row touched it (its diagonal block exists). Collective.
+fn gram<C: Comm>(blocks: &[Block], dist: &Distribution<'_, C>, first: usize, w: impl Fn(usize) -> f64) -> (SymCsc, Vec<bool>) {
+    // this rank's column blocks: (b, a, values) flattened as b, a, len, values…
+    let mut mine = Vec::new();
+    for sr in &dist.subs {
+        let a = sr.index;
+        let ba = &blocks[a];
+        if ba.k == 0 {
+            continue;
         }
-    }
-    // (column block, row block) → k_row × k_col values, column-major
-    let mut acc: std::collections::BTreeMap<(usize, usize), Vec<f64>> = Default::default();
-    for r in 0..n {
-        let wr = w(r + first);
-        let list = &ent[ptr[r]..ptr[r + 1]];
-        for &(a, pa) in list {
-            for &(b, pb) in list.iter().filter(|x| x.0 <= a) {
-                let (ba, bb) = (&blocks[a], &blocks[b]);
-                let blk = acc.entry((b, a)).or_insert_with(|| vec![0.0; ba.k * bb.k]);
+        let mut acc: std::collections::BTreeMap<usize, Vec<f64>> = Default::default();
+        for ((pa, &r), &l) in ba.rows.iter().enumerate().zip(&sr.rows).filter(|((_, &r), _)| r >= first) {
+            let wr = w(r);
+            for &(b, pb) in dist.touching(l).iter().filter(|x| x.0 <= a) {
+                let bb = &blocks[b];
+                if bb.k == 0 {
+                    continue;
+                }
+                let blk = acc.entry(b).or_insert_with(|| vec![0.0; ba.k * bb.k]);
                 for jj in 0..bb.k {
                     let y = bb.g[pb * bb.k + jj];
                     for ii in (if a == b { jj } else { 0 })..ba.k {
@@ -588,6 +634,20 @@ fn gram(blocks: &[Block], first: usize, dim: usize, w: impl Fn(usize) -> f64) ->
                     }
                 }
             }
+        }
+        for (b, v) in acc {
+            mine.extend([b as f64, a as f64, v.len() as f64]);
+            mine.extend(v);
+        }
+    }
+    // (column block, row block) → k_row × k_col values, column-major
+    let mut acc: std::collections::BTreeMap<(usize, usize), Vec<f64>> = Default::default();
+    for part in dist.comm().all_gather_f64(&mine) {
+        let mut i = 0;
+        while i < part.len() {
+            let (b, a, n) = (part[i] as usize, part[i + 1] as usize, part[i + 2] as usize);
+            acc.insert((b, a), part[i + 3..i + 3 + n].to_vec());
+            i += 3 + n;
         }
     }
     let nc = blocks.last().map_or(0, |b| b.off + b.k);
@@ -620,6 +680,14 @@ mod tests {
         crate::feti::cluster::Clustering::singletons(d).kernels(&model.mesh, d, &vec![vec![]; d.subdomains.len()])
     }
 
+    /// The coarse problem on one rank holding every piece.
+    fn build<'c>(model: &crate::model::Model, d: &Decomposition, cons: &Constraints, kind: Kind, comm: &'c crate::comm::SerialComm) -> (Coarse, Distribution<'c, crate::comm::SerialComm>) {
+        let dist = Distribution::new(comm, cons, &vec![0; d.subdomains.len()]);
+        let k: Vec<_> = kernels(model, d).into_iter().map(Some).collect();
+        let c = Coarse::new(&dist, &k, cons, &subdomain_loads(d, &model.loads), kind, &|_| String::new()).unwrap();
+        (c, dist)
+    }
+
     fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
@@ -631,10 +699,8 @@ mod tests {
     #[test]
     fn projector_identities() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
-        let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Orthogonal, &|_| String::new()).unwrap();
         let comm = crate::comm::SerialComm;
-        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
+        let (c, dist) = build(&model, &d, &cons, Kind::Orthogonal, &comm);
         let n = cons.layout.dim();
         let ni = cons.e_start();
         assert!(ni > 0 && n > ni);
@@ -693,9 +759,8 @@ mod tests {
     #[test]
     fn explicit_inverse_rows_agree_with_the_factors() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
-        let loads = subdomain_loads(&d, &model.loads);
-        let new = || Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Orthogonal, &|_| String::new()).unwrap();
         let comm = crate::comm::SerialComm;
+        let new = || build(&model, &d, &cons, Kind::Orthogonal, &comm).0;
         let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
         let (f, mut x) = (new(), new());
         let bytes = x.make_explicit(&dist, usize::MAX).unwrap();
@@ -732,10 +797,8 @@ mod tests {
     #[test]
     fn restricted_projector_maps_into_ker_g_on_w() {
         let (model, d, cons) = crate::feti::seed_fixture(5, 3);
-        let loads = subdomain_loads(&d, &model.loads);
-        let c = Coarse::new(&kernels(&model, &d), &cons, &loads, Kind::Oblique, &|_| String::new()).unwrap();
         let comm = crate::comm::SerialComm;
-        let dist = Distribution::new(&comm, &cons, &vec![0; d.subdomains.len()]);
+        let (c, dist) = build(&model, &d, &cons, Kind::Oblique, &comm);
         let n = cons.layout.dim();
         let (m, ni) = (cons.layout.m, cons.e_start());
         let mut s = 9u64;
@@ -768,7 +831,7 @@ mod tests {
             }
             *x = y;
         };
-        let chol = c.restricted(n, &free, &slides).expect("GΠGᵀ regular");
+        let chol = c.restricted(&dist, &free, &slides).expect("GΠGᵀ regular");
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut x: Vec<f64> = (0..n).map(|_| lcg(&mut s)).collect();
         pi(&mut x);

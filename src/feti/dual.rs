@@ -50,8 +50,6 @@ pub struct TfetiDual<'c, C: Comm> {
     counter: ProductCounter,
     /// First E (gluing, Dirichlet) row of the global numbering.
     e_start: usize,
-    /// Number of multipliers over all ranks.
-    rows: usize,
     /// The preconditioner's scaling and its S_s (one per local subdomain), once built.
     precond: Option<(Scaling, Vec<Schur>)>,
     /// H-TFETI: the null space W of F (the B_c rows as combinations of B's rows), owned
@@ -76,7 +74,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let c = dist.restrict(&cons.c);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, rows: cons.layout.dim(), precond: None, null: vec![] };
+        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None, null: vec![] };
         let b = dual.rhs();
         (dual, b)
     }
@@ -221,7 +219,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
                 (pw[k], pw[k + 1]) = (t[0] * s, t[1] * s);
             }
             let (free_all, slides_all) = self.global_pi(&free, &slides);
-            let chol = self.coarse.restricted(self.rows, &free_all, &slides_all);
+            let chol = self.coarse.restricted(&self.dist, &free_all, &slides_all);
             // every rank must agree: a rank without the factor makes all of them fail
             let mut bad = [f64::from(u8::from(chol.is_none()))];
             self.dist.comm().max_f64(&mut bad);
@@ -426,7 +424,7 @@ impl<C: Comm> qp::Coarse for TfetiDual<'_, C> {
     fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn qp::CoarseProjector + 'a>> {
         let (free_all, slides_all) = self.global_pi(free, slides);
         let clock = &self.dist.clock;
-        let chol = Clock::time(&clock.restricted, || Clock::time(&clock.restricted_factor, || self.coarse.restricted(self.rows, &free_all, &slides_all)))?;
+        let chol = Clock::time(&clock.restricted, || Clock::time(&clock.restricted_factor, || self.coarse.restricted(&self.dist, &free_all, &slides_all)))?;
         Some(Box::new(Restricted { dual: self, chol }))
     }
 }

@@ -9,7 +9,7 @@ use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
 use crate::error::{Error, Result};
-use crate::feti::coarse::{self, rigid_loads, Coarse};
+use crate::feti::coarse::{self, Coarse};
 use crate::feti::constraints;
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
@@ -189,7 +189,9 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     };
     let body = |c: usize| mesh.bodies[d.subdomains[clusters.members[c][0]].body].name.clone();
     let (coarse, explicit_bytes) = t.phase(comm, "coarse", || {
-        let mut coarse = Coarse::new(&clusters.kernels(mesh, &d, &elim), &cons, &clusters.concat(&loads), kind, &body)?;
+        // the kernels of the pieces whose blocks of G this rank reads: its own and its halo
+        let kernels = clusters.kernels_of(mesh, &d, &elim, &Coarse::pieces_read(&dist));
+        let mut coarse = Coarse::new(&dist, &kernels, &cons, &clusters.concat(&loads), kind, &body)?;
         let bytes = match dec.coarse_solve {
             CoarseSolve::Factor => 0,
             CoarseSolve::Explicit => coarse.make_explicit(&dist, coarse::MAX_EXPLICIT_BYTES)?,
@@ -245,7 +247,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
                 let (cons_k, loads) = model.state(k);
                 let f = subdomain_loads(&d, &loads);
                 let sub_cons = constraints::build(&d, &cons_k, contact, dec.gluing, &elim);
-                let e = rigid_loads(&clusters.kernels(mesh, &d, &elim), &clusters.concat(&f));
+                let own: Vec<usize> = dual.dist.subs.iter().map(|sr| sr.index).collect();
+                let e = dual.coarse.rigid_loads(&dual.dist, &clusters.kernels_of(mesh, &d, &elim, &own), &clusters.concat(&f));
                 let c = sub_cons.c;
                 let g = held_values(&d, &elim, &cons_k);
                 let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[s].clone(), g[s].clone())).collect()).collect();

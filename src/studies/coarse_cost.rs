@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::feti::cluster::Clustering;
 use crate::feti::coarse::{Coarse, Kind};
 use crate::feti::decomposition::decompose_each;
+use crate::feti::distribution::Distribution;
 use crate::feti::{constraints, eliminated, subdomain_loads};
 
 /// What `bench-coarse` is asked to do.
@@ -57,7 +58,11 @@ pub fn run(args: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
         let cons = clusters.outer(&sub_cons);
         let loads = subdomain_loads(&d, &model.loads);
         let t = Instant::now();
-        let coarse = Coarse::new(&clusters.kernels(&model.mesh, &d, &elim), &cons, &clusters.concat(&loads), Kind::Oblique, &|_| String::new())?;
+        // one process holding every piece
+        let comm = crate::comm::SerialComm;
+        let dist = Distribution::new(&comm, &cons, &vec![0; clusters.len()]);
+        let kernels: Vec<_> = clusters.kernels(&model.mesh, &d, &elim).into_iter().map(Some).collect();
+        let coarse = Coarse::new(&dist, &kernels, &cons, &clusters.concat(&loads), Kind::Oblique, &|_| String::new())?;
         let build_s = t.elapsed().as_secs_f64();
         let mut row = Row { subdomains: d.subdomains.len(), pieces: clusters.len(), dim: coarse.dim(), nnz_c: coarse.nnz_c, nnz_l: 0, build_s, factor_solve_s: 0.0, rows: vec![] };
         for &m in &args.pieces {
