@@ -183,7 +183,7 @@ impl Coarse {
                 Some((r, kr)) => {
                     debug_assert_eq!(*kr, k);
                     let rows = cons.sorted_rows(s);
-                    let nd = if k > 0 { r.len() / k } else { 0 };
+                    let nd = r.len().checked_div(k).unwrap_or(0);
                     let mut g = vec![0.0; k * rows.len()];
                     for &(row, dof, coef) in &cons.rows[s] {
                         let p = rows.binary_search(&row).expect("row listed");
