@@ -235,6 +235,9 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
     let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c, coarse_explicit_bytes } = setup(comm, ls, model, t)?;
+    // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
+    let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows];
+    drop(cons);
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
@@ -301,9 +304,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
         f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
-        f.contact_rows = cons.e_start();
-        f.gluing_rows = cons.gluing_rows;
-        f.dirichlet_rows = cons.dirichlet_rows;
+        [f.contact_rows, f.gluing_rows, f.dirichlet_rows] = rows;
         f.eliminated_dofs = elim.iter().map(Vec::len).sum();
         f.clusters = clusters.len();
         f.corner_rows = clusters.corner_rows();
