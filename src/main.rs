@@ -163,7 +163,7 @@ enum Cmd {
     },
     /// The coarse problem's cost as the subdomain count grows: for each S, C = G_E G_Eᵀ of the
     /// scene's decomposition (clusters too), one solve with its factor (what every rank pays
-    /// today) against one rank's explicit inverse rows (`decomposition.coarse_solve =
+    /// with `coarse_solve = "factor"`) against one rank's explicit inverse rows (`decomposition.coarse_solve =
     /// "explicit"`) for each pieces-per-rank; one process. The cost model's inputs.
     BenchCoarse {
         #[arg(long, default_value = "run/seed.toml")]
