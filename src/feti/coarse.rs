@@ -333,9 +333,7 @@ impl Coarse {
                 *inv = Inverse::Explicit(Rows::new(chol, &self.blocks, &pieces));
             }
         }
-        let mut mine = [[&self.chol, &self.full].into_iter().flatten().map(|inv| if let Inverse::Explicit(r) = inv { r.bytes() } else { 0 }).sum::<usize>() as f64];
-        dist.comm().max_f64(&mut mine);
-        Ok(mine[0] as usize)
+        Ok(bytes)
     }
 
     /// What C⁻¹ costs one rank that holds `pieces` pieces (the first ones with a kernel), for
