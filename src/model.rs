@@ -13,6 +13,9 @@ use crate::scene::{Component, LoadedScene, Scene};
 #[derive(Clone, Debug)]
 pub struct Model {
     pub mesh: Mesh,
+    /// The sizes of the whole mesh (they stay when TFETI releases the mesh arrays:
+    /// [`Model::release_mesh`]).
+    pub size: MeshSize,
     /// Lamé constants of each body.
     pub lame: Vec<Lame>,
     /// (global node, component, prescribed value).
@@ -28,6 +31,13 @@ pub struct Model {
     /// Bodies whose Dirichlet conditions leave a rigid motion free that contact holds: solved
     /// by TFETI with the orthogonal projector (SMALSE-M), Gλ = e over every row.
     pub floating: Vec<usize>,
+}
+
+/// Nodes and elements of the whole mesh.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MeshSize {
+    pub nodes: usize,
+    pub elements: usize,
 }
 
 /// The quasi-static load path: at step k (1…K) every Dirichlet value and traction is its
@@ -49,27 +59,46 @@ impl LoadPath {
     pub fn is_path(&self) -> bool {
         self.steps > 1
     }
+
+    /// The nodal forces (DOF, value) of every traction at step k (1…K), in the order
+    /// [`Model::state`] sums them.
+    pub fn forces(&self, k: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.traction.iter().flat_map(move |(f, entries)| entries.iter().map(move |&(d, x)| (d, f[k - 1] * x)))
+    }
 }
 
 impl Model {
     /// The constraints (same DOFs at every step) and nodal loads at load step k (1…K).
     pub fn state(&self, k: usize) -> (Vec<(usize, usize, f64)>, Vec<f64>) {
-        let p = &self.path;
-        let constraints = self.constraints.iter().zip(&p.constraint_entry).map(|(&(v, c, _), &(e, val))| (v, c, val * p.dirichlet[e][k - 1])).collect();
-        let mut loads = vec![0.0; self.loads.len()];
-        for (f, entries) in &p.traction {
-            for &(d, x) in entries {
-                loads[d] += f[k - 1] * x;
-            }
+        let constraints = self.constraints.iter().zip(self.constraint_values(k)).map(|(&(v, c, _), val)| (v, c, val)).collect();
+        let mut loads = vec![0.0; self.ndof()];
+        for (d, x) in self.path.forces(k) {
+            loads[d] += x;
         }
         (constraints, loads)
+    }
+
+    /// The prescribed value of every constraint at load step k (1…K).
+    pub fn constraint_values(&self, k: usize) -> Vec<f64> {
+        let p = &self.path;
+        p.constraint_entry.iter().map(|&(e, val)| val * p.dirichlet[e][k - 1]).collect()
+    }
+
+    /// Drops the whole mesh's node and element arrays and the whole load vector: TFETI, once
+    /// every rank holds its share of them. `size`, the bodies' ranges, the faces and the load
+    /// path stay; [`Model::state`] is gone with the mesh (a share takes its loads from
+    /// [`LoadPath::forces`]).
+    pub fn release_mesh(&mut self) {
+        self.mesh.nodes = Vec::new();
+        self.mesh.hexes = Vec::new();
+        self.loads = Vec::new();
     }
 }
 
 impl Model {
     /// Number of displacement DOFs, 3 per node (the paper's n).
     pub fn ndof(&self) -> usize {
-        3 * self.mesh.nodes.len()
+        3 * self.size.nodes
     }
 }
 
@@ -232,7 +261,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         floating.push(b);
     }
-    Ok(Model { mesh, lame, constraints, loads, contact, pairs, path, floating })
+    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.hexes.len() };
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, path, floating })
 }
 
 /// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words: the

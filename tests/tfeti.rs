@@ -31,7 +31,7 @@ fn solve(scene: &str, sets: &[String], parts: usize) -> (Solution, Option<Contac
         // the FETI preconditioners act on TFETI's gluing rows: the monolithic dual takes none
         sets.retain(|s| !s.starts_with("solver.preconditioner="));
     }
-    let (ls, model) = load(scene, &sets);
+    let (ls, mut model) = load(scene, &sets);
     let mut t = Timings::default();
     if parts == 0 {
         match model.pairs {
@@ -39,7 +39,7 @@ fn solve(scene: &str, sets: &[String], parts: usize) -> (Solution, Option<Contac
             None => (pipeline::solve_elastic(&SerialComm, &model, ls.scene.factorization.ordering, &mut t).unwrap(), None),
         }
     } else {
-        pipeline::tfeti::solve(&SerialComm, &ls, &model, &mut t).unwrap()
+        pipeline::tfeti::solve(&SerialComm, &ls, &mut model, &mut t).unwrap()
     }
 }
 

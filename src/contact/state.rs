@@ -92,29 +92,15 @@ pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64],
     s
 }
 
-/// Node fields of the contact state on the slave nodes (zero elsewhere), for the result file.
-pub fn contact_fields(nnodes: usize, contact: &Contact, state: &ContactState, want: impl Fn(&str) -> bool) -> Vec<Field> {
+/// Node fields of the contact state on the slave nodes of the pairs `pairs` (a field's values
+/// in their order; the other nodes are zero in the result file), and those nodes: the rows of
+/// every field, as for a distributed field ([`crate::output::OutputData::rows`]).
+pub fn contact_fields(contact: &Contact, state: &ContactState, pairs: &[usize], want: impl Fn(&str) -> bool) -> (Vec<Field>, Vec<usize>) {
     let mut fields = Vec::new();
-    let scalar = |name: &str, f: &dyn Fn(usize) -> f64| {
-        let mut v = vec![0.0; nnodes];
-        for i in 0..contact.len() {
-            v[contact.slave[i]] = f(i);
-        }
-        Field { name: name.into(), center: Center::Node, ncomp: 1, values: Values::F64(v) }
-    };
-    let vector = |name: &str, f: &dyn Fn(usize) -> [f64; 3]| {
-        let mut v = vec![0.0; 3 * nnodes];
-        for i in 0..contact.len() {
-            v[3 * contact.slave[i]..3 * contact.slave[i] + 3].copy_from_slice(&f(i));
-        }
-        Field { name: name.into(), center: Center::Node, ncomp: 3, values: Values::F64(v) }
-    };
+    let scalar = |name: &str, f: &dyn Fn(usize) -> f64| Field { name: name.into(), center: Center::Node, ncomp: 1, values: Values::F64(pairs.iter().map(|&i| f(i)).collect()) };
+    let vector = |name: &str, f: &dyn Fn(usize) -> [f64; 3]| Field { name: name.into(), center: Center::Node, ncomp: 3, values: Values::F64(pairs.iter().flat_map(|&i| f(i)).collect()) };
     if want("contact_status") {
-        let mut v = vec![0; nnodes];
-        for i in 0..contact.len() {
-            v[contact.slave[i]] = state.status[i];
-        }
-        fields.push(Field { name: "contact_status".into(), center: Center::Node, ncomp: 1, values: Values::I32(v) });
+        fields.push(Field { name: "contact_status".into(), center: Center::Node, ncomp: 1, values: Values::I32(pairs.iter().map(|&i| state.status[i]).collect()) });
     }
     if want("contact_pressure") {
         fields.push(scalar("contact_pressure", &|i| state.normal_force[i] / contact.area[i]));
@@ -128,5 +114,5 @@ pub fn contact_fields(nnodes: usize, contact: &Contact, state: &ContactState, wa
     if want("slip") {
         fields.push(vector("slip", &|i| state.slip[i]));
     }
-    fields
+    (fields, pairs.iter().map(|&i| contact.slave[i]).collect())
 }

@@ -222,7 +222,16 @@ impl Clustering {
     /// (member s's local DOF j is `offset[s] + j`).
     pub fn outer(&self, cons: &Constraints) -> Constraints {
         let rows = self.members.iter().map(|m| m.iter().flat_map(|&s| cons.rows[s].iter().map(move |&(r, j, v)| (r, self.offset[s] + j, v))).collect()).collect();
-        Constraints { layout: cons.layout, c: cons.c.clone(), rows, gluing_rows: cons.gluing_rows, dirichlet_rows: cons.dirichlet_rows }
+        Constraints {
+            layout: cons.layout,
+            c: cons.c.clone(),
+            gap: cons.gap.clone(),
+            c_moved: cons.c_moved.clone(),
+            c_held: cons.c_held.clone(),
+            rows,
+            gluing_rows: cons.gluing_rows,
+            dirichlet_rows: cons.dirichlet_rows,
+        }
     }
 
     /// Per cluster: its members' vectors one after the other (`per_sub[s]` for subdomain s).

@@ -682,7 +682,7 @@ mod tests {
     fn build<'c>(model: &crate::model::Model, d: &Decomposition, cons: &Constraints, kind: Kind, comm: &'c crate::comm::SerialComm) -> (Coarse, Distribution<'c, crate::comm::SerialComm>) {
         let dist = Distribution::new(comm, cons, &vec![0; d.subdomains.len()]);
         let k: Vec<_> = kernels(model, d).into_iter().map(Some).collect();
-        let c = Coarse::new(&dist, &k, cons, &subdomain_loads(d, &model.loads), kind, &|_| String::new()).unwrap();
+        let c = Coarse::new(&dist, &k, cons, &subdomain_loads(d, &model.loads, &(0..d.subdomains.len()).collect::<Vec<_>>()), kind, &|_| String::new()).unwrap();
         (c, dist)
     }
 

@@ -32,6 +32,13 @@ pub struct Constraints {
     pub layout: Layout,
     /// c, one value per multiplier.
     pub c: Vec<f64>,
+    /// How c depends on the prescribed values (entries of the `dirichlet` list), what a load
+    /// step (new values, the same DOFs) needs to give its c without rebuilding B: a contact row
+    /// starts from `gap` and loses coef · value for each (row, entry, coef) of `c_moved`, in
+    /// order; a Dirichlet row is the value of its entry (`c_held`: row, entry); the others 0.
+    pub gap: Vec<f64>,
+    pub c_moved: Vec<(usize, usize, f64)>,
+    pub c_held: Vec<(usize, usize)>,
     /// Per subdomain: (row, local DOF 3·l + comp, coefficient).
     pub rows: Vec<Vec<(usize, usize, f64)>>,
     pub gluing_rows: usize,
@@ -62,13 +69,17 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
     let mut rows = vec![Vec::new(); d.subdomains.len()];
     let mut c = vec![0.0; layout.contact_dim()];
     let mut prescribed = std::collections::HashMap::new();
-    for &(v, k, val) in dirichlet {
-        prescribed.insert((v, k), val);
+    for (entry, &(v, k, val)) in dirichlet.iter().enumerate() {
+        prescribed.insert((v, k), (val, entry));
     }
+    let (mut c_moved, mut c_held) = (Vec::new(), Vec::new());
+    if let Some(ct) = contact {
+        (0..m).for_each(|i| c[layout.normal(i)] = ct.gap[i]);
+    }
+    let gap = c.clone();
     if let Some(ct) = contact {
         let first = |v: usize| d.copies[v][0];
         for i in 0..m {
-            c[layout.normal(i)] = ct.gap[i];
             let pair_rows = std::iter::once((layout.normal(i), ct.normal[i]))
                 .chain(friction.then(|| [(layout.tangent(i, 0), ct.t1[i]), (layout.tangent(i, 1), ct.t2[i])]).into_iter().flatten());
             for (row, dir) in pair_rows {
@@ -80,8 +91,9 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
                             // entry stays with coefficient 0 so the row keeps its subdomains
                             let coef = sign * dir[k];
                             match prescribed.get(&(node, k)) {
-                                Some(&val) => {
+                                Some(&(val, entry)) => {
                                     c[row] -= coef * val;
+                                    c_moved.push((row, entry, coef));
                                     rows[s].push((row, 3 * l + k, 0.0));
                                 }
                                 None => rows[s].push((row, 3 * l + k, coef)),
@@ -95,12 +107,13 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
     let (mut gluing_rows, mut dirichlet_rows) = (0, 0);
     for (v, copies) in d.copies.iter().enumerate() {
         for k in 0..3 {
-            if let Some(&val) = prescribed.get(&(v, k)) {
+            if let Some(&(val, entry)) = prescribed.get(&(v, k)) {
                 for &(s, l) in copies {
                     if eliminated.get(s).is_some_and(|e| e.binary_search(&(3 * l + k)).is_ok()) {
                         continue;
                     }
                     rows[s].push((c.len(), 3 * l + k, 1.0));
+                    c_held.push((c.len(), entry));
                     c.push(val);
                     dirichlet_rows += 1;
                 }
@@ -129,7 +142,43 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
         }
     }
     layout.free = gluing_rows + dirichlet_rows;
-    Constraints { layout, c, rows, gluing_rows, dirichlet_rows }
+    Constraints { layout, c, gap, c_moved, c_held, rows, gluing_rows, dirichlet_rows }
+}
+
+/// c on this rank's rows at other prescribed values: [`Constraints`]' record of how c depends
+/// on them, kept for the local rows of a [`super::distribution::Distribution`].
+#[derive(Clone, Debug, Default)]
+pub struct LocalRhs {
+    /// c on the local rows before the prescribed values: the gaps, 0 elsewhere.
+    base: Vec<f64>,
+    /// (local row, entry, coefficient) and (local row, entry), in the constraints' order.
+    moved: Vec<(usize, usize, f64)>,
+    held: Vec<(usize, usize)>,
+}
+
+impl LocalRhs {
+    /// The part of `cons` on the global rows `rows` (ascending: the local rows, in order).
+    pub fn new(cons: &Constraints, rows: &[usize]) -> Self {
+        let local = |r: usize| rows.binary_search(&r).ok();
+        LocalRhs {
+            base: rows.iter().map(|&r| cons.gap.get(r).copied().unwrap_or(0.0)).collect(),
+            moved: cons.c_moved.iter().filter_map(|&(r, e, x)| local(r).map(|i| (i, e, x))).collect(),
+            held: cons.c_held.iter().filter_map(|&(r, e)| local(r).map(|i| (i, e))).collect(),
+        }
+    }
+
+    /// c on the local rows for the prescribed values `values` (one per entry of the list the
+    /// constraints were built with), computed as [`build`] computes it.
+    pub fn at(&self, values: &[f64]) -> Vec<f64> {
+        let mut c = self.base.clone();
+        for &(i, e, coef) in &self.moved {
+            c[i] -= coef * values[e];
+        }
+        for &(i, e) in &self.held {
+            c[i] = values[e];
+        }
+        c
+    }
 }
 
 #[cfg(test)]

@@ -80,15 +80,15 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     }
 
     /// A new load state on the same subdomains and rows (a step of a load path): f_s and the
-    /// held values g_s of each member of each local piece, e = Rᵀf (all pieces), c on every row, and
+    /// held values g_s of each member of each local piece, e = Rᵀf (all pieces), c on the owned rows, and
     /// the tangential rows of c moved by `jump` (owned; B_T u of the last step,
     /// [`TfetiDual::jump`]): friction acts on the slip increment. Returns b̃.
-    pub fn set_load(&mut self, f: Vec<Vec<(Vec<f64>, Vec<f64>)>>, e: Vec<f64>, c: &[f64], jump: &[f64]) -> Vec<f64> {
+    pub fn set_load(&mut self, f: Vec<Vec<(Vec<f64>, Vec<f64>)>>, e: Vec<f64>, c: Vec<f64>, jump: &[f64]) -> Vec<f64> {
         for (s, fs) in self.pieces.iter_mut().zip(f) {
             s.sys.set_load(fs);
         }
         self.coarse.e = e;
-        self.c0 = self.dist.restrict(c);
+        self.c0 = c;
         self.c = self.c0.clone();
         crate::dual::add_tangential(self.layout, jump, &mut self.c);
         self.rhs()

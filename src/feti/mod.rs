@@ -22,12 +22,18 @@ use crate::feti::decomposition::Decomposition;
 use crate::mesh::Mesh;
 use crate::scene::DirichletMode;
 
-/// f_s for every subdomain (per local DOF 3·l + c): each node's load goes to its first copy.
-pub fn subdomain_loads(d: &Decomposition, loads: &[f64]) -> Vec<Vec<f64>> {
-    let mut f: Vec<Vec<f64>> = d.subdomains.iter().map(|sd| vec![0.0; 3 * sd.nodes.len()]).collect();
-    for (v, copies) in d.copies.iter().enumerate() {
-        let (s, l) = copies[0];
-        f[s][3 * l..3 * l + 3].copy_from_slice(&loads[3 * v..3 * v + 3]);
+/// f_s of the subdomains `subs` (per local DOF 3·l + c; empty for the others): each node's load
+/// goes to its first copy.
+pub fn subdomain_loads(d: &Decomposition, loads: &[f64], subs: &[usize]) -> Vec<Vec<f64>> {
+    let mut f: Vec<Vec<f64>> = vec![Vec::new(); d.subdomains.len()];
+    for &s in subs {
+        let sd = &d.subdomains[s];
+        f[s] = vec![0.0; 3 * sd.nodes.len()];
+        for (l, &v) in sd.nodes.iter().enumerate() {
+            if d.copies[v][0].0 == s {
+                f[s][3 * l..3 * l + 3].copy_from_slice(&loads[3 * v..3 * v + 3]);
+            }
+        }
     }
     f
 }

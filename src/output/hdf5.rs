@@ -105,7 +105,24 @@ pub fn read(path: &Path) -> Result<OutputData> {
 
 /// Checks everything that would otherwise fail half-way through writing.
 fn validate(data: &OutputData) -> std::result::Result<(), String> {
-    let nnodes = data.coordinates.len();
+    let nnodes = data.nnodes();
+    if let Some(m) = &data.mesh_rows {
+        if m.node_rows.len() != data.coordinates.len() || m.cell_rows.len() != data.hexahedra.len() {
+            return Err(format!(
+                "distributed mesh: {} node rows for {} coordinates, {} cell rows for {} hexahedra",
+                m.node_rows.len(),
+                data.coordinates.len(),
+                m.cell_rows.len(),
+                data.hexahedra.len()
+            ));
+        }
+        if let Some(r) = m.node_rows.iter().find(|&&r| r >= m.nodes) {
+            return Err(format!("distributed mesh: node row {r} beyond the {} nodes", m.nodes));
+        }
+        if let Some(r) = m.cell_rows.iter().find(|&&r| r >= m.cells) {
+            return Err(format!("distributed mesh: cell row {r} beyond the {} cells", m.cells));
+        }
+    }
     if let Some((e, hex)) = data
         .hexahedra
         .iter()
@@ -176,8 +193,8 @@ fn validate_fields(data: &OutputData, fields: &[Field], rows: &Rows) -> std::res
 /// The number of nodes or cells of the mesh of `data`: the rows of a field centered at `c`.
 fn mesh_len(data: &OutputData, c: Center) -> usize {
     match c {
-        Center::Node => data.coordinates.len(),
-        Center::Cell => data.hexahedra.len(),
+        Center::Node => data.nnodes(),
+        Center::Cell => data.ncells(),
     }
 }
 
@@ -237,8 +254,9 @@ fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
 
 fn write_contents<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<()> {
     let mesh = file.create_group(MESH).map_err(ctx("creating /mesh"))?;
+    let rows = data.mesh_rows.as_ref().map(|m| (m.node_rows.as_slice(), m.cell_rows.as_slice()));
     let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
-    write_dataset(comm, &mesh, COORDINATES, &[data.coordinates.len(), 3], None, &coords)?;
+    write_dataset(comm, &mesh, COORDINATES, &[data.nnodes(), 3], rows.map(|r| r.0), &coords)?;
     let hexes = data
         .hexahedra
         .iter()
@@ -246,7 +264,7 @@ fn write_contents<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<(
         .map(|&n| i64::try_from(n))
         .collect::<std::result::Result<Vec<i64>, _>>()
         .map_err(|_| Error::output(String::new(), "node index does not fit in i64"))?;
-    write_dataset(comm, &mesh, HEXAHEDRA, &[data.hexahedra.len(), 8], None, &hexes)?;
+    write_dataset(comm, &mesh, HEXAHEDRA, &[data.ncells(), 8], rows.map(|r| r.1), &hexes)?;
     drop(mesh);
 
     let fields = create_group(file, FIELDS)?;
@@ -486,7 +504,16 @@ pub fn verify(path: &Path, data: &OutputData) -> Result<usize> {
     let shown = path.display().to_string();
     let back = read(path)?;
     let fail = |m: String| Error::output(&shown, format!("read back: {m}"));
-    if back.coordinates != data.coordinates || back.hexahedra != data.hexahedra {
+    let same_mesh = match &data.mesh_rows {
+        None => back.coordinates == data.coordinates && back.hexahedra == data.hexahedra,
+        Some(m) => {
+            back.coordinates.len() == m.nodes
+                && back.hexahedra.len() == m.cells
+                && m.node_rows.iter().zip(&data.coordinates).all(|(&r, x)| back.coordinates[r].map(f64::to_bits) == x.map(f64::to_bits))
+                && m.cell_rows.iter().zip(&data.hexahedra).all(|(&r, h)| back.hexahedra[r] == *h)
+        }
+    };
+    if !same_mesh {
         return Err(fail("the mesh differs from the one in memory".into()));
     }
     let mut checked = 3 * data.coordinates.len() + 8 * data.hexahedra.len();
@@ -593,6 +620,7 @@ fn read_file(path: &Path) -> R<OutputData> {
     Ok(OutputData {
         coordinates,
         hexahedra,
+        mesh_rows: None,
         fields,
         attributes,
         rows: Default::default(),
@@ -798,6 +826,7 @@ mod tests {
         OutputData {
             coordinates: g.nodes,
             hexahedra: g.hexes,
+            mesh_rows: None,
             fields: vec![
                 Field {
                     name: "displacement".into(),

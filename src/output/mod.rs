@@ -35,10 +35,14 @@ pub struct Field {
 /// Everything one result file holds.
 #[derive(Clone, Debug, Default)]
 pub struct OutputData {
-    /// `/mesh/coordinates`, nnodes × 3.
+    /// `/mesh/coordinates`, nnodes × 3 (this rank's rows only where `mesh_rows` is set).
     pub coordinates: Vec<[f64; 3]>,
-    /// `/mesh/hexahedra`, nelems × 8, VTK/XDMF node order.
+    /// `/mesh/hexahedra`, nelems × 8, VTK/XDMF node order, global node numbers (this rank's
+    /// rows only where `mesh_rows` is set).
     pub hexahedra: Vec<[usize; 8]>,
+    /// A distributed mesh: the sizes of the whole mesh and the rows this rank holds of it.
+    /// None: `coordinates` and `hexahedra` are the whole mesh (on every rank).
+    pub mesh_rows: Option<MeshRows>,
     pub fields: Vec<Field>,
     /// String attributes on the root group (resolved scene, versions, timings, report).
     pub attributes: Vec<(String, String)>,
@@ -50,6 +54,30 @@ pub struct OutputData {
     /// the HDF5 file, a temporal collection in the XDMF sidecar. Empty = one load state: the
     /// files are exactly as without load paths. `fields` stays the final state either way.
     pub steps: Vec<Step>,
+}
+
+/// The rows of the mesh one rank holds ([`OutputData::mesh_rows`]): every node and cell held
+/// by some rank, as for a distributed field.
+#[derive(Clone, Debug, Default)]
+pub struct MeshRows {
+    pub nodes: usize,
+    pub cells: usize,
+    /// The nodes whose coordinates this rank holds, in the order of `coordinates`.
+    pub node_rows: Vec<usize>,
+    /// The cells whose hexahedra this rank holds, in the order of `hexahedra`.
+    pub cell_rows: Vec<usize>,
+}
+
+impl OutputData {
+    /// Nodes of the whole mesh.
+    pub fn nnodes(&self) -> usize {
+        self.mesh_rows.as_ref().map_or(self.coordinates.len(), |m| m.nodes)
+    }
+
+    /// Cells of the whole mesh.
+    pub fn ncells(&self) -> usize {
+        self.mesh_rows.as_ref().map_or(self.hexahedra.len(), |m| m.cells)
+    }
 }
 
 /// One state of a load path: `/steps/<index as 4 digits, from 1>/<field name>` in the HDF5 file,

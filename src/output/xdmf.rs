@@ -76,8 +76,8 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
 
 /// The `Topology` and `Geometry` of a grid, indented by `indent` spaces.
 fn mesh(s: &mut String, indent: usize, h5: &str, data: &OutputData) {
-    let nnodes = data.coordinates.len();
-    let nelems = data.hexahedra.len();
+    let nnodes = data.nnodes();
+    let nelems = data.ncells();
     let pad = " ".repeat(indent);
     let _ = writeln!(
         s,
@@ -114,8 +114,8 @@ fn attributes(
             ));
         }
         let (center, expected) = match f.center {
-            Center::Node => ("Node", data.coordinates.len()),
-            Center::Cell => ("Cell", data.hexahedra.len()),
+            Center::Node => ("Node", data.nnodes()),
+            Center::Cell => ("Cell", data.ncells()),
         };
         // a distributed field holds this rank's rows only; the file has them all
         let len = if rows.contains_key(&f.name) { expected } else { nvalues / f.ncomp };
@@ -323,6 +323,7 @@ mod tests {
         OutputData {
             coordinates: g.nodes,
             hexahedra: g.hexes,
+            mesh_rows: None,
             fields: vec![
                 Field {
                     name: "displacement".into(),

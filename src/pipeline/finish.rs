@@ -1,36 +1,73 @@
 //! The one post-solve path of both duals: each rank checks K u = f − Bᵀλ on its pieces (bodies
 //! or TFETI subdomains), computes their element stresses (phase `stress`), and rank 0 gathers u,
 //! the stresses and each piece's figures (phase `gather`); a node shared by several pieces is
-//! written by the first of them and the others' copies give the gluing jump.
+//! written by the first of them and the others' copies give the gluing jump. Each rank reads
+//! only its own pieces' part of the mesh ([`PieceLayout`]).
 
 use serde::{Deserialize, Serialize};
 
-use super::{LocalFields, Solution, Timings};
+use super::{LocalFields, LocalMesh, Solution, Timings};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::element::hex8_center_stress;
 use crate::fem::material::von_mises;
 use crate::linalg::sparse::SymCsc;
-use crate::model::Model;
+use crate::fem::material::Lame;
 
-/// Where a piece lives; the same list on every rank, in the order rank 0 unpacks.
+/// A piece of this rank (a body, or a TFETI subdomain): its part of the mesh, all that the
+/// post-solve path reads of it.
 #[derive(Clone, Debug)]
 pub struct PieceLayout {
-    pub rank: usize,
+    /// The piece's index over all ranks (bodies, subdomains).
+    pub index: usize,
     pub body: usize,
     /// Global node ids, ascending: the piece-local index of a node is its position here.
     pub nodes: Vec<usize>,
-    /// Global element indices.
+    /// Coordinates of `nodes`.
+    pub coords: Vec<[f64; 3]>,
+    /// Whether this piece writes the node (each node is written by one piece: the first that
+    /// has it).
+    pub writes: Vec<bool>,
+    /// Global element indices, ascending.
     pub elems: Vec<usize>,
+    /// The elements' nodes, piece-local.
+    pub hexes: Vec<[usize; 8]>,
+    /// Nodes shared with other pieces (TFETI), 0 for a body.
+    pub interface_nodes: usize,
     /// The piece in messages ("body \"upper\"", "subdomain 3 (body \"upper\")").
     pub name: String,
+}
+
+impl PieceLayout {
+    /// Body `b` of `mesh` whole (bodies share no nodes).
+    pub fn body(mesh: &crate::mesh::Mesh, b: usize) -> Self {
+        let body = &mesh.bodies[b];
+        let n0 = body.nodes.start;
+        PieceLayout {
+            index: b,
+            body: b,
+            nodes: body.nodes.clone().collect(),
+            coords: mesh.nodes[body.nodes.clone()].to_vec(),
+            writes: vec![true; body.nodes.len()],
+            elems: body.elems.clone().collect(),
+            hexes: mesh.hexes[body.elems.clone()].iter().map(|h| h.map(|v| v - n0)).collect(),
+            interface_nodes: 0,
+            name: format!("body \"{}\"", body.name),
+        }
+    }
+}
+
+/// The sizes of the whole problem the pieces are part of.
+#[derive(Clone, Copy, Debug)]
+pub struct Sizes {
+    pub nodes: usize,
+    pub cells: usize,
+    pub pieces: usize,
 }
 
 /// A piece on this rank with its solution: K x = rhs on the DOFs K acts on, and u at every node
 /// of the piece.
 pub struct PieceSolution<'a> {
-    /// Index into the layout.
-    pub piece: usize,
     pub k: &'a SymCsc,
     pub nnz_l: usize,
     pub x: &'a [f64],
@@ -60,30 +97,26 @@ pub struct PieceStats {
     pub rank: usize,
 }
 
+/// Per piece in the gathered buffer: index, nodes, elements, interface nodes, body.
+const HEAD_LEN: usize = 5;
 const STATS_LEN: usize = 4;
 
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Checks, stresses and gathers the pieces (phases `stress` and `gather`). `hint` ends the
+/// Checks, stresses and gathers the pieces (phases `stress` and `gather`): `layout` and `mine`
+/// are this rank's pieces, in the same order; `lame` the bodies' constants. `hint` ends the
 /// message of a piece whose K u = rhs does not hold. Returns the solution (fields on rank 0,
-/// this rank's rows everywhere), the figures of every piece and the relative gluing jump (both
-/// on rank 0).
-pub fn finish<C: Comm>(comm: &C, model: &Model, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<(Solution, Vec<PieceStats>, f64)> {
-    let mesh = &model.mesh;
-    // the piece that writes each node: the first that has it
-    let mut writer = vec![usize::MAX; mesh.nodes.len()];
-    for (p, pl) in layout.iter().enumerate().rev() {
-        for &v in &pl.nodes {
-            writer[v] = p;
-        }
-    }
-    let (packed, local) = t.phase(comm, "stress", || {
+/// this rank's rows and mesh everywhere), the figures and interface nodes of every piece in
+/// index order and the relative gluing jump (both on rank 0). Nothing here reads the whole mesh.
+pub fn finish<C: Comm>(comm: &C, lame: &[Lame], sizes: Sizes, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<(Solution, Vec<(PieceStats, usize)>, f64)> {
+    assert_eq!(layout.len(), mine.len(), "one layout per piece of this rank");
+    let (packed, local, local_mesh) = t.phase(comm, "stress", || {
         let mut buf = Vec::new();
         let mut local = LocalFields::default();
-        for ps in mine {
-            let pl = &layout[ps.piece];
+        let mut lm = LocalMesh::default();
+        for (pl, ps) in layout.iter().zip(mine) {
             let mut kx = ps.k.mul(ps.x);
             ps.held.iter().for_each(|&d| kx[d] = ps.rhs[d]);
             let rn = norm(&kx.iter().zip(ps.rhs).map(|(a, b)| a - b).collect::<Vec<_>>());
@@ -92,72 +125,68 @@ pub fn finish<C: Comm>(comm: &C, model: &Model, layout: &[PieceLayout], mine: &[
             if !residual.is_finite() || residual > 1e-6 {
                 return Err(Error::numerical(pl.name.clone(), format!("K u = f − Bᵀλ does not hold (relative residual {residual:.1e}): {hint}")));
             }
+            buf.extend([pl.index, pl.nodes.len(), pl.elems.len(), pl.interface_nodes, pl.body].map(|x| x as f64));
+            // a node the piece does not write goes as −(v + 1): a copy, for the gluing jump
+            buf.extend(pl.nodes.iter().zip(&pl.writes).map(|(&v, &w)| if w { v as f64 } else { -(v as f64) - 1.0 }));
             buf.extend(ps.nodal.iter().flatten());
-            for (l, &v) in pl.nodes.iter().enumerate().filter(|(_, &v)| writer[v] == ps.piece) {
+            for (l, &v) in pl.nodes.iter().enumerate().filter(|&(l, _)| pl.writes[l]) {
                 local.nodes.push(v);
                 local.displacement.push(ps.nodal[l]);
+                lm.coordinates.push(pl.coords[l]);
             }
-            let lame = model.lame[pl.body];
-            for &e in &pl.elems {
-                let ue = mesh.hexes[e].map(|v| ps.nodal[pl.nodes.binary_search(&v).expect("element node in its piece")]);
-                let vm = von_mises(&hex8_center_stress(&mesh.hex_coords(e), &ue, lame));
+            let lame = lame[pl.body];
+            buf.extend(pl.elems.iter().map(|&e| e as f64));
+            for (&e, hex) in pl.elems.iter().zip(&pl.hexes) {
+                let vm = von_mises(&hex8_center_stress(&hex.map(|l| pl.coords[l]), &hex.map(|l| ps.nodal[l]), lame));
                 buf.push(vm);
                 local.cells.push(e);
                 local.von_mises.push(vm);
+                lm.hexahedra.push(hex.map(|l| pl.nodes[l]));
+                lm.cell_body.push(pl.body);
+                lm.cell_piece.push(pl.index);
             }
             buf.extend([ps.x.len() as f64, ps.k.nnz() as f64, ps.nnz_l as f64, residual]);
         }
-        Ok((buf, local))
+        Ok((buf, local, lm))
     })?;
     let (mut sol, stats, jump) = t.phase(comm, "gather", || {
         let Some(all) = comm.gather_f64(0, &packed) else {
             return Ok((Solution::default(), vec![], 0.0));
         };
-        let mut sol = Solution { displacement: vec![[0.0; 3]; mesh.nodes.len()], von_mises: vec![0.0; mesh.hexes.len()], ..Default::default() };
+        let mut sol = Solution { displacement: vec![[0.0; 3]; sizes.nodes], von_mises: vec![0.0; sizes.cells], ..Default::default() };
         let mut copies: Vec<(usize, [f64; 3])> = Vec::new();
-        let mut stats = Vec::with_capacity(layout.len());
-        let mut cursor = vec![0usize; comm.size()];
-        // pieces in the order each rank packed them (layout order per rank)
-        for (p, pl) in layout.iter().enumerate() {
-            let data = &all[pl.rank];
-            let mut c = cursor[pl.rank];
-            for &v in &pl.nodes {
-                let uv = [data[c], data[c + 1], data[c + 2]];
-                if writer[v] == p {
-                    sol.displacement[v] = uv;
-                } else {
-                    copies.push((v, uv));
+        let mut stats: Vec<Option<(PieceStats, usize)>> = vec![None; sizes.pieces];
+        for (rank, data) in all.iter().enumerate() {
+            let mut c = 0;
+            while c < data.len() {
+                let [index, nn, ne, interface, body] = std::array::from_fn(|i| data[c + i] as usize);
+                c += HEAD_LEN;
+                let (ids, u) = (&data[c..c + nn], &data[c + nn..c + 4 * nn]);
+                for (&id, uv) in ids.iter().zip(u.chunks_exact(3)) {
+                    let uv = [uv[0], uv[1], uv[2]];
+                    if id >= 0.0 {
+                        sol.displacement[id as usize] = uv;
+                    } else {
+                        copies.push(((-id - 1.0) as usize, uv));
+                    }
                 }
-                c += 3;
+                c += 4 * nn;
+                for (&e, &vm) in data[c..c + ne].iter().zip(&data[c + ne..c + 2 * ne]) {
+                    sol.von_mises[e as usize] = vm;
+                }
+                c += 2 * ne;
+                let s = &data[c..c + STATS_LEN];
+                let piece = PieceStats { body, nodes: nn, elements: ne, dofs: s[0] as usize, nnz_k: s[1] as usize, nnz_l: s[2] as usize, residual: s[3], rank };
+                stats[index] = Some((piece, interface));
+                c += STATS_LEN;
             }
-            for &e in &pl.elems {
-                sol.von_mises[e] = data[c];
-                c += 1;
-            }
-            let s = &data[c..c + STATS_LEN];
-            stats.push(PieceStats {
-                body: pl.body,
-                nodes: pl.nodes.len(),
-                elements: pl.elems.len(),
-                dofs: s[0] as usize,
-                nnz_k: s[1] as usize,
-                nnz_l: s[2] as usize,
-                residual: s[3],
-                rank: pl.rank,
-            });
-            cursor[pl.rank] = c + STATS_LEN;
         }
+        let stats = stats.into_iter().map(|s| s.expect("every piece lies on one rank")).collect();
         let umax = sol.displacement.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
         let jump = copies.iter().map(|(v, uv)| (0..3).map(|c| (uv[c] - sol.displacement[*v][c]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
         Ok((sol, stats, jump / umax))
     })?;
     sol.local = local;
-    let mut element_rank = vec![0; mesh.hexes.len()];
-    for pl in layout {
-        for &e in &pl.elems {
-            element_rank[e] = pl.rank;
-        }
-    }
-    sol.element_rank = element_rank;
+    sol.local_mesh = local_mesh;
     Ok((sol, stats, jump))
 }

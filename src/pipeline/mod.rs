@@ -27,7 +27,7 @@ use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::model::{self, Model};
-use crate::output::{self, Center, Field, OutputData, Values};
+use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::qp::{self, Method, Operator, Qp, Space};
@@ -126,8 +126,19 @@ pub struct Solution {
     pub tfeti: Option<tfeti::TfetiInfo>,
     /// This rank's own rows of the fields, as it writes them to the file (every rank).
     pub local: LocalFields,
-    /// Rank that computed each element (every rank).
-    pub element_rank: Vec<usize>,
+    /// This rank's rows of the mesh (every rank): its pieces' part, what it writes to the file.
+    pub local_mesh: LocalMesh,
+}
+
+/// The rows of the mesh one rank holds, parallel to [`LocalFields`]' nodes and cells: the
+/// coordinates of the nodes it writes; its elements' nodes (global numbers), bodies and pieces
+/// (TFETI: subdomains).
+#[derive(Clone, Debug, Default)]
+pub struct LocalMesh {
+    pub coordinates: Vec<[f64; 3]>,
+    pub hexahedra: Vec<[usize; 8]>,
+    pub cell_body: Vec<usize>,
+    pub cell_piece: Vec<usize>,
 }
 
 /// The rows of the distributed fields one rank holds: the nodes it writes (each node once over
@@ -212,30 +223,20 @@ pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t
 /// stresses, gather on rank 0.
 fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[Vec<f64>], rhs: &[&[f64]], t: &mut Timings) -> Result<Solution> {
     let mesh = &model.mesh;
-    let layout: Vec<finish::PieceLayout> = mesh
-        .bodies
-        .iter()
-        .enumerate()
-        .map(|(b, body)| finish::PieceLayout {
-            rank: owner(b, comm.size()),
-            body: b,
-            nodes: body.nodes.clone().collect(),
-            elems: body.elems.clone().collect(),
-            name: format!("body \"{}\"", body.name),
-        })
-        .collect();
+    let layout: Vec<finish::PieceLayout> = bodies.iter().map(|lb| finish::PieceLayout::body(mesh, lb.body)).collect();
     let mine: Vec<finish::PieceSolution<'_>> = bodies
         .iter()
         .zip(u)
         .zip(rhs)
-        .map(|((lb, x), f)| finish::PieceSolution { piece: lb.body, k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, held: &[], nodal: lb.dofs.expand(x) })
+        .map(|((lb, x), f)| finish::PieceSolution { k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, held: &[], nodal: lb.dofs.expand(x) })
         .collect();
+    let sizes = finish::Sizes { nodes: mesh.nodes.len(), cells: mesh.hexes.len(), pieces: mesh.bodies.len() };
     let hint = "the stiffness is singular or ill-conditioned; is the body held against rigid motion?";
-    let (mut sol, stats, _) = finish::finish(comm, model, &layout, &mine, hint, t)?;
+    let (mut sol, stats, _) = finish::finish(comm, &model.lame, sizes, &layout, &mine, hint, t)?;
     sol.bodies = stats
         .iter()
         .zip(&mesh.bodies)
-        .map(|(s, body)| BodyStats { name: body.name.clone(), nodes: s.nodes, elements: s.elements, free_dofs: s.dofs, nnz_k: s.nnz_k, nnz_l: s.nnz_l, residual: s.residual, rank: s.rank })
+        .map(|((s, _), body)| BodyStats { name: body.name.clone(), nodes: s.nodes, elements: s.elements, free_dofs: s.dofs, nnz_k: s.nnz_k, nnz_l: s.nnz_l, residual: s.residual, rank: s.rank })
         .collect();
     Ok(sol)
 }
@@ -448,7 +449,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         }
         Ok(ls)
     })?;
-    let model = t.phase(comm, "mesh", || model::build(&ls))?;
+    let mut model = t.phase(comm, "mesh", || model::build(&ls))?;
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
@@ -476,7 +477,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
     }
     let (sol, outcome) = match &model.pairs {
-        _ if tfeti => tfeti::solve(comm, &ls, &model, &mut t)?,
+        _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t)?,
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
         None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
     };
@@ -585,7 +586,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             subdomains: f.subdomains.clone(),
         }),
         ordering: format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
-        mesh: MeshReport { nodes: mesh.nodes.len(), elements: mesh.hexes.len(), dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
+        mesh: MeshReport { nodes: model.size.nodes, elements: model.size.elements, dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
         bodies: sol.bodies.clone(),
         results: Results {
             max_displacement: umax,
@@ -644,27 +645,21 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
 /// fields whole.
 #[allow(clippy::too_many_arguments)]
 fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str, history: &str) -> OutputData {
-    let mesh = &model.mesh;
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
-    let (mut fields, rows) = distributed_fields(&sol.local, &want);
+    let (mut fields, mut rows) = distributed_fields(&sol.local, &want);
+    let lm = &sol.local_mesh;
+    let cell_field = |name: &str, v: Vec<i32>| Field { name: name.into(), center: Center::Cell, ncomp: 1, values: Values::I32(v) };
     if want("rank") {
-        fields.push(Field { name: "rank".into(), center: Center::Cell, ncomp: 1, values: Values::I32(sol.element_rank.iter().map(|&r| r as i32).collect()) });
+        fields.push(cell_field("rank", vec![comm.rank() as i32; sol.local.cells.len()]));
+        rows.insert("rank".into(), sol.local.cells.clone());
     }
-    if let (true, Some(f)) = (want("subdomain"), &sol.tfeti) {
-        fields.push(Field {
-            name: "subdomain".into(),
-            center: Center::Cell,
-            ncomp: 1,
-            values: Values::I32(f.element_subdomain.iter().map(|&s| s as i32).collect()),
-        });
+    if let (true, Some(_)) = (want("subdomain"), &sol.tfeti) {
+        fields.push(cell_field("subdomain", lm.cell_piece.iter().map(|&s| s as i32).collect()));
+        rows.insert("subdomain".into(), sol.local.cells.clone());
     }
     if want("body") {
-        fields.push(Field {
-            name: "body".into(),
-            center: Center::Cell,
-            ncomp: 1,
-            values: Values::I32(mesh.elem_body().into_iter().map(|b| b as i32).collect()),
-        });
+        fields.push(cell_field("body", lm.cell_body.iter().map(|&b| b as i32).collect()));
+        rows.insert("body".into(), sol.local.cells.clone());
     }
     let mut attributes = vec![
         ("scene".into(), ls.scene.to_toml()),
@@ -675,19 +670,31 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
     ];
     let mut steps = Vec::new();
     if let (Some(o), Some(c)) = (outcome, &model.pairs) {
-        fields.extend(contact_fields(mesh.nodes.len(), c, &o.state, want));
+        // the contact state is whole on every rank: rank 0 writes its rows
+        let pairs: Vec<usize> = if comm.is_root() { (0..c.len()).collect() } else { vec![] };
+        let with_contact = |fields: &mut Vec<Field>, rows: &mut Rows, state: &ContactState| {
+            let (f, nodes) = contact_fields(c, state, &pairs, want);
+            for x in &f {
+                rows.insert(x.name.clone(), nodes.clone());
+            }
+            fields.extend(f);
+        };
+        with_contact(&mut fields, &mut rows, &o.state);
         attributes.push(("solver_history".into(), history.to_string()));
         for s in &o.steps {
-            let (mut fields, rows) = distributed_fields(&s.local, &want);
-            fields.extend(contact_fields(mesh.nodes.len(), c, &s.state, want));
+            let (mut fields, mut rows) = distributed_fields(&s.local, &want);
+            with_contact(&mut fields, &mut rows, &s.state);
             steps.push(output::Step { time: s.report.step as f64, fields, rows });
         }
     }
-    OutputData { coordinates: mesh.nodes.clone(), hexahedra: mesh.hexes.clone(), fields, attributes, rows, steps }
+    let mesh_rows = Some(MeshRows { nodes: model.size.nodes, cells: model.size.elements, node_rows: sol.local.nodes.clone(), cell_rows: sol.local.cells.clone() });
+    OutputData { coordinates: lm.coordinates.clone(), hexahedra: lm.hexahedra.clone(), mesh_rows, fields, attributes, rows, steps }
 }
 
+type Rows = std::collections::BTreeMap<String, Vec<usize>>;
+
 /// u and the von Mises stress (when `want`ed) on this rank's rows, and the rows.
-fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec<Field>, std::collections::BTreeMap<String, Vec<usize>>) {
+fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec<Field>, Rows) {
     let mut fields = Vec::new();
     let mut rows = std::collections::BTreeMap::new();
     if want("displacement") {

@@ -4,13 +4,13 @@
 //! to ranks by a partition of the subdomain graph (`feti::assign_ranks`); the dual vectors are distributed
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own.
 
-use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
+use super::finish::{finish, PieceLayout, PieceSolution, PieceStats, Sizes};
 use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
 use crate::error::{Error, Result};
 use crate::feti::coarse::{self, Coarse};
-use crate::feti::constraints;
+use crate::feti::constraints::{self, LocalRhs};
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
@@ -34,8 +34,6 @@ pub struct SubdomainStats {
 #[derive(Clone, Debug, Default)]
 pub struct TfetiInfo {
     pub subdomains: Vec<SubdomainStats>,
-    /// Subdomain of every element.
-    pub element_subdomain: Vec<usize>,
     /// Multipliers: contact, gluing, Dirichlet.
     pub contact_rows: usize,
     pub gluing_rows: usize,
@@ -141,6 +139,9 @@ pub struct TfetiProblem<'c, C: Comm> {
     pub dual: TfetiDual<'c, C>,
     pub b: Vec<f64>,
     pub set: Lambda,
+    /// This rank's share of the mesh and the decomposition: what the solve reads of them after
+    /// the setup.
+    pub share: Share,
     pub coarse_dim: usize,
     pub nnz_c: usize,
     pub coarse_explicit_bytes: usize,
@@ -164,7 +165,9 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         Ok((d, sub_cons, clusters, cons, owner, elim))
     })?;
     let dist = Distribution::new(comm, &cons, &owner);
-    let loads = subdomain_loads(&d, &model.loads);
+    // the loads and held values of this rank's subdomains (empty for the others)
+    let own_subs: Vec<usize> = (0..clusters.len()).filter(|&c| owner[c] == comm.rank()).flat_map(|c| clusters.members[c].iter().copied()).collect();
+    let loads = subdomain_loads(&d, &model.loads, &own_subs);
     let held = held_values(&d, &elim, &model.constraints);
     let pieces = t.phase(comm, "factorize", || {
         (0..clusters.len())
@@ -198,7 +201,8 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         };
         Ok((coarse, bytes))
     })?;
-    drop(sub_cons);
+    let share = Share::new(model, &d, &elim, &own_subs, &sub_cons, &dist);
+    drop((sub_cons, loads));
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || {
         let (mut dual, mut b) = TfetiDual::new(dist, &cons, pieces, coarse);
@@ -214,7 +218,95 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
         None => Lambda::unconstrained(dual.layout.free),
     };
-    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
+    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
+}
+
+/// This rank's share of the mesh and the decomposition, built at the end of the setup: all that
+/// the solve reads of them afterwards (the load steps, the post-solve path), so that the whole
+/// mesh, decomposition and B can go.
+pub struct Share {
+    /// This rank's subdomains (the members of its clusters), ascending: their nodes,
+    /// coordinates, elements and which nodes they write.
+    pub layout: Vec<PieceLayout>,
+    /// Per subdomain of `layout`: the entry of the constraint list holding each DOF held inside it.
+    held_entry: Vec<Vec<usize>>,
+    /// Load paths: the nodes carrying traction whose first copy is in this rank's subdomains:
+    /// (position in `layout`, local index).
+    loaded: std::collections::HashMap<usize, (usize, usize)>,
+    /// c on the owned rows at a step's prescribed values.
+    rhs: LocalRhs,
+    /// Subdomains over all ranks, and their held DOFs.
+    pub subdomains: usize,
+    pub eliminated_dofs: usize,
+}
+
+impl Share {
+    /// The share of the subdomains `own` and of the owned rows of `dist`.
+    #[allow(clippy::too_many_arguments)]
+    fn new<C: Comm>(model: &Model, d: &Decomposition, elim: &[Vec<usize>], own: &[usize], cons: &constraints::Constraints, dist: &Distribution<'_, C>) -> Share {
+        let mesh = &model.mesh;
+        let mut own = own.to_vec();
+        own.sort_unstable();
+        let layout = own
+            .iter()
+            .map(|&s| {
+                let sd = &d.subdomains[s];
+                PieceLayout {
+                    index: s,
+                    body: sd.body,
+                    nodes: sd.nodes.clone(),
+                    coords: sd.nodes.iter().map(|&v| mesh.nodes[v]).collect(),
+                    writes: sd.nodes.iter().map(|&v| d.copies[v][0].0 == s).collect(),
+                    elems: sd.elems.clone(),
+                    hexes: sd.elems.iter().map(|&e| mesh.hexes[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect(),
+                    interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count(),
+                    name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
+                }
+            })
+            .collect();
+        // a later entry for the same DOF wins (as in `held_values`)
+        let entry: std::collections::HashMap<(usize, usize), usize> = model.constraints.iter().enumerate().map(|(i, &(v, k, _))| ((v, k), i)).collect();
+        let held_entry = own.iter().map(|&s| elim[s].iter().map(|&dof| entry[&(d.subdomains[s].nodes[dof / 3], dof % 3)]).collect()).collect();
+        let mut loaded = std::collections::HashMap::new();
+        if model.path.is_path() {
+            for (dof, _) in model.path.forces(1) {
+                let (s, l) = d.copies[dof / 3][0];
+                if let Ok(p) = own.binary_search(&s) {
+                    loaded.insert(dof / 3, (p, l));
+                }
+            }
+        }
+        Share { layout, held_entry, loaded, rhs: LocalRhs::new(cons, &dist.owned), subdomains: d.subdomains.len(), eliminated_dofs: elim.iter().map(Vec::len).sum() }
+    }
+
+    fn position(&self, s: usize) -> usize {
+        self.layout.binary_search_by_key(&s, |pl| pl.index).expect("a subdomain of this rank")
+    }
+
+    /// Load step k of `model`'s path on this rank's pieces: f_s and the held values g_s of every
+    /// member of `dual`'s pieces, e = Rᵀf and c on the owned rows — what
+    /// [`TfetiDual::set_load`] takes.
+    #[allow(clippy::type_complexity)]
+    fn step<C: Comm>(&self, model: &Model, k: usize, dual: &TfetiDual<'_, C>, clusters: &Clustering) -> (Vec<Vec<(Vec<f64>, Vec<f64>)>>, Vec<f64>, Vec<f64>) {
+        let values = model.constraint_values(k);
+        let mut f: Vec<Vec<f64>> = self.layout.iter().map(|pl| vec![0.0; 3 * pl.nodes.len()]).collect();
+        for (dof, x) in model.path.forces(k) {
+            if let Some(&(p, l)) = self.loaded.get(&(dof / 3)) {
+                f[p][3 * l + dof % 3] += x;
+            }
+        }
+        let g: Vec<Vec<f64>> = self.held_entry.iter().map(|h| h.iter().map(|&e| values[e]).collect()).collect();
+        let (mut fc, mut kernels) = (vec![Vec::new(); clusters.len()], vec![None; clusters.len()]);
+        for p in &dual.pieces {
+            let c = p.sys.index;
+            fc[c] = clusters.members[c].iter().flat_map(|&s| f[self.position(s)].iter().copied()).collect();
+            let (r, kc) = p.sys.kernel();
+            kernels[c] = Some((r.to_vec(), kc));
+        }
+        let e = dual.coarse.rigid_loads(&dual.dist, &kernels, &fc);
+        let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[self.position(s)].clone(), g[self.position(s)].clone())).collect()).collect();
+        (mine, e, self.rhs.at(&values))
+    }
 }
 
 /// Δ_s = μ_min/μ_s per piece (a cluster lies in one body): the preconditioner's stiffness
@@ -228,16 +320,18 @@ pub fn piece_weights(model: &Model, d: &Decomposition, clusters: &Clustering) ->
 /// Decomposes, factorizes, then for each load step (one without `[load]`) sets the load
 /// (phase `load`), solves (contact or not) warm-started from the last step and recovers on the
 /// TFETI dual. The outcome is the last step's, with every step's record.
-pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
-    let mesh = &model.mesh;
+pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
     let dec = &ls.scene.decomposition;
-    let contact = model.pairs.as_ref();
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, coarse_dim, nnz_c, coarse_explicit_bytes } = setup(comm, ls, model, t)?;
-    // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
+    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes } = setup(comm, ls, model, t)?;
+    // B's rows are each rank's pieces' entries in `dual` now, the mesh and the decomposition
+    // each rank's share: only the counts of the whole are kept
     let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows];
-    drop(cons);
+    drop((d, cons, elim, owner));
+    model.release_mesh();
+    let model = &*model;
+    let contact = model.pairs.as_ref();
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
@@ -247,15 +341,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         walk.begin();
         if walk.on_path {
             b = t.phase(comm, "load", || {
-                let (cons_k, loads) = model.state(k);
-                let f = subdomain_loads(&d, &loads);
-                let sub_cons = constraints::build(&d, &cons_k, contact, dec.gluing, &elim);
-                let own: Vec<usize> = dual.dist.subs.iter().map(|sr| sr.index).collect();
-                let e = dual.coarse.rigid_loads(&dual.dist, &clusters.kernels_of(mesh, &d, &elim, &own), &clusters.concat(&f));
-                let c = sub_cons.c;
-                let g = held_values(&d, &elim, &cons_k);
-                let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[s].clone(), g[s].clone())).collect()).collect();
-                Ok(dual.set_load(mine, e, &c, &walk.jump))
+                let (mine, e, c) = share.step(model, k, &dual, &clusters);
+                Ok(dual.set_load(mine, e, c, &walk.jump))
             })?;
         }
         let mut monitor = t.monitor();
@@ -299,13 +386,11 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings
         })?;
         let feasibility = rec.feasibility;
         let distribution = DistributionStats::new(&dual);
-        let sub_owner: Vec<usize> = clusters.cluster_of.iter().map(|&c| owner[c]).collect();
-        let mut solution = finish_subdomains(comm, model, &d, &dual, &rec.u, &rec.rhs, &sub_owner, t)?;
+        let mut solution = finish_subdomains(comm, model, &share, &dual, &rec.u, &rec.rhs, t)?;
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
-        f.element_subdomain = d.elem_subdomain(mesh.hexes.len());
         [f.contact_rows, f.gluing_rows, f.dirichlet_rows] = rows;
-        f.eliminated_dofs = elim.iter().map(Vec::len).sum();
+        f.eliminated_dofs = share.eliminated_dofs;
         f.clusters = clusters.len();
         f.corner_rows = clusters.corner_rows();
         f.coarse_dim = coarse_dim;
@@ -366,36 +451,14 @@ fn held_rows(set: &Lambda, lambda: &[f64]) -> (Vec<bool>, Vec<(usize, [f64; 2])>
     (free, slides)
 }
 
-/// The post-solve path of the subdomains ([`finish`], one piece per subdomain): checks
-/// K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ), stresses, gather on rank 0 with the gluing jump; the bodies' figures
-/// summed over their subdomains.
-#[allow(clippy::too_many_arguments)]
-fn finish_subdomains<C: Comm>(
-    comm: &C,
-    model: &Model,
-    d: &Decomposition,
-    dual: &TfetiDual<'_, C>,
-    u: &[Vec<f64>],
-    rhs: &[Vec<f64>],
-    owner: &[usize],
-    t: &mut Timings,
-) -> Result<Solution> {
+/// The post-solve path of the subdomains ([`finish`], one piece per subdomain, this rank's
+/// share): checks K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ),
+/// stresses, gather on rank 0 with the gluing jump; the bodies' figures summed over their
+/// subdomains.
+fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>], t: &mut Timings) -> Result<Solution> {
     let mesh = &model.mesh;
-    let layout: Vec<PieceLayout> = d
-        .subdomains
-        .iter()
-        .enumerate()
-        .map(|(s, sd)| PieceLayout {
-            rank: owner[s],
-            body: sd.body,
-            nodes: sd.nodes.clone(),
-            elems: sd.elems.clone(),
-            name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
-        })
-        .collect();
-    // per subdomain (the members of this rank's pieces): u_s − g_s, zero on the held DOFs, whose
-    // rows (reactions) are not checked
-    // (finish takes each rank's pieces in ascending order)
+    // per subdomain (the members of this rank's pieces, ascending like the share): u_s − g_s,
+    // zero on the held DOFs, whose rows (reactions) are not checked
     let mut members: Vec<(&SubdomainSystem, &[f64], &[f64])> = dual
         .pieces
         .iter()
@@ -416,7 +479,6 @@ fn finish_subdomains<C: Comm>(
         .iter()
         .zip(&w)
         .map(|(&(sub, us, f), ws)| PieceSolution {
-            piece: sub.index,
             k: &sub.k,
             nnz_l: sub.nnz_l(),
             x: ws,
@@ -425,14 +487,15 @@ fn finish_subdomains<C: Comm>(
             nodal: us.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         })
         .collect();
-    let (mut sol, stats, jump) = finish(comm, model, &layout, &mine, "the recovered u is inaccurate", t)?;
+    let sizes = Sizes { nodes: model.size.nodes, cells: model.size.elements, pieces: share.subdomains };
+    let (mut sol, stats, jump) = finish(comm, &model.lame, sizes, &share.layout, &mine, "the recovered u is inaccurate", t)?;
     if comm.is_root() {
         sol.bodies = mesh
             .bodies
             .iter()
             .enumerate()
             .map(|(b, body)| {
-                let mine = stats.iter().filter(|x| x.body == b);
+                let mine = stats.iter().map(|x| &x.0).filter(|x| x.body == b);
                 BodyStats {
                     name: body.name.clone(),
                     nodes: body.nodes.len(),
@@ -445,11 +508,7 @@ fn finish_subdomains<C: Comm>(
                 }
             })
             .collect();
-        let subdomains = stats
-            .into_iter()
-            .zip(&d.subdomains)
-            .map(|(piece, sd)| SubdomainStats { piece, interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count() })
-            .collect();
+        let subdomains = stats.into_iter().map(|(piece, interface_nodes)| SubdomainStats { piece, interface_nodes }).collect();
         sol.tfeti = Some(TfetiInfo { subdomains, gluing_jump: jump, ..Default::default() });
     }
     Ok(sol)
