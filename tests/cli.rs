@@ -446,10 +446,18 @@ fn on_1_2_3_ranks(name: &str, sets: &[&str]) -> Vec<(String, OutputData)> {
     for (stdout, data) in &runs[1..] {
         // the same iteration counters, and the same results to the last bit (well within 1e-10)
         assert_eq!(counters(stdout), counters(&runs[0].0));
+        // the mesh is written as each rank's rows: the same file whatever the rank count
         assert_eq!(data.coordinates, runs[0].1.coordinates);
+        assert_eq!(data.hexahedra, runs[0].1.hexahedra);
         for (a, b) in data.fields.iter().zip(&runs[0].1.fields).filter(|(a, _)| a.name != "rank") {
             assert_eq!(a.name, b.name);
             assert_eq!(a.values, b.values, "field {} differs between rank counts", a.name);
+        }
+        assert_eq!(data.steps.len(), runs[0].1.steps.len());
+        for (sa, sb) in data.steps.iter().zip(&runs[0].1.steps) {
+            for (a, b) in sa.fields.iter().zip(&sb.fields) {
+                assert_eq!(a.values, b.values, "step {}: field {} differs between rank counts", sa.time, a.name);
+            }
         }
     }
     runs
@@ -466,8 +474,9 @@ fn one_two_three_ranks_give_identical_fields() {
 /// preconditioner (gathered (BBᵀ)⁻¹ groups, GΠGᵀ per Newton step), and the preconditioner in
 /// SSN's BiCGSTAB, GIMSSN's CGMfeas and MPGP (whose face, and so GΠGᵀ, changes on one rank
 /// only: the decision to restrict anew is collective), H-TFETI (clusters of 2, whole on a
-/// rank), and TSSN on the oblique operator with the explicit coarse inverse (each rank its
-/// pieces' rows of C⁻¹); each rank reads the parallel HDF5 file back.
+/// rank), TSSN on the oblique operator with the explicit coarse inverse (each rank its
+/// pieces' rows of C⁻¹), and a load path of three steps (each step's loads, held values and c
+/// from the ranks' shares of the mesh); each rank reads the parallel HDF5 file back.
 #[test]
 fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
     for (name, method, pc, per_cluster) in [
@@ -479,6 +488,7 @@ fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
         ("tfeti-mpgp-lumped", "mpgp", "lumped", 1),
         ("htfeti-tssn-lumped", "tssn", "lumped", 2),
         ("tfeti-tssn-explicit", "tssn", "none", 1),
+        ("tfeti-tssn-path", "tssn", "none", 1),
     ] {
         let m = format!("solver.method=\"{method}\"");
         let p = format!("solver.preconditioner=\"{pc}\"");
@@ -486,6 +496,9 @@ fn tfeti_on_one_two_three_ranks_gives_identical_counters_and_fields() {
         let mut sets = vec!["mesh.n=8", "solver.eps=1e-6", "decomposition.subdomains=4", "decomposition.tfeti=true", &m, &p, &c, "output.verify=true"];
         if name.ends_with("explicit") {
             sets.extend(["decomposition.projected_cg=false", "decomposition.coarse_solve=\"explicit\""]);
+        }
+        if name.ends_with("path") {
+            sets.extend(["load.steps=3", "decomposition.dirichlet=\"eliminated\""]);
         }
         // ε = 1e-6: GIMSSN stalls near 5e-8 on this TFETI dual (README)
         let runs = on_1_2_3_ranks(name, &sets);

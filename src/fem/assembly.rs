@@ -126,15 +126,16 @@ pub struct BodySystem {
 pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Result<BodySystem> {
     let b = &mesh.bodies[body];
     let start = b.nodes.start;
-    assemble_elements(mesh, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
+    assemble_elements(&mesh.nodes, &mesh.hexes, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
         .map_err(|(e, msg)| Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)))
 }
 
-/// Assembles K_ff and f_f over the elements `elems`, whose nodes are numbered `local(v)` in
-/// 0..nn; DOF `3·local(v) + c` of `dofs` (its `nodes` range is not used). On an inverted
-/// element returns the element and what is wrong with it.
+/// Assembles K_ff and f_f over the elements `elems` of (`nodes`, `hexes`), whose nodes are
+/// numbered `local(v)` in 0..nn; DOF `3·local(v) + c` of `dofs` (its `nodes` range is not
+/// used). On an inverted element returns the element and what is wrong with it.
 pub fn assemble_elements(
-    mesh: &Mesh,
+    nodes: &[[f64; 3]],
+    hexes: &[[usize; 8]],
     elems: impl Iterator<Item = usize> + Clone,
     nn: usize,
     local: impl Fn(usize) -> usize,
@@ -142,7 +143,7 @@ pub fn assemble_elements(
     dofs: &DofMap,
     loads: &[f64],
 ) -> std::result::Result<BodySystem, (usize, &'static str)> {
-    let (xadj, adj) = node_graph(&mesh.hexes, elems.clone(), nn, &local);
+    let (xadj, adj) = node_graph(hexes, elems.clone(), nn, &local);
     // pattern: column of free DOF (v, c) holds free DOFs of v (components ≥ c) and of every
     // neighbour w > v, all three components — node-major numbering makes them sorted.
     let mut col_ptr = Vec::with_capacity(dofs.nfree + 1);
@@ -174,12 +175,12 @@ pub fn assemble_elements(
     let mut k = SymCsc::from_pattern(dofs.nfree, col_ptr, row_idx);
     let mut f = dofs.restrict(loads);
     for e in elems {
-        let x = mesh.hex_coords(e);
+        let x = hexes[e].map(|v| nodes[v]);
         if hex_min_jacobian(&x) <= 0.0 {
             return Err((e, "inverted or degenerate (non-positive Jacobian)"));
         }
         let ke = hex8_stiffness(&x, lame);
-        let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(mesh.hexes[e][r / 3]) + r % 3);
+        let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(hexes[e][r / 3]) + r % 3);
         lift(&ke, &ld, dofs, &mut f);
         for q in 0..24 {
             let j = dofs.free[ld[q]];

@@ -242,23 +242,25 @@ impl Clustering {
     /// R_c of every cluster (column-major, the cluster's DOFs × k_c) from the members' kernels
     /// with their held DOFs `eliminated`.
     pub fn kernels(&self, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>]) -> Vec<(Vec<f64>, usize)> {
-        (0..self.len()).map(|c| self.kernel(c, mesh, d, eliminated)).collect()
+        let part = |s: usize| (d.subdomains[s].nodes.iter().map(|&v| mesh.nodes[v]).collect(), eliminated[s].as_slice());
+        (0..self.len()).map(|c| self.kernel(c, &part)).collect()
     }
 
-    /// R_c of the clusters `pieces` only (None for the others): what a rank's blocks of G need.
-    pub fn kernels_of(&self, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>], pieces: &[usize]) -> Vec<Option<(Vec<f64>, usize)>> {
+    /// R_c of the clusters `pieces` only (None for the others), from each member's node
+    /// coordinates and held DOFs (`part(s)`): what a rank's blocks of G need.
+    pub fn kernels_of<'a>(&self, pieces: &[usize], part: impl Fn(usize) -> (Vec<[f64; 3]>, &'a [usize])) -> Vec<Option<(Vec<f64>, usize)>> {
         let mut out = vec![None; self.len()];
-        pieces.iter().for_each(|&c| out[c] = Some(self.kernel(c, mesh, d, eliminated)));
+        pieces.iter().for_each(|&c| out[c] = Some(self.kernel(c, &part)));
         out
     }
 
     /// R_c of cluster `c` (see [`Clustering::kernels`]).
-    fn kernel(&self, c: usize, mesh: &Mesh, d: &Decomposition, eliminated: &[Vec<usize>]) -> (Vec<f64>, usize) {
+    fn kernel<'a>(&self, c: usize, part: &impl Fn(usize) -> (Vec<[f64; 3]>, &'a [usize])) -> (Vec<f64>, usize) {
         let rs: Vec<(Vec<f64>, usize, usize)> = self.members[c]
             .iter()
             .map(|&s| {
-                let coords: Vec<[f64; 3]> = d.subdomains[s].nodes.iter().map(|&v| mesh.nodes[v]).collect();
-                let (r, k) = held_kernel(&coords, &eliminated[s]).expect("eliminated only where the held DOFs leave an exact kernel");
+                let (coords, held) = part(s);
+                let (r, k) = held_kernel(&coords, held).expect("eliminated only where the held DOFs leave an exact kernel");
                 (r, k, 3 * coords.len())
             })
             .collect();

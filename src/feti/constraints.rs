@@ -230,4 +230,23 @@ mod tests {
             assert_eq!(c.c.iter().filter(|&&x| x == 0.5).count(), c.dirichlet_rows);
         }
     }
+    /// A load step's c from the record of the prescribed values equals c built anew at those
+    /// values, bit for bit, on any set of rows: contact rows with prescribed DOFs (the seed's
+    /// clamped faces touch the contact face), Dirichlet rows, gluing rows.
+    #[test]
+    fn local_rhs_gives_the_c_of_other_prescribed_values() {
+        let (model, d, cons) = crate::feti::seed_fixture(5, 3);
+        assert!(!cons.c_moved.is_empty() && !cons.c_held.is_empty());
+        let values: Vec<f64> = (0..model.constraints.len()).map(|i| 1e-3 * ((i * 7919 % 23) as f64 - 11.0)).collect();
+        let moved: Vec<(usize, usize, f64)> = model.constraints.iter().zip(&values).map(|(&(v, k, _), &x)| (v, k, x)).collect();
+        let again = build(&d, &moved, model.pairs.as_ref(), Gluing::Orthonormal, &[]);
+        assert_ne!(again.c, cons.c, "the values move c");
+        for rows in [(0..cons.c.len()).collect::<Vec<_>>(), (0..cons.c.len()).step_by(3).collect()] {
+            let local = LocalRhs::new(&cons, &rows);
+            let want: Vec<u64> = rows.iter().map(|&r| again.c[r].to_bits()).collect();
+            assert_eq!(local.at(&values).iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want);
+            let at_model: Vec<f64> = model.constraints.iter().map(|c| c.2).collect();
+            assert_eq!(local.at(&at_model), rows.iter().map(|&r| cons.c[r]).collect::<Vec<_>>());
+        }
+    }
 }

@@ -66,17 +66,6 @@ pub fn eliminated(mesh: &Mesh, d: &Decomposition, dirichlet: &[(usize, usize, f6
     out
 }
 
-/// The values g of the held DOFs `eliminated` (per subdomain, as [`eliminated`] gives them)
-/// from the prescribed list `dirichlet` (a later entry for the same DOF winning).
-pub fn held_values(d: &Decomposition, eliminated: &[Vec<usize>], dirichlet: &[(usize, usize, f64)]) -> Vec<Vec<f64>> {
-    let value: std::collections::HashMap<(usize, usize), f64> = dirichlet.iter().map(|&(v, k, x)| ((v, k), x)).collect();
-    eliminated
-        .iter()
-        .zip(&d.subdomains)
-        .map(|(held, sd)| held.iter().map(|&dof| value[&(sd.nodes[dof / 3], dof % 3)]).collect())
-        .collect()
-}
-
 /// Rank of every piece (subdomain, or cluster of them) with `dofs[s]` DOFs and the rows `cons`:
 /// a METIS k-way partition of the piece graph (an edge where rows of B couple two pieces,
 /// weighted by their number; vertices weighted by DOFs), so that a rank's pieces lie together

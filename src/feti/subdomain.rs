@@ -225,19 +225,43 @@ pub struct SubdomainSystem {
     chol: Cholesky,
 }
 
+/// A subdomain's part of the mesh in its local node numbering: what assembling K_s reads.
+pub struct SubdomainMesh<'a> {
+    /// Coordinates of its nodes.
+    pub coords: &'a [[f64; 3]],
+    /// Its elements' nodes, local.
+    pub hexes: &'a [[usize; 8]],
+    /// The global index of each element, its body's name and the body's first element (for
+    /// messages).
+    pub elems: &'a [usize],
+    pub body: &'a str,
+    pub body_elems_start: usize,
+}
+
 impl SubdomainSystem {
-    /// Assembles K_s over the subdomain's elements and factorizes it with its fixing DOFs; `f`
-    /// is f_s (per local DOF), `held` the eliminated DOFs (ascending) and `g` their values.
+    /// [`SubdomainSystem::from_part`] of subdomain `sd` of `mesh`.
     #[allow(clippy::too_many_arguments)]
     pub fn new(mesh: &Mesh, sd: &Subdomain, index: usize, lame: Lame, ordering: OrderingKind, f: Vec<f64>, held: Vec<usize>, g: Vec<f64>) -> Result<Self> {
-        let nn = sd.nodes.len();
-        let what = || format!("subdomain {index} (body \"{}\")", mesh.bodies[sd.body].name);
         let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-        let (r, kdim) = held_kernel(&coords, &held).ok_or_else(|| Error::numerical(what(), "its held DOFs stop a rigid motion only weakly: keep its Dirichlet rows"))?;
-        let fixed = fixing_dofs(&coords, &r, kdim, &held).ok_or_else(|| Error::numerical(what(), "its nodes are collinear: no rigid-body fixing DOFs"))?;
+        let hexes: Vec<[usize; 8]> = sd.elems.iter().map(|&e| mesh.hexes[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect();
+        let body = &mesh.bodies[sd.body];
+        let part = SubdomainMesh { coords: &coords, hexes: &hexes, elems: &sd.elems, body: &body.name, body_elems_start: body.elems.start };
+        Self::from_part(&part, index, lame, ordering, f, held, g)
+    }
+
+    /// Assembles K_s over the subdomain's elements (`part`, in its local numbering) and
+    /// factorizes it with its fixing DOFs; `f` is f_s (per local DOF), `held` the eliminated
+    /// DOFs (ascending) and `g` their values.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_part(part: &SubdomainMesh<'_>, index: usize, lame: Lame, ordering: OrderingKind, f: Vec<f64>, held: Vec<usize>, g: Vec<f64>) -> Result<Self> {
+        let coords = part.coords;
+        let nn = coords.len();
+        let what = || format!("subdomain {index} (body \"{}\")", part.body);
+        let (r, kdim) = held_kernel(coords, &held).ok_or_else(|| Error::numerical(what(), "its held DOFs stop a rigid motion only weakly: keep its Dirichlet rows"))?;
+        let fixed = fixing_dofs(coords, &r, kdim, &held).ok_or_else(|| Error::numerical(what(), "its nodes are collinear: no rigid-body fixing DOFs"))?;
         let all = DofMap::new(0..nn, &[]);
-        let sys = assemble_elements(mesh, sd.elems.iter().copied(), nn, |v| sd.local(v).expect("element node in its subdomain"), lame, &all, &f)
-            .map_err(|(e, msg)| Error::mesh(format!("body {}", mesh.bodies[sd.body].name), format!("element {} is {msg}", e - mesh.bodies[sd.body].elems.start)))?;
+        let sys = assemble_elements(coords, part.hexes, 0..part.hexes.len(), nn, |v| v, lame, &all, &f)
+            .map_err(|(e, msg)| Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)))?;
         let k = sys.k;
         let mut zeroed: Vec<usize> = fixed.iter().chain(&held).copied().collect();
         zeroed.sort_unstable();

@@ -895,6 +895,31 @@ mod tests {
         }
     }
 
+    /// A mesh given as rows (each rank its own, here one rank holding all of them in reverse
+    /// order) is written whole, as the same file as the whole mesh; read back and verified row
+    /// by row. A row beyond the mesh is refused before anything is written.
+    #[test]
+    fn a_mesh_given_as_rows_is_written_whole() {
+        let whole = sample();
+        let (nn, nc) = (whole.coordinates.len(), whole.hexahedra.len());
+        let mut dist = whole.clone();
+        let node_rows: Vec<usize> = (0..nn).rev().collect();
+        let cell_rows: Vec<usize> = (0..nc).rev().collect();
+        dist.coordinates = node_rows.iter().map(|&r| whole.coordinates[r]).collect();
+        dist.hexahedra = cell_rows.iter().map(|&r| whole.hexahedra[r]).collect();
+        dist.mesh_rows = Some(crate::output::MeshRows { nodes: nn, cells: nc, node_rows, cell_rows });
+        let (a, b) = (tmp("mesh_whole.h5"), tmp("mesh_rows.h5"));
+        write(&a, &whole).unwrap();
+        write(&b, &dist).unwrap();
+        assert_same(&read(&a).unwrap(), &read(&b).unwrap());
+        assert_eq!(verify(&b, &dist).unwrap(), verify(&a, &whole).unwrap());
+        dist.mesh_rows.as_mut().unwrap().node_rows[0] = nn;
+        let c = tmp("mesh_bad_row.h5");
+        let e = write(&c, &dist).unwrap_err().to_string();
+        assert!(e.contains(&format!("node row {nn} beyond the {nn} nodes")), "{e}");
+        assert!(!c.exists());
+    }
+
     #[test]
     fn round_trip_is_exact() {
         let data = sample();

@@ -105,12 +105,16 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
+/// What [`finish`] returns: the solution, every piece's figures and interface nodes, the
+/// relative gluing jump.
+pub type Finished = (Solution, Vec<(PieceStats, usize)>, f64);
+
 /// Checks, stresses and gathers the pieces (phases `stress` and `gather`): `layout` and `mine`
 /// are this rank's pieces, in the same order; `lame` the bodies' constants. `hint` ends the
 /// message of a piece whose K u = rhs does not hold. Returns the solution (fields on rank 0,
 /// this rank's rows and mesh everywhere), the figures and interface nodes of every piece in
 /// index order and the relative gluing jump (both on rank 0). Nothing here reads the whole mesh.
-pub fn finish<C: Comm>(comm: &C, lame: &[Lame], sizes: Sizes, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<(Solution, Vec<(PieceStats, usize)>, f64)> {
+pub fn finish<C: Comm>(comm: &C, lame: &[Lame], sizes: Sizes, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<Finished> {
     assert_eq!(layout.len(), mine.len(), "one layout per piece of this rank");
     let (packed, local, local_mesh) = t.phase(comm, "stress", || {
         let mut buf = Vec::new();

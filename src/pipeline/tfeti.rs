@@ -15,8 +15,8 @@ use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::cluster::{ClusterSystem, Clustering};
-use crate::feti::subdomain::SubdomainSystem;
-use crate::feti::{assign_ranks, eliminated, held_values, subdomain_loads};
+use crate::feti::subdomain::{SubdomainMesh, SubdomainSystem};
+use crate::feti::{assign_ranks, eliminated, subdomain_loads};
 use crate::model::Model;
 use crate::qp::{self, Lambda, Operator, Qp, Space};
 use crate::contact::state::contact_state;
@@ -127,13 +127,10 @@ impl DistributionStats {
 /// The TFETI dual problem of a scene, ready to iterate: the decomposition, the constraint rows,
 /// the operator F (with the preconditioner TSSN asks for) and b̃, this rank's part of Λ.
 pub struct TfetiProblem<'c, C: Comm> {
-    pub decomposition: Decomposition,
     /// The subdomains' clusters (one subdomain each unless H-TFETI).
     pub clusters: Clustering,
     /// The outer dual's rows of B, per cluster (B without the corner rows).
     pub constraints: constraints::Constraints,
-    /// Per subdomain, the DOFs held inside it (hybrid Dirichlet).
-    pub eliminated: Vec<Vec<usize>>,
     /// Rank of every cluster.
     pub owner: Vec<usize>,
     pub dual: TfetiDual<'c, C>,
@@ -142,18 +139,21 @@ pub struct TfetiProblem<'c, C: Comm> {
     /// This rank's share of the mesh and the decomposition: what the solve reads of them after
     /// the setup.
     pub share: Share,
+    /// Δ per piece ([`piece_weights`]), what a preconditioner set later takes.
+    pub weights: Vec<f64>,
     pub coarse_dim: usize,
     pub nnz_c: usize,
     pub coarse_explicit_bytes: usize,
 }
 
 /// Phases `decompose`, `factorize`, `coarse`, `dual` (and `preconditioner` when TSSN runs with
-/// one on a contact scene): everything before the iterations.
-pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<TfetiProblem<'c, C>> {
-    let mesh = &model.mesh;
+/// one on a contact scene): everything before the iterations. The decomposition is whole on
+/// every rank until each rank has taken its share of it ([`Share`]) and the kernels of the
+/// pieces it reads; then the model's whole mesh is released and the rest reads the share.
+pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &mut Timings) -> Result<TfetiProblem<'c, C>> {
     let dec = &ls.scene.decomposition;
-    let contact = model.pairs.as_ref();
-    let (d, sub_cons, clusters, cons, owner, elim) = t.phase(comm, "decompose", || {
+    let (clusters, cons, owner, dist, share, loads, halo, weights, names) = t.phase(comm, "decompose", || {
+        let (mesh, contact) = (&model.mesh, model.pairs.as_ref());
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = decompose_each(mesh, &parts)?;
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
@@ -162,22 +162,39 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         let cons = clusters.outer(&sub_cons);
         let dofs: Vec<usize> = clusters.members.iter().map(|m| m.iter().map(|&s| 3 * d.subdomains[s].nodes.len()).sum()).collect();
         let owner = assign_ranks(&dofs, &cons, comm.size());
-        Ok((d, sub_cons, clusters, cons, owner, elim))
+        let dist = Distribution::new(comm, &cons, &owner);
+        // this rank's subdomains: their share of the mesh and their loads (empty for the others)
+        let own: Vec<usize> = (0..clusters.len()).filter(|&c| owner[c] == comm.rank()).flat_map(|c| clusters.members[c].iter().copied()).collect();
+        let share = Share::new(model, &d, &elim, &own, &sub_cons, &dist);
+        let loads = subdomain_loads(&d, &model.loads, &own);
+        // the coordinates and held DOFs of the other ranks' pieces whose blocks of G this rank
+        // reads (its halo): their kernels
+        let halo: std::collections::HashMap<usize, (Vec<[f64; 3]>, Vec<usize>)> = Coarse::pieces_read(&dist)
+            .into_iter()
+            .filter(|&c| owner[c] != comm.rank())
+            .flat_map(|c| clusters.members[c].iter().map(|&s| (s, (d.subdomains[s].nodes.iter().map(|&v| mesh.nodes[v]).collect(), elim[s].clone()))))
+            .collect();
+        let weights = piece_weights(model, &d, &clusters);
+        let names: Vec<String> = clusters.members.iter().map(|m| mesh.bodies[d.subdomains[m[0]].body].name.clone()).collect();
+        Ok((clusters, cons, owner, dist, share, loads, halo, weights, names))
     })?;
-    let dist = Distribution::new(comm, &cons, &owner);
-    // the loads and held values of this rank's subdomains (empty for the others)
-    let own_subs: Vec<usize> = (0..clusters.len()).filter(|&c| owner[c] == comm.rank()).flat_map(|c| clusters.members[c].iter().copied()).collect();
-    let loads = subdomain_loads(&d, &model.loads, &own_subs);
-    let held = held_values(&d, &elim, &model.constraints);
+    // every rank holds its share: the whole mesh goes before the factors come
+    model.release_mesh();
+    let model = &*model;
+    let contact = model.pairs.as_ref();
     let pieces = t.phase(comm, "factorize", || {
+        let held = share.held(&model.constraints.iter().map(|c| c.2).collect::<Vec<_>>());
         (0..clusters.len())
             .filter(|&c| owner[c] == comm.rank())
             .map(|c| {
                 let subs = clusters.members[c]
                     .iter()
                     .map(|&s| {
-                        let sd = &d.subdomains[s];
-                        SubdomainSystem::new(mesh, sd, s, model.lame[sd.body], ls.scene.factorization.ordering, loads[s].clone(), elim[s].clone(), held[s].clone())
+                        let p = share.position(s);
+                        let pl = &share.layout[p];
+                        let body = &model.mesh.bodies[pl.body];
+                        let part = SubdomainMesh { coords: &pl.coords, hexes: &pl.hexes, elems: &pl.elems, body: &body.name, body_elems_start: body.elems.start };
+                        SubdomainSystem::from_part(&part, s, model.lame[pl.body], ls.scene.factorization.ordering, loads[s].clone(), share.eliminated[p].clone(), held[p].clone())
                     })
                     .collect::<Result<Vec<_>>>()?;
                 ClusterSystem::new(c, subs, clusters.bc[c].0.clone(), clusters.bc[c].1)
@@ -190,19 +207,24 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
         (true, true) => coarse::Kind::Orthogonal,
         (true, false) => coarse::Kind::ContactHeld,
     };
-    let body = |c: usize| mesh.bodies[d.subdomains[clusters.members[c][0]].body].name.clone();
     let (coarse, explicit_bytes) = t.phase(comm, "coarse", || {
         // the kernels of the pieces whose blocks of G this rank reads: its own and its halo
-        let kernels = clusters.kernels_of(mesh, &d, &elim, &Coarse::pieces_read(&dist));
-        let mut coarse = Coarse::new(&dist, &kernels, &cons, &clusters.concat(&loads), kind, &body)?;
+        let part = |s: usize| match halo.get(&s) {
+            Some((coords, held)) => (coords.clone(), held.as_slice()),
+            None => {
+                let p = share.position(s);
+                (share.layout[p].coords.clone(), share.eliminated[p].as_slice())
+            }
+        };
+        let kernels = clusters.kernels_of(&Coarse::pieces_read(&dist), part);
+        let mut coarse = Coarse::new(&dist, &kernels, &cons, &clusters.concat(&loads), kind, &|c: usize| names[c].clone())?;
         let bytes = match dec.coarse_solve {
             CoarseSolve::Factor => 0,
             CoarseSolve::Explicit => coarse.make_explicit(&dist, coarse::MAX_EXPLICIT_BYTES)?,
         };
         Ok((coarse, bytes))
     })?;
-    let share = Share::new(model, &d, &elim, &own_subs, &sub_cons, &dist);
-    drop((sub_cons, loads));
+    drop((halo, loads));
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
     let (mut dual, b) = t.phase(comm, "dual", || {
         let (mut dual, mut b) = TfetiDual::new(dist, &cons, pieces, coarse);
@@ -211,14 +233,14 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &Model, t: &mut 
     })?;
     let s = &super::solver_for(ls, model);
     if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
-        t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, piece_weights(model, &d, &clusters)))?;
+        t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, weights.clone()))?;
     }
     // this rank's part of Λ: its pairs, its λ_E
     let set = match contact {
         Some(c) => c.constraint_set().restrict(&dual.dist.pairs).with_free(dual.layout.free),
         None => Lambda::unconstrained(dual.layout.free),
     };
-    Ok(TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, dual, b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
+    Ok(TfetiProblem { clusters, constraints: cons, owner, dual, b, set, share, weights, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
 }
 
 /// This rank's share of the mesh and the decomposition, built at the end of the setup: all that
@@ -228,7 +250,9 @@ pub struct Share {
     /// This rank's subdomains (the members of its clusters), ascending: their nodes,
     /// coordinates, elements and which nodes they write.
     pub layout: Vec<PieceLayout>,
-    /// Per subdomain of `layout`: the entry of the constraint list holding each DOF held inside it.
+    /// Per subdomain of `layout`: the DOFs held inside it (hybrid Dirichlet, ascending) and the
+    /// entry of the constraint list holding each.
+    pub eliminated: Vec<Vec<usize>>,
     held_entry: Vec<Vec<usize>>,
     /// Load paths: the nodes carrying traction whose first copy is in this rank's subdomains:
     /// (position in `layout`, local index).
@@ -264,7 +288,7 @@ impl Share {
                 }
             })
             .collect();
-        // a later entry for the same DOF wins (as in `held_values`)
+        // a later entry for the same DOF wins (as in `constraints::build`)
         let entry: std::collections::HashMap<(usize, usize), usize> = model.constraints.iter().enumerate().map(|(i, &(v, k, _))| ((v, k), i)).collect();
         let held_entry = own.iter().map(|&s| elim[s].iter().map(|&dof| entry[&(d.subdomains[s].nodes[dof / 3], dof % 3)]).collect()).collect();
         let mut loaded = std::collections::HashMap::new();
@@ -276,11 +300,18 @@ impl Share {
                 }
             }
         }
-        Share { layout, held_entry, loaded, rhs: LocalRhs::new(cons, &dist.owned), subdomains: d.subdomains.len(), eliminated_dofs: elim.iter().map(Vec::len).sum() }
+        let eliminated = own.iter().map(|&s| elim[s].clone()).collect();
+        Share { layout, eliminated, held_entry, loaded, rhs: LocalRhs::new(cons, &dist.owned), subdomains: d.subdomains.len(), eliminated_dofs: elim.iter().map(Vec::len).sum() }
     }
 
-    fn position(&self, s: usize) -> usize {
+    /// The position of subdomain `s` (one of this rank's) in `layout`.
+    pub fn position(&self, s: usize) -> usize {
         self.layout.binary_search_by_key(&s, |pl| pl.index).expect("a subdomain of this rank")
+    }
+
+    /// g_s of every subdomain of `layout` from the constraints' values `values`.
+    pub fn held(&self, values: &[f64]) -> Vec<Vec<f64>> {
+        self.held_entry.iter().map(|h| h.iter().map(|&e| values[e]).collect()).collect()
     }
 
     /// Load step k of `model`'s path on this rank's pieces: f_s and the held values g_s of every
@@ -295,7 +326,7 @@ impl Share {
                 f[p][3 * l + dof % 3] += x;
             }
         }
-        let g: Vec<Vec<f64>> = self.held_entry.iter().map(|h| h.iter().map(|&e| values[e]).collect()).collect();
+        let g = self.held(&values);
         let (mut fc, mut kernels) = (vec![Vec::new(); clusters.len()], vec![None; clusters.len()]);
         for p in &dual.pieces {
             let c = p.sys.index;
@@ -324,13 +355,11 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
     let dec = &ls.scene.decomposition;
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { decomposition: d, clusters, constraints: cons, eliminated: elim, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes } = setup(comm, ls, model, t)?;
-    // B's rows are each rank's pieces' entries in `dual` now, the mesh and the decomposition
-    // each rank's share: only the counts of the whole are kept
-    let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows];
-    drop((d, cons, elim, owner));
-    model.release_mesh();
+    let TfetiProblem { clusters, constraints: cons, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } = setup(comm, ls, model, t)?;
     let model = &*model;
+    // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
+    let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows];
+    drop((cons, owner));
     let contact = model.pairs.as_ref();
     let params = &s.params;
     let name = if contact.is_some() { params.method().name() } else { "cg" };

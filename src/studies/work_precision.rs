@@ -262,9 +262,9 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                 continue;
             }
             let tls = tfeti_scene(args, &sets, s)?;
-            let tmodel = crate::model::build(&tls)?;
+            let mut tmodel = crate::model::build(&tls)?;
             let mut tt = Timings::default();
-            let mut prob = setup(comm, &tls, &tmodel, &mut tt)?;
+            let mut prob = setup(comm, &tls, &mut tmodel, &mut tt)?;
             let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
             let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: default_method(&tls, DualKind::of(&tls, &tmodel)) };
             on_problem(&problem);
@@ -273,16 +273,16 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                 let Solver::Dual(c) = solver else { continue };
                 let t0 = Instant::now();
                 let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true })?;
-                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, crate::pipeline::tfeti::piece_weights(&tmodel, &prob.decomposition, &prob.clusters))?;
+                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, prob.weights.clone())?;
                 let pc_s = t0.elapsed().as_secs_f64();
-                let (dual_t, d) = (&prob.dual, &prob.decomposition);
+                let (dual_t, share) = (&prob.dual, &prob.share);
                 let measure = |sol: &QpSolution| {
                     let rec = dual_t.recover(&sol.lambda);
                     let mut e = 0.0f64;
                     for (ls, uc) in dual_t.pieces.iter().zip(&rec.u) {
                         for (m, sub) in ls.sys.subs.iter().enumerate() {
                             let us = ls.sys.part(uc, m);
-                            for (l, &v) in d.subdomains[sub.index].nodes.iter().enumerate() {
+                            for (l, &v) in share.layout[share.position(sub.index)].nodes.iter().enumerate() {
                                 for c in 0..3 {
                                     e = e.max((us[3 * l + c] - u_nodes[v][c]).abs());
                                 }
