@@ -39,17 +39,6 @@ impl Decomposition {
     pub fn interface_nodes(&self) -> usize {
         self.copies.iter().filter(|c| c.len() > 1).count()
     }
-
-    /// The subdomain of every element.
-    pub fn elem_subdomain(&self, nelems: usize) -> Vec<usize> {
-        let mut out = vec![0; nelems];
-        for (s, sd) in self.subdomains.iter().enumerate() {
-            for &e in &sd.elems {
-                out[e] = s;
-            }
-        }
-        out
-    }
 }
 
 /// Splits every body into `parts` subdomains.

@@ -2,7 +2,8 @@
 //! (assemble K_s and factorize K_s with its fixing DOFs, this rank's subdomains only), `coarse`
 //! (G, e, C), `dual` (b̃), `iterate`, `recover` (λ, α, u), `stress` and `gather`. Subdomains go
 //! to ranks by a partition of the subdomain graph (`feti::assign_ranks`); the dual vectors are distributed
-//! (`feti::distribution`), each rank holding the multipliers its subdomains own.
+//! (`feti::distribution`), each rank holding the multipliers its subdomains own. The mesh and
+//! the decomposition are whole on every rank only until each has taken its [`Share`].
 
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats, Sizes};
 use super::{BodyStats, ContactOutcome, Solution, Timings};
@@ -243,9 +244,9 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
     Ok(TfetiProblem { clusters, constraints: cons, owner, dual, b, set, share, weights, coarse_dim, nnz_c, coarse_explicit_bytes: explicit_bytes })
 }
 
-/// This rank's share of the mesh and the decomposition, built at the end of the setup: all that
-/// the solve reads of them afterwards (the load steps, the post-solve path), so that the whole
-/// mesh, decomposition and B can go.
+/// This rank's share of the mesh and the decomposition, taken right after the partition: all
+/// that the factorization, the load steps and the post-solve path read of them, so that the
+/// whole mesh and decomposition can go before the factors are built.
 pub struct Share {
     /// This rank's subdomains (the members of its clusters), ascending: their nodes,
     /// coordinates, elements and which nodes they write.
@@ -266,7 +267,6 @@ pub struct Share {
 
 impl Share {
     /// The share of the subdomains `own` and of the owned rows of `dist`.
-    #[allow(clippy::too_many_arguments)]
     fn new<C: Comm>(model: &Model, d: &Decomposition, elim: &[Vec<usize>], own: &[usize], cons: &constraints::Constraints, dist: &Distribution<'_, C>) -> Share {
         let mesh = &model.mesh;
         let mut own = own.to_vec();
