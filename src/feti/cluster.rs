@@ -219,19 +219,14 @@ impl Clustering {
 
     /// The outer dual's constraints: B's rows (all of them: B_c's rows are combinations of its
     /// gluing rows, [`Clustering::null`]), one entry list per cluster over the cluster's DOFs
-    /// (member s's local DOF j is `offset[s] + j`).
-    pub fn outer(&self, cons: &Constraints) -> Constraints {
-        let rows = self.members.iter().map(|m| m.iter().flat_map(|&s| cons.rows[s].iter().map(move |&(r, j, v)| (r, self.offset[s] + j, v))).collect()).collect();
-        Constraints {
-            layout: cons.layout,
-            c: cons.c.clone(),
-            gap: cons.gap.clone(),
-            c_moved: cons.c_moved.clone(),
-            c_held: cons.c_held.clone(),
-            rows,
-            gluing_rows: cons.gluing_rows,
-            dirichlet_rows: cons.dirichlet_rows,
+    /// (member s's local DOF j is `offset[s] + j`). Clusters of one subdomain each (TFETI) take
+    /// `cons` as it is: no second copy of B.
+    pub fn outer(&self, cons: Constraints) -> Constraints {
+        if (0..self.len()).all(|c| self.members[c] == [c] && self.offset[c] == 0) {
+            return cons;
         }
+        let rows = self.members.iter().map(|m| m.iter().flat_map(|&s| cons.rows[s].iter().map(move |&(r, j, v)| (r, self.offset[s] + j, v))).collect()).collect();
+        Constraints { rows, ..cons }
     }
 
     /// Per cluster: its members' vectors one after the other (`per_sub[s]` for subdomain s).
@@ -669,7 +664,7 @@ mod tests {
         assert!(cl.bc.iter().all(|b| b.1 >= 6), "each cluster has corner rows: {:?}", cl.bc.iter().map(|b| b.1).collect::<Vec<_>>());
         // the outer rows are B's; the B_c rows are combinations w of them (Bᵀw = B_cᵀe_j),
         // orthonormal
-        let outer = cl.outer(&cons);
+        let outer = cl.outer(cons.clone());
         assert_eq!((outer.c.len(), outer.rows.iter().map(Vec::len).sum::<usize>()), (cons.c.len(), cons.rows.iter().map(Vec::len).sum::<usize>()));
         assert_eq!(cl.null.len(), cl.corner_rows());
         let dense = |w: &[(usize, f64)]| {
@@ -762,7 +757,7 @@ mod tests {
         let cl = Clustering::new(&model.mesh, &d, &cons, 1).unwrap();
         assert_eq!(cl.len(), d.subdomains.len());
         assert!((0..cl.len()).all(|c| cl.is_single(c)));
-        let outer = cl.outer(&cons);
+        let outer = cl.outer(cons.clone());
         assert_eq!(outer.rows, cons.rows);
         // clusters of 2 and 3 of the 3 subdomains per body: every subdomain in one cluster of its body
         for per in [2, 3] {

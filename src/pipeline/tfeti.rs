@@ -160,13 +160,13 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
         let sub_cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
         let clusters = Clustering::new(mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
-        let cons = clusters.outer(&sub_cons);
+        let cons = clusters.outer(sub_cons);
         let dofs: Vec<usize> = clusters.members.iter().map(|m| m.iter().map(|&s| 3 * d.subdomains[s].nodes.len()).sum()).collect();
         let owner = assign_ranks(&dofs, &cons, comm.size());
         let dist = Distribution::new(comm, &cons, &owner);
         // this rank's subdomains: their share of the mesh and their loads (empty for the others)
         let own: Vec<usize> = (0..clusters.len()).filter(|&c| owner[c] == comm.rank()).flat_map(|c| clusters.members[c].iter().copied()).collect();
-        let share = Share::new(model, &d, &elim, &own, &sub_cons, &dist);
+        let share = Share::new(model, &d, &elim, &own, &cons, &dist);
         let loads = subdomain_loads(&d, &model.loads, &own);
         // the coordinates and held DOFs of the other ranks' pieces whose blocks of G this rank
         // reads (its halo): their kernels

@@ -55,7 +55,7 @@ pub fn run(args: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
         let elim = eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
         let sub_cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), dec.gluing, &elim);
         let clusters = Clustering::new(&model.mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
-        let cons = clusters.outer(&sub_cons);
+        let cons = clusters.outer(sub_cons);
         let loads = subdomain_loads(&d, &model.loads, &(0..d.subdomains.len()).collect::<Vec<_>>());
         let t = Instant::now();
         // one process holding every piece
