@@ -92,8 +92,9 @@ pub fn automatic(dec: &DecompositionSettings) -> bool {
 /// Prices the monolithic dual (unless `decomposition.tfeti`) and TFETI at the subdomain counts
 /// of [`SUBDOMAIN_COUNTS`] for a run on `ranks` ranks with the solver settings `solver`;
 /// ordered as priced.
-/// The fill of the factors is counted by the ranks of `comm` in turn and summed, so every rank
-/// gets the same table.
+/// The ranks of `comm` share the work — the monolithic candidate's bodies, and each TFETI
+/// candidate whole (its partition, B and fills) — and sum the figures, so every rank gets the
+/// same table.
 pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solver: &Common, ranks: usize) -> Result<Vec<Candidate>> {
     let eps = solver.eps;
     let mesh = &model.mesh;
@@ -167,45 +168,83 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
     if dec.tfeti {
         counts.insert(0, 1);
     }
-    for s in counts {
-        let target = largest.div_ceil(s);
-        let parts: Vec<usize> = body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect();
-        if (s > 1 && target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len()) {
-            continue;
+    // the TFETI candidates (target DOFs, parts): each priced whole — its partition, B, fills —
+    // by one rank (candidate j by rank j % workers), the figures summed (x + 0 is exact), so
+    // every rank gets the same table and none repeats another's partitions
+    let specs: Vec<(usize, usize, Vec<usize>)> = counts
+        .into_iter()
+        .map(|s| (s, largest.div_ceil(s)))
+        .map(|(s, target)| (s, target, body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect::<Vec<usize>>()))
+        .filter(|(s, target, parts)| !((*s > 1 && *target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len())))
+        .collect();
+    const FIGURES: usize = 8;
+    let mut figures = vec![0.0; FIGURES * specs.len()];
+    let mut failed = Ok(());
+    for (j, (s, target, parts)) in specs.iter().enumerate().filter(|(j, _)| j % workers == me) {
+        let priced = (|| -> Result<Candidate> {
+            let d = decompose_each(mesh, parts)?;
+            let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
+            let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
+            // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the
+            // others scaled from it by their node count (nested dissection of 3-D pieces:
+            // nnz(L) ~ n^4/3, work ~ n²)
+            let ns = d.subdomains.len();
+            let stride = ns.div_ceil((ns / 4).clamp(2, SAMPLED).min(ns));
+            let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
+            let counted = sampled
+                .iter()
+                .map(|&s| {
+                    let sd = &d.subdomains[s];
+                    let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
+                    // the DOFs held inside the subdomain cost no fill
+                    let mut free = vec![3u8; sd.nodes.len()];
+                    elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);
+                    Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
+                })
+                .collect::<Result<Vec<Fill>>>()?;
+            let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
+            let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
+            for (&s, x) in sampled.iter().zip(&counted) {
+                (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
+            }
+            let f: Vec<Fill> = (0..ns)
+                .map(|s| match sampled.binary_search(&s) {
+                    Ok(i) => counted[i],
+                    Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
+                })
+                .collect();
+            let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, ranks);
+            let growth = 1.0 + TFETI_GROWTH * (*s as f64).log2();
+            let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
+            let rows = (cons.gluing_rows, cons.dirichlet_rows);
+            Ok(candidate(parts.clone(), Some(*target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a))
+        })();
+        match priced {
+            Ok(c) => figures[FIGURES * j..FIGURES * (j + 1)].copy_from_slice(&[c.nnz_l, c.nnz_l_rank, c.gluing_rows as f64, c.dirichlet_rows as f64, c.n_a, c.t_product, c.t_factor, c.time]),
+            Err(e) => {
+                failed = Err(e);
+                break;
+            }
         }
-        let d = comm.agree(decompose_each(mesh, &parts))?;
-        let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
-        let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
-        // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the others
-        // scaled from it by their node count (nested dissection of 3-D pieces: nnz(L) ~ n^4/3,
-        // work ~ n²)
-        let ns = d.subdomains.len();
-        let stride = ns.div_ceil((ns / 4).clamp(2, SAMPLED).min(ns));
-        let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
-        let counted = fills(sampled.len(), &|i| {
-            let sd = &d.subdomains[sampled[i]];
-            let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
-            // the DOFs held inside the subdomain cost no fill
-            let mut free = vec![3u8; sd.nodes.len()];
-            elim[sampled[i]].iter().for_each(|&dof| free[dof / 3] -= 1);
-            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
-        })?;
-        let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
-        let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
-        for (&s, x) in sampled.iter().zip(&counted) {
-            (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
-        }
-        let f: Vec<Fill> = (0..ns)
-            .map(|s| match sampled.binary_search(&s) {
-                Ok(i) => counted[i],
-                Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
-            })
-            .collect();
-        let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, ranks);
-        let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
-        let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
-        let rows = (cons.gluing_rows, cons.dirichlet_rows);
-        out.push(candidate(parts, Some(target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a));
+    }
+    // every rank reaches the sum, then all fail together
+    comm.sum_f64(&mut figures);
+    comm.agree(failed)?;
+    for ((_, target, parts), x) in specs.into_iter().zip(figures.chunks(FIGURES)) {
+        out.push(Candidate {
+            parts,
+            tfeti: true,
+            target_dofs: Some(target),
+            nnz_l: x[0],
+            nnz_l_rank: x[1],
+            contact_rows,
+            gluing_rows: x[2] as usize,
+            dirichlet_rows: x[3] as usize,
+            n_a: x[4],
+            t_product: x[5],
+            t_factor: x[6],
+            time: x[7],
+        });
     }
     Ok(out)
 }
