@@ -199,7 +199,7 @@ impl Coarse {
             blocks.push(block);
         }
         let mut coarse = Coarse { blocks, e_start, e: vec![0.0; off], chol: None, full: None, nnz_c: 0, pattern: Default::default() };
-        coarse.e = coarse.rigid_loads(dist, kernels, loads);
+        coarse.e = coarse.rigid_loads(dist, &|s| kernels[s].as_ref().expect("a kernel for every piece of this rank").0.as_slice(), loads);
         if kind != Kind::Oblique {
             coarse.full = Some(Inverse::Factor(coarse_matrix(&coarse.blocks, dist, 0, body)?.0));
         }
@@ -210,13 +210,13 @@ impl Coarse {
         Ok(coarse)
     }
 
-    /// e = Rᵀf: the load's work in each piece's kernel motions (`kernels[s]` = (R_s, k_s) and
+    /// e = Rᵀf: the load's work in each piece's kernel motions (`kernel(s)` = R_s and
     /// `loads[s]` = f_s for this rank's pieces; R_s vanishes on held DOFs: Rᵀf = Rᵀ(f − Kg)),
     /// reduced over the ranks (one contributor per entry). Collective.
-    pub fn rigid_loads<C: Comm>(&self, dist: &Distribution<'_, C>, kernels: &[Option<(Vec<f64>, usize)>], loads: &[Vec<f64>]) -> Vec<f64> {
+    pub fn rigid_loads<'k, C: Comm>(&self, dist: &Distribution<'_, C>, kernel: &dyn Fn(usize) -> &'k [f64], loads: &[Vec<f64>]) -> Vec<f64> {
         let mut e = vec![0.0; self.dim()];
         for sr in &dist.subs {
-            let (r, _) = kernels[sr.index].as_ref().expect("a kernel for every piece of this rank");
+            let r = kernel(sr.index);
             let b = &self.blocks[sr.index];
             e[b.off..b.off + b.k].copy_from_slice(&rigid_work(r, &loads[sr.index]));
         }

@@ -13,6 +13,7 @@ use crate::fem::element::hex8_center_stress;
 use crate::fem::material::von_mises;
 use crate::linalg::sparse::SymCsc;
 use crate::fem::material::Lame;
+use crate::model::MeshSize;
 
 /// A piece of this rank (a body, or a TFETI subdomain): its part of the mesh, all that the
 /// post-solve path reads of it.
@@ -55,14 +56,6 @@ impl PieceLayout {
             name: format!("body \"{}\"", body.name),
         }
     }
-}
-
-/// The sizes of the whole problem the pieces are part of.
-#[derive(Clone, Copy, Debug)]
-pub struct Sizes {
-    pub nodes: usize,
-    pub cells: usize,
-    pub pieces: usize,
 }
 
 /// A piece on this rank with its solution: K x = rhs on the DOFs K acts on, and u at every node
@@ -110,11 +103,13 @@ fn norm(v: &[f64]) -> f64 {
 pub type Finished = (Solution, Vec<(PieceStats, usize)>, f64);
 
 /// Checks, stresses and gathers the pieces (phases `stress` and `gather`): `layout` and `mine`
-/// are this rank's pieces, in the same order; `lame` the bodies' constants. `hint` ends the
+/// are this rank's pieces, in the same order, of `pieces` over all ranks on a mesh of `size`;
+/// `lame` the bodies' constants. `hint` ends the
 /// message of a piece whose K u = rhs does not hold. Returns the solution (fields on rank 0,
 /// this rank's rows and mesh everywhere), the figures and interface nodes of every piece in
 /// index order and the relative gluing jump (both on rank 0). Nothing here reads the whole mesh.
-pub fn finish<C: Comm>(comm: &C, lame: &[Lame], sizes: Sizes, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<Finished> {
+#[allow(clippy::too_many_arguments)]
+pub fn finish<C: Comm>(comm: &C, lame: &[Lame], size: MeshSize, pieces: usize, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<Finished> {
     assert_eq!(layout.len(), mine.len(), "one layout per piece of this rank");
     let (packed, local, local_mesh) = t.phase(comm, "stress", || {
         let mut buf = Vec::new();
@@ -157,9 +152,9 @@ pub fn finish<C: Comm>(comm: &C, lame: &[Lame], sizes: Sizes, layout: &[PieceLay
         let Some(all) = comm.gather_f64(0, &packed) else {
             return Ok((Solution::default(), vec![], 0.0));
         };
-        let mut sol = Solution { displacement: vec![[0.0; 3]; sizes.nodes], von_mises: vec![0.0; sizes.cells], ..Default::default() };
+        let mut sol = Solution { displacement: vec![[0.0; 3]; size.nodes], von_mises: vec![0.0; size.elements], ..Default::default() };
         let mut copies: Vec<(usize, [f64; 3])> = Vec::new();
-        let mut stats: Vec<Option<(PieceStats, usize)>> = vec![None; sizes.pieces];
+        let mut stats: Vec<Option<(PieceStats, usize)>> = vec![None; pieces];
         for (rank, data) in all.iter().enumerate() {
             let mut c = 0;
             while c < data.len() {

@@ -230,9 +230,8 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
         .zip(rhs)
         .map(|((lb, x), f)| finish::PieceSolution { k: &lb.sys.k, nnz_l: lb.chol.nnz_l(), x, rhs: f, held: &[], nodal: lb.dofs.expand(x) })
         .collect();
-    let sizes = finish::Sizes { nodes: mesh.nodes.len(), cells: mesh.hexes.len(), pieces: mesh.bodies.len() };
     let hint = "the stiffness is singular or ill-conditioned; is the body held against rigid motion?";
-    let (mut sol, stats, _) = finish::finish(comm, &model.lame, sizes, &layout, &mine, hint, t)?;
+    let (mut sol, stats, _) = finish::finish(comm, &model.lame, model.size, mesh.bodies.len(), &layout, &mine, hint, t)?;
     sol.bodies = stats
         .iter()
         .zip(&mesh.bodies)

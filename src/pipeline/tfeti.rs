@@ -5,7 +5,7 @@
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own. The mesh and
 //! the decomposition are whole on every rank only until each has taken its [`Share`].
 
-use super::finish::{finish, PieceLayout, PieceSolution, PieceStats, Sizes};
+use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
 use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
@@ -327,14 +327,14 @@ impl Share {
             }
         }
         let g = self.held(&values);
-        let (mut fc, mut kernels) = (vec![Vec::new(); clusters.len()], vec![None; clusters.len()]);
+        let mut fc = vec![Vec::new(); clusters.len()];
+        let mut kernels: Vec<&[f64]> = vec![&[]; clusters.len()];
         for p in &dual.pieces {
             let c = p.sys.index;
             fc[c] = clusters.members[c].iter().flat_map(|&s| f[self.position(s)].iter().copied()).collect();
-            let (r, kc) = p.sys.kernel();
-            kernels[c] = Some((r.to_vec(), kc));
+            kernels[c] = p.sys.kernel().0;
         }
-        let e = dual.coarse.rigid_loads(&dual.dist, &kernels, &fc);
+        let e = dual.coarse.rigid_loads(&dual.dist, &|c| kernels[c], &fc);
         let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[self.position(s)].clone(), g[self.position(s)].clone())).collect()).collect();
         (mine, e, self.rhs.at(&values))
     }
@@ -516,8 +516,7 @@ fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &Tfe
             nodal: us.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         })
         .collect();
-    let sizes = Sizes { nodes: model.size.nodes, cells: model.size.elements, pieces: share.subdomains };
-    let (mut sol, stats, jump) = finish(comm, &model.lame, sizes, &share.layout, &mine, "the recovered u is inaccurate", t)?;
+    let (mut sol, stats, jump) = finish(comm, &model.lame, model.size, share.subdomains, &share.layout, &mine, "the recovered u is inaccurate", t)?;
     if comm.is_root() {
         sol.bodies = mesh
             .bodies
