@@ -91,22 +91,15 @@ pub fn solve<S: Space>(
     for it in 1..=fp.max_iterations {
         p.common.eps = (fp.inner_factor * change).max(eps);
         let sol = solve_one(&current, &x, &p)?;
-        let n_a_before = total.n_a;
-        total.iterations += sol.info.iterations;
-        total.n_a += sol.info.n_a;
-        total.n_a_power += sol.info.n_a_power;
-        total.inner_iterations += sol.info.inner_iterations;
-        total.preconditioner_applications += sol.info.preconditioner_applications;
-        total.history.extend(sol.info.history.iter().cloned().map(|mut s| {
-            s.n_a += n_a_before;
-            s
-        }));
-        (total.sigma_est, total.rho, total.err, total.q) = (sol.info.sigma_est, sol.info.rho, sol.info.err, sol.info.q);
+        total.absorb(&sol.info);
         // σ_max does not depend on Λ: measured once
         p.common.sigma.get_or_insert(sol.info.sigma_est);
         let (old, new) = (normals(&x), normals(&sol.lambda));
         let diff: Vec<f64> = new.iter().zip(&old).map(|(a, b)| a - b).collect();
-        change = space.norm(&diff) / space.norm(&new).max(f64::MIN_POSITIVE);
+        // relative to the larger of the two: λν falling to 0 (every pair opening) is a change of
+        // 1, not an overflow; both 0 is no change
+        let scale = space.norm(&new).max(space.norm(&old));
+        change = if scale > 0.0 { space.norm(&diff) / scale } else { 0.0 };
         if !change.is_finite() {
             return Err(QpError::NotFinite { what: "the Coulomb fixed point's normal multipliers", outer: it });
         }

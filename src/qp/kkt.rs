@@ -35,8 +35,15 @@ impl Kkt {
 
 /// The KKT residuals of λ with gradient r; `bnorm` = ‖b‖.
 pub fn residuals(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64) -> Kkt {
+    residuals_scaled(set, lambda, r, bnorm, 0.0)
+}
+
+/// [`residuals`] with the forces relative to at least `force`: the problem's force scale
+/// (‖b‖/σ_max(A), the size of the multipliers an ε‖b‖ gradient moves), so that multipliers of
+/// round-off size where every pair is open (and every bound 0) are not read as forces.
+pub fn residuals_scaled(set: &Lambda, lambda: &[f64], r: &[f64], bnorm: f64, force: f64) -> Kkt {
     let m = set.layout.m;
-    let mut lscale = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let mut lscale = lambda[..m].iter().fold(0.0f64, |s, v| s.max(v.abs())).max(if force.is_finite() { force } else { 0.0 });
     let mut k = Kkt::default();
     let bnorm = bnorm.max(f64::MIN_POSITIVE);
     // each set's size: the projection of a far point lies on its boundary
@@ -101,6 +108,19 @@ mod tests {
     /// One pair with a disc of radius 1: λ = (λν, λτ₁, λτ₂), r likewise.
     fn set() -> Lambda {
         Lambda::new(1, Some(vec![TangentSet::Disc(Disc::new(1.0))]))
+    }
+
+    #[test]
+    fn round_off_multipliers_of_open_pairs_are_not_forces_at_the_problem_scale() {
+        // Coulomb cones cut at λν = 1e-20 (every pair open, λ of round-off size): relative to
+        // the largest λν itself the pair looks pressed and open at once
+        let s = Lambda::new(1, Some(vec![TangentSet::Disc(Disc::new(2e-20))]));
+        let (lam, r) = ([1e-20, 0.0, 0.0], [1e-3, 0.0, 0.0]);
+        assert!(residuals(&s, &lam, &r, 1e-2).complementarity > 0.05);
+        // at the problem's force scale (‖b‖/σ_max = 100) it is round-off
+        assert!(residuals_scaled(&s, &lam, &r, 1e-2, 100.0).worst() < 1e-15);
+        // a real force stays one: λν = 1 with the pair open by 1e-3
+        assert!(residuals_scaled(&s, &[1.0, 0.0, 0.0], &r, 1e-2, 100.0).complementarity > 1e-4);
     }
 
     #[test]

@@ -168,6 +168,25 @@ fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
+impl Info {
+    /// Adds the counters of `later`, a solve continued from this one's λ: the sums, its history
+    /// after this one's (its products counted on from here), its final figures.
+    pub fn absorb(&mut self, later: &Info) {
+        let n_a_before = self.n_a;
+        self.iterations += later.iterations;
+        self.n_a += later.n_a;
+        self.n_a_power += later.n_a_power;
+        self.inner_iterations += later.inner_iterations;
+        self.preconditioner_applications += later.preconditioner_applications;
+        self.fixed_point_iterations += later.fixed_point_iterations;
+        self.history.extend(later.history.iter().cloned().map(|mut s| {
+            s.n_a += n_a_before;
+            s
+        }));
+        (self.sigma_est, self.rho, self.err, self.q) = (later.sigma_est, later.rho, later.err, later.q);
+    }
+}
+
 /// Why a solve failed.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum QpError {
