@@ -541,6 +541,9 @@ fn print_summary(s: &pipeline::Summary) {
             "solver {}: {fp}{} outer iterations, nA = {} (+{} for σ_max), {} inner iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e}){kkt}",
             sv.method, i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err, sv.eps
         );
+        for t in &sv.eps_tightened {
+            println!("{}", t.line());
+        }
     }
     if let Some(c) = &r.contact {
         let f = c.total_force_on_slave;

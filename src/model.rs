@@ -2,11 +2,12 @@
 //! the named faces resolved, Dirichlet constraints and nodal loads. Every face name a scene
 //! uses is checked here, with the scene key in the error.
 
+use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact};
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
 use crate::fem::material::Lame;
-use crate::mesh::{boxgen, gmsh, Face, Mesh};
+use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
 use crate::scene::{Component, LoadedScene, Scene};
 
 /// Mesh + boundary conditions, ready for assembly.
@@ -265,54 +266,40 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, path, floating })
 }
 
-/// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words: the
-/// kernel of the 6 × 6 Gram matrix of the rigid modes (about the centroid, rotations scaled by
-/// the body's size) over the rows.
+/// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words
+/// ([`rigid::free_modes`]).
 fn free_motions(mesh: &Mesh, b: usize, rows: impl Iterator<Item = (usize, [f64; 3])>) -> Vec<String> {
-    let nodes = mesh.bodies[b].nodes.clone();
-    let n = nodes.len() as f64;
-    let c: [f64; 3] = std::array::from_fn(|d| nodes.clone().map(|v| mesh.nodes[v][d]).sum::<f64>() / n);
-    let size = nodes.clone().map(|v| (0..3).map(|d| (mesh.nodes[v][d] - c[d]).powi(2)).sum::<f64>()).fold(0.0, f64::max).sqrt().max(f64::MIN_POSITIVE);
-    let mut gram = faer::Mat::<f64>::zeros(6, 6);
-    for (v, dir) in rows {
-        let x: [f64; 3] = std::array::from_fn(|d| (mesh.nodes[v][d] - c[d]) / size);
-        // the row's R: translations dir, rotations dir · (ω × x)
-        let mut r = [0.0; 6];
-        r[..3].copy_from_slice(&dir);
-        let rot = [[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]];
-        for k in 0..3 {
-            r[3 + k] = (0..3).map(|d| rot[k][d] * dir[d]).sum();
-        }
-        for i in 0..6 {
-            for j in 0..6 {
-                gram[(i, j)] += r[i] * r[j];
-            }
-        }
+    match rigid::free_modes(mesh, b, rows) {
+        Some(modes) => modes.iter().map(rigid::describe).collect(),
+        None => vec!["(eigen-decomposition failed)".into()],
     }
-    let Ok(eig) = gram.self_adjoint_eigen(faer::Side::Lower) else { return vec!["(eigen-decomposition failed)".into()] };
-    let (vals, vecs) = (eig.S(), eig.U());
-    let top = (0..6).map(|i| vals[i]).fold(0.0, f64::max);
-    let axis = |w: [f64; 3]| {
-        let names = ["x", "y", "z"];
-        let big: Vec<usize> = (0..3).filter(|&d| w[d].abs() > 1e-6).collect();
-        if big.len() == 1 { names[big[0]].to_string() } else { format!("({:.3}, {:.3}, {:.3})", w[0], w[1], w[2]) }
-    };
-    (0..6)
-        .filter(|&i| vals[i] <= 1e-10 * top.max(1.0))
-        .map(|i| {
-            let u: [f64; 6] = std::array::from_fn(|k| vecs[(k, i)]);
-            let (t, w) = ([u[0], u[1], u[2]], [u[3], u[4], u[5]]);
-            let (nt, nw) = (t.iter().map(|a| a * a).sum::<f64>().sqrt(), w.iter().map(|a| a * a).sum::<f64>().sqrt());
-            if nw <= 1e-6 * nt {
-                format!("translation along {}", axis(t.map(|a| a / nt)))
-            } else if nt <= 1e-6 * nw {
-                format!("rotation about {}", axis(w.map(|a| a / nw)))
-            } else if (0..3).map(|d| t[d] * w[d]).sum::<f64>().abs() <= 1e-6 * nt * nw {
-                // a translation across the axis only moves the axis
-                format!("rotation about an axis along {}", axis(w.map(|a| a / nw)))
-            } else {
-                format!("screw motion (rotation about {}, translation along {})", axis(w.map(|a| a / nw)), axis(t.map(|a| a / nt)))
+}
+
+impl Model {
+    /// Refuses a load that contact and friction cannot hold on the bodies held by contact
+    /// alone ([`crate::contact::hold`]): at every load step, before anything is solved. The
+    /// whole mesh and load vector must still be there (before TFETI releases them).
+    pub fn check_held(&self) -> Result<()> {
+        let Some(c) = self.pairs.as_ref().filter(|_| !self.floating.is_empty()) else { return Ok(()) };
+        let free: Vec<FreeBody> = self
+            .floating
+            .iter()
+            .map(|&b| {
+                let nodes = &self.mesh.bodies[b].nodes;
+                let rows = self.constraints.iter().filter(|x| nodes.contains(&x.0)).map(|&(v, k, _)| {
+                    let mut dir = [0.0; 3];
+                    dir[k] = 1.0;
+                    (v, dir)
+                });
+                FreeBody { body: b, modes: rigid::free_modes(&self.mesh, b, rows).unwrap_or_default() }
+            })
+            .collect();
+        for k in 1..=self.path.steps {
+            let loads = if k == self.path.steps { std::borrow::Cow::Borrowed(&self.loads) } else { std::borrow::Cow::Owned(self.state(k).1) };
+            if let Some(unheld) = hold::check(&self.mesh, c, &free, &loads)? {
+                return Err(unheld.error(&self.mesh, self.path.is_path().then_some((k, self.path.steps))));
             }
-        })
-        .collect()
+        }
+        Ok(())
+    }
 }

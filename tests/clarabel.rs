@@ -67,8 +67,8 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
     let force_rel = (0..3).map(|k| (fo[k] - fr[k]).powi(2)).sum::<f64>().sqrt() / fnorm;
     // the same classifier on both
     let bnorm = dual.space().norm(&b);
-    let ours = contact_state(contact, &set, &sol.lambda, &sol.gradient, 1e-6, bnorm);
-    let reference = contact_state(contact, &set, lam_ref, &clar.gradient, 1e-6, bnorm);
+    let ours = contact_state(contact, &set, &sol.lambda, &sol.gradient, 1e-6, bnorm, 0.0);
+    let reference = contact_state(contact, &set, lam_ref, &clar.gradient, 1e-6, bnorm, 0.0);
     let counts = |s: &tresca_feti::contact::state::ContactState| [s.count(OPEN), s.count(STICK), s.count(SLIP)];
     eprintln!(
         "N = {n}, {method:?}: Clarabel {} in {} iterations; max|Δu|/max|u| = {:.2e}, |ΔF|/|F| = {force_rel:.2e}, open/stick/slip {:?} vs {:?}",

@@ -1,7 +1,9 @@
 //! Contact: node-to-node pairing of slave and master faces, with the local frames, nodal areas,
 //! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ
-//! ([`pairing`]), and the contact state recovered from the dual solution ([`state`]: open /
+//! ([`pairing`]), whether they can hold the bodies held by contact alone under the load
+//! ([`hold`]), and the contact state recovered from the dual solution ([`state`]: open /
 //! stick / slip, tractions, gaps, slip).
 
+pub mod hold;
 pub mod pairing;
 pub mod state;

@@ -49,14 +49,15 @@ impl ContactState {
     }
 }
 
-/// Classifies each pair from λ and r = Aλ − b; `tol` is relative (to the largest λν, and to gᵢ).
+/// Classifies each pair from λ and r = Aλ − b; `tol` is relative (to the largest λν, at least
+/// `force`, the problem's force scale (`pipeline::accuracy::force_scale`; 0: none), and to gᵢ).
 /// A closed pair slips when λ̄τ is on the bound (within `tol`), or when it is better explained
 /// as sliding than as sticking: its relative distance to the bound (along the ray through λ̄τ)
 /// is smaller than its relative slip ‖r̄τ‖/‖b‖ (`bnorm`) — the same comparison as the KKT
 /// friction-law residual, so that a sliding pair an ε-hair inside the bound is not called stuck.
-pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64], tol: f64, bnorm: f64) -> ContactState {
+pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64], tol: f64, bnorm: f64, force: f64) -> ContactState {
     let m = contact.len();
-    let lmax = lambda[..m].iter().fold(0.0f64, |a, v| a.max(*v));
+    let lmax = lambda[..m].iter().fold(0.0f64, |a, v| a.max(*v)).max(if force.is_finite() { force } else { 0.0 });
     let mut s = ContactState::default();
     for i in 0..m {
         let (lt, rt) = if set.layout.friction {

@@ -2,12 +2,13 @@
 //!
 //! Owns the [`Mesh`] (all bodies, global node and element numbering, one node set per body —
 //! bodies never share nodes), the structured box generator ([`boxgen`]), the Gmsh 4.1 importer
-//! ([`gmsh`]) and the boundary topology shared by both ([`topology`]). Node order inside a
-//! hexahedron is the VTK/Gmsh/XDMF one: bottom face 0-1-2-3 counter-clockwise seen from above,
-//! top face 4-5-6-7 above it.
+//! ([`gmsh`]), the boundary topology shared by both ([`topology`]) and a body's rigid motions
+//! ([`rigid`]). Node order inside a hexahedron is the VTK/Gmsh/XDMF one: bottom face 0-1-2-3
+//! counter-clockwise seen from above, top face 4-5-6-7 above it.
 
 pub mod boxgen;
 pub mod gmsh;
+pub mod rigid;
 pub mod topology;
 
 use std::ops::Range;

@@ -14,6 +14,7 @@ use crate::fem::material::von_mises;
 use crate::linalg::sparse::SymCsc;
 use crate::fem::material::Lame;
 use crate::model::MeshSize;
+use super::accuracy::Equilibrium;
 
 /// A piece of this rank (a body, or a TFETI subdomain): its part of the mesh, all that the
 /// post-solve path reads of it.
@@ -72,6 +73,14 @@ pub struct PieceSolution<'a> {
     pub nodal: Vec<[f64; 3]>,
 }
 
+impl PieceSolution<'_> {
+    /// Its recovered equilibrium K x = rhs ([`Equilibrium`]: what the accuracy guard and the
+    /// post-solve check judge).
+    pub fn equilibrium(&self) -> Equilibrium {
+        Equilibrium::of(self.k, self.x, self.rhs, self.held)
+    }
+}
+
 /// Figures of one piece.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PieceStats {
@@ -94,10 +103,6 @@ pub struct PieceStats {
 const HEAD_LEN: usize = 5;
 const STATS_LEN: usize = 4;
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
 /// What [`finish`] returns: the solution, every piece's figures and interface nodes, the
 /// relative gluing jump.
 pub type Finished = (Solution, Vec<(PieceStats, usize)>, f64);
@@ -111,17 +116,17 @@ pub type Finished = (Solution, Vec<(PieceStats, usize)>, f64);
 #[allow(clippy::too_many_arguments)]
 pub fn finish<C: Comm>(comm: &C, lame: &[Lame], size: MeshSize, pieces: usize, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<Finished> {
     assert_eq!(layout.len(), mine.len(), "one layout per piece of this rank");
+    // the equilibrium of every piece, judged against the rounding of the whole problem
+    let eqs: Vec<Equilibrium> = mine.iter().map(PieceSolution::equilibrium).collect();
+    let mut scale = [eqs.iter().map(|e| e.scale).fold(0.0, f64::max)];
+    comm.max_f64(&mut scale);
     let (packed, local, local_mesh) = t.phase(comm, "stress", || {
         let mut buf = Vec::new();
         let mut local = LocalFields::default();
         let mut lm = LocalMesh::default();
-        for (pl, ps) in layout.iter().zip(mine) {
-            let mut kx = ps.k.mul(ps.x);
-            ps.held.iter().for_each(|&d| kx[d] = ps.rhs[d]);
-            let rn = norm(&kx.iter().zip(ps.rhs).map(|(a, b)| a - b).collect::<Vec<_>>());
-            let fnorm = norm(ps.rhs);
-            let residual = if fnorm > 0.0 { rn / fnorm } else { rn };
-            if !residual.is_finite() || residual > 1e-6 {
+        for ((pl, ps), eq) in layout.iter().zip(mine).zip(&eqs) {
+            let residual = eq.relative();
+            if eq.excess(scale[0]) > 1.0 {
                 return Err(Error::numerical(pl.name.clone(), format!("K u = f − Bᵀλ does not hold (relative residual {residual:.1e}): {hint}")));
             }
             buf.extend([pl.index, pl.nodes.len(), pl.elems.len(), pl.interface_nodes, pl.body].map(|x| x as f64));

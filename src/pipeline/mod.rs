@@ -11,6 +11,7 @@
 //! post-solve path ([`finish`]) and the typed [`report`]. Where the FETI preconditioner applies
 //! is decided here, once ([`preconditioner`]). Rank 0 shows progress live ([`monitor`]).
 
+pub mod accuracy;
 pub mod finish;
 pub mod monitor;
 pub mod path;
@@ -270,14 +271,33 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
                 }, &walk.jump))
             })?;
         }
-        let mut monitor = t.monitor();
-        let sol = t.phase(comm, "iterate", || {
-            qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &walk.y, &walk.params, &mut monitor).map_err(|e| Error::solver(walk.name(name, k), e))
-        })?;
-        // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-        let coulomb_set = coulomb.map(|mu| qp::coulomb::bounds(&set, mu, &sol.lambda));
+        // the accuracy guard: a result that misses its checks is continued at a tighter ε
+        let (mut params, mut x0, mut guard, mut total) = (walk.params.clone(), walk.y.clone(), accuracy::Guard::default(), qp::Info::default());
+        let bnorm = dual.space().norm(&b);
+        let (mut sol, rec, coulomb_set, kkt) = loop {
+            let mut monitor = t.monitor();
+            let sol = t.phase(comm, "iterate", || {
+                qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &x0, &params, &mut monitor).map_err(|e| Error::solver(walk.name(name, k), e))
+            })?;
+            total.absorb(&sol.info);
+            // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+            let coulomb_set = coulomb.map(|mu| qp::coulomb::bounds(&set, mu, &sol.lambda));
+            let set_k = coulomb_set.as_ref().unwrap_or(&set);
+            let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
+            let kkt = qp::kkt::residuals_scaled(set_k, &rec.lambda, &rec.gap, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
+            let pieces: Vec<_> = dual.blocks.iter().zip(&rec.u).zip(&rec.rhs).map(|((blk, u), f)| accuracy::Equilibrium::of(&blk.local.sys.k, u, f, &[])).collect();
+            let verdict = accuracy::Verdict::new(comm, &pieces, kkt.worst(), params.common.eps);
+            match guard.next(k, &verdict, &walk.name(name, k), &t.live)? {
+                None => break (sol, rec, coulomb_set, kkt),
+                Some(eps) => {
+                    params.common.eps = eps;
+                    params.common.sigma = Some(sol.info.sigma_est).filter(|s| s.is_finite() && *s > 0.0);
+                    x0 = sol.lambda;
+                }
+            }
+        };
+        sol.info = total;
         let set_k = coulomb_set.as_ref().unwrap_or(&set);
-        let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
         if k == walk.steps {
             if let Some(path) = &ls.scene.output.export_dual {
                 t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
@@ -290,13 +310,12 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
         let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
         // the status cannot be sharper than the solution: classify at the solver's tolerance
-        let bnorm = dual.space().norm(&b);
-        let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, s.params.common.eps.max(1e-9), bnorm);
-        let kkt = qp::kkt::residuals(set_k, &rec.lambda, &rec.gap, bnorm);
+        let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
         let sigma = sol.info.sigma_est;
-        let mut outcome = ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt, steps: vec![] };
+        let mut outcome = ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt, steps: vec![], tightenings: guard.tightenings };
         if let Some(records) = walk.end(k, &solution, Some((contact, &outcome)), &t.live, sol.lambda, dual.jump(&rec.gap), Some(sigma)) {
             outcome.steps = records;
+            outcome.tightenings = walk.take_tightenings();
             return Ok((solution, outcome));
         }
     }
@@ -436,6 +455,9 @@ pub struct ContactOutcome {
     pub kkt: qp::kkt::Kkt,
     /// Every step of a load path (empty with one load state).
     pub steps: Vec<path::StepOutput>,
+    /// Where the accuracy guard tightened ε (this step's; the last step's outcome holds every
+    /// step's once the path is walked).
+    pub tightenings: Vec<accuracy::Tightening>,
 }
 
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
@@ -448,7 +470,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         }
         Ok(ls)
     })?;
-    let mut model = t.phase(comm, "mesh", || model::build(&ls))?;
+    let mut model = t.phase(comm, "mesh", || model::build(&ls).and_then(|m| m.check_held().map(|()| m)))?;
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
@@ -618,9 +640,10 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 norm_b: o.bnorm,
                 kkt: o.kkt,
                 kkt_worst: o.kkt.worst(),
+                eps_tightened: o.tightenings.clone(),
             }),
             // TFETI without contact: CG on the gluing and Dirichlet rows (no KKT beyond Ax = b)
-            (None, Some((info, dim, bnorm))) => Some(SolverReport {
+            (None, Some((info, dim, bnorm, tightened))) => Some(SolverReport {
                 method: "cg".into(),
                 dual_dim: *dim,
                 eps: solver.common.eps,
@@ -628,6 +651,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 norm_b: *bnorm,
                 kkt: Default::default(),
                 kkt_worst: 0.0,
+                eps_tightened: tightened.clone(),
             }),
             (None, None) => None,
         },
@@ -713,6 +737,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     use std::fmt::Write;
     let mut ls = crate::scene::load(scene_path, overrides)?;
     let model = model::build(&ls)?;
+    model.check_held()?;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let priced = if plan::automatic(&ls.scene.decomposition) {
         let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks)?;

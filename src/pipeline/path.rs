@@ -14,6 +14,7 @@ use crate::contact::pairing::Contact;
 use crate::contact::state::{ContactState, OPEN, SLIP, STICK};
 use crate::model::LoadPath;
 use crate::qp::Params;
+use super::accuracy::Tightening;
 
 /// The walk along a load path: the warm start y and the last step's tangential jump B_T u, the
 /// solver's settings with σ_max measured at the first step and reused (A does not change along
@@ -26,13 +27,15 @@ pub struct Walk {
     pub jump: Vec<f64>,
     pub params: Params,
     records: Vec<StepOutput>,
+    /// Where the accuracy guard tightened ε, every step so far.
+    tightenings: Vec<Tightening>,
     start: Instant,
 }
 
 impl Walk {
     /// Before the first step, on a dual of length `dim`.
     pub fn new(path: &LoadPath, dim: usize, params: &Params) -> Self {
-        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), records: vec![], start: Instant::now() }
+        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), records: vec![], tightenings: vec![], start: Instant::now() }
     }
 
     /// Step k begins (its time starts).
@@ -45,6 +48,9 @@ impl Walk {
     /// records (empty off a path).
     #[allow(clippy::too_many_arguments)]
     pub fn end(&mut self, k: usize, solution: &Solution, contact: Option<(&Contact, &ContactOutcome)>, live: &Live, y: Vec<f64>, jump: Vec<f64>, sigma: Option<f64>) -> Option<Vec<StepOutput>> {
+        if let Some((_, o)) = contact {
+            self.tightenings.extend(o.tightenings.iter().cloned());
+        }
         if let (true, Some((c, o))) = (self.on_path, contact) {
             let rec = StepOutput::new(k, solution, c, o, self.start.elapsed().as_secs_f64());
             live.line(&rec.line(self.steps));
@@ -56,6 +62,11 @@ impl Walk {
         (self.y, self.jump) = (y, jump);
         self.params.common.sigma = sigma.filter(|s| s.is_finite() && *s > 0.0);
         None
+    }
+
+    /// Every tightening of ε by the accuracy guard along the path (taken).
+    pub fn take_tightenings(&mut self) -> Vec<Tightening> {
+        std::mem::take(&mut self.tightenings)
     }
 
     /// The solver's name in an error, with the load step on a path.

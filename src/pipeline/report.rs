@@ -83,6 +83,10 @@ pub struct SolverReport {
     pub norm_b: f64,
     pub kkt: qp::kkt::Kkt,
     pub kkt_worst: f64,
+    /// Where the accuracy guard tightened ε (`pipeline::accuracy`): the result at the scene's ε
+    /// missed its checks and the solve went on from there.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub eps_tightened: Vec<super::accuracy::Tightening>,
 }
 
 /// What the TFETI path adds.

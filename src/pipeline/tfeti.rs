@@ -6,7 +6,7 @@
 //! the decomposition are whole on every rank only until each has taken its [`Share`].
 
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
-use super::{BodyStats, ContactOutcome, Solution, Timings};
+use super::{accuracy, BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
 use crate::feti::decomposition::{decompose_each, Decomposition};
 use crate::error::{Error, Result};
@@ -58,9 +58,9 @@ pub struct TfetiInfo {
     pub smalse: Option<SmalseInfo>,
     /// How the dual vectors and the work of an A-product are spread over the ranks.
     pub distribution: DistributionStats,
-    /// Without contact: the plain CG's counters, the dual's length and ‖b‖ (with contact they
-    /// are the [`ContactOutcome`]'s).
-    pub cg: Option<(qp::Info, usize, f64)>,
+    /// Without contact: the plain CG's counters, the dual's length, ‖b‖ and the accuracy
+    /// guard's tightenings of ε (with contact they are the [`ContactOutcome`]'s).
+    pub cg: Option<(qp::Info, usize, f64, Vec<accuracy::Tightening>)>,
 }
 
 /// The distribution of the multipliers and the time in each part of the A-products (max over
@@ -374,45 +374,74 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
                 Ok(dual.set_load(mine, e, c, &walk.jump))
             })?;
         }
-        let mut monitor = t.monitor();
-        let (sol, smalse) = t.phase(comm, "iterate", || {
-            let m = dual.preconditioner();
-            let projected = super::projected(params.method(), super::DualKind::of(ls, model));
-            let qp = Qp::new(&dual, &b, &set)
-                .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
-                .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
-            let r = match (orthogonal, contact.is_some()) {
-                (true, _) => {
-                    // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
-                    // where a body is held by contact alone: its normal components give Coulomb's
-                    // first bounds something to carry the load with); Coulomb is solved inside
-                    // each augmented-Lagrangian step (`qp::solve_friction`)
-                    let x0 = if k == 1 { dual.dist.owned_part(&dual.lambda_hat) } else { walk.y.clone() };
-                    smalse::solve(&dual, qp.preconditioner, &set, mu.as_deref(), &x0, &walk.params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
-                }
-                (false, true) => qp::solve_friction(&qp, mu.as_deref(), &walk.y, &walk.params, &mut monitor).map(|s| (s, None)),
-                (false, false) => qp::cg::solve(&qp, &walk.y, &params.common, &mut monitor).map(|s| (s, None)),
-            };
-            let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
-            r.map_err(|e| Error::solver(walk.name(&what, k), e))
-        })?;
-        let rec = t.phase(comm, "recover", || {
-            // a body held by contact alone: α closes the E rows and the contact rows the pairs'
-            // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
-            let pi = (!dual.coarse.held()).then(|| {
-                let set_k = match &mu {
-                    Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
-                    None => set.clone(),
+        // the accuracy guard: a result that misses its checks is continued at a tighter ε
+        let (mut params, mut x0, mut guard, mut total) = (walk.params.clone(), walk.y.clone(), accuracy::Guard::default(), qp::Info::default());
+        let bnorm = dual.space().norm(&b);
+        let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
+        let (mut sol, smalse, rec, judged) = loop {
+            let mut monitor = t.monitor();
+            let (sol, smalse) = t.phase(comm, "iterate", || {
+                let m = dual.preconditioner();
+                let projected = super::projected(params.method(), super::DualKind::of(ls, model));
+                let qp = Qp::new(&dual, &b, &set)
+                    .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
+                    .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
+                let r = match (orthogonal, contact.is_some()) {
+                    (true, _) => {
+                        // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
+                        // where a body is held by contact alone: its normal components give Coulomb's
+                        // first bounds something to carry the load with); Coulomb is solved inside
+                        // each augmented-Lagrangian step (`qp::solve_friction`)
+                        let x0 = if k == 1 && guard.tightenings.is_empty() { dual.dist.owned_part(&dual.lambda_hat) } else { x0.clone() };
+                        smalse::solve(&dual, qp.preconditioner, &set, mu.as_deref(), &x0, &params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
+                    }
+                    (false, true) => qp::solve_friction(&qp, mu.as_deref(), &x0, &params, &mut monitor).map(|s| (s, None)),
+                    (false, false) => qp::cg::solve(&qp, &x0, &params.common, &mut monitor).map(|s| (s, None)),
                 };
-                held_rows(&set_k, &sol.lambda)
+                r.map_err(|e| Error::solver(walk.name(&what, k), e))
+            })?;
+            let rec = t.phase(comm, "recover", || {
+                // a body held by contact alone: α closes the E rows and the contact rows the pairs'
+                // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
+                let pi = (!dual.coarse.held()).then(|| {
+                    let set_k = match &mu {
+                        Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
+                        None => set.clone(),
+                    };
+                    held_rows(&set_k, &sol.lambda)
+                });
+                dual.recover_with(&sol.lambda, pi.as_ref().map(|(f, s)| (f.as_slice(), s.as_slice()))).ok_or_else(|| {
+                    Error::numerical(
+                        "TFETI recovery",
+                        "a body held by contact alone keeps a rigid motion at this solution that no sticking or pressed pair holds (frictionless sliding freedom, or a body that lifts off)",
+                    )
+                })
+            })?;
+            total.absorb(&sol.info);
+            // with contact: the contact multipliers and the gap c − Bu from the recovered u (= the
+            // solvers' gradient on the I rows), whole on every rank, and their KKT residuals
+            let judged = contact.map(|c| {
+                let set_i = c.constraint_set();
+                let ni = set_i.layout.dim();
+                let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
+                // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+                let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
+                let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
+                (set_i, li, ri, kkt)
             });
-            dual.recover_with(&sol.lambda, pi.as_ref().map(|(f, s)| (f.as_slice(), s.as_slice()))).ok_or_else(|| {
-                Error::numerical(
-                    "TFETI recovery",
-                    "a body held by contact alone keeps a rigid motion at this solution that no sticking or pressed pair holds (frictionless sliding freedom, or a body that lifts off)",
-                )
-            })
-        })?;
+            let kkt = judged.as_ref().map_or(0.0, |j| j.3.worst());
+            let verdict = accuracy::Verdict::new(comm, &equilibria(&dual, &rec.u, &rec.rhs), kkt, params.common.eps);
+            match guard.next(k, &verdict, &walk.name(&what, k), &t.live)? {
+                None => break (sol, smalse, rec, judged),
+                Some(eps) => {
+                    params.common.eps = eps;
+                    // σ_max of SMALSE-M's penalized operator is its own business
+                    params.common.sigma = Some(sol.info.sigma_est).filter(|s| !orthogonal && s.is_finite() && *s > 0.0);
+                    x0 = sol.lambda;
+                }
+            }
+        };
+        sol.info = total;
         let feasibility = rec.feasibility;
         let distribution = DistributionStats::new(&dual);
         let mut solution = finish_subdomains(comm, model, &share, &dual, &rec.u, &rec.rhs, t)?;
@@ -429,26 +458,18 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
         f.smalse = smalse;
         f.distribution = distribution;
         if contact.is_none() {
-            f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), dual.space().norm(&b)));
+            f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), bnorm, guard.tightenings.clone()));
         }
-        let mut outcome = contact.map(|c| {
-            let set_i = c.constraint_set();
-            // the contact multipliers and the gap c − Bu from the recovered u (= the solvers'
-            // gradient on the I rows), whole on every rank
-            let ni = set_i.layout.dim();
-            let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
-            // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-            let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
-            let bnorm = dual.space().norm(&b);
-            let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm);
-            let kkt = qp::kkt::residuals(&set_i, &li, &ri, bnorm);
-            ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt, steps: vec![] }
+        let mut outcome = contact.zip(judged).map(|(c, (set_i, li, ri, kkt))| {
+            let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
+            ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt, steps: vec![], tightenings: guard.tightenings.clone() }
         });
         // σ_max of SMALSE-M's penalized operator is its own business: measured every step
         let sigma = (!orthogonal).then_some(sol.info.sigma_est);
         if let Some(records) = walk.end(k, &solution, contact.zip(outcome.as_ref()), &t.live, sol.lambda, dual.jump(&rec.gap), sigma) {
             if let Some(o) = &mut outcome {
                 o.steps = records;
+                o.tightenings = walk.take_tightenings();
             }
             return Ok((solution, outcome));
         }
@@ -480,15 +501,13 @@ fn held_rows(set: &Lambda, lambda: &[f64]) -> (Vec<bool>, Vec<(usize, [f64; 2])>
     (free, slides)
 }
 
-/// The post-solve path of the subdomains ([`finish`], one piece per subdomain, this rank's
-/// share): checks K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ),
-/// stresses, gather on rank 0 with the gluing jump; the bodies' figures summed over their
-/// subdomains.
-fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>], t: &mut Timings) -> Result<Solution> {
-    let mesh = &model.mesh;
-    // per subdomain (the members of this rank's pieces, ascending like the share): u_s − g_s,
-    // zero on the held DOFs, whose rows (reactions) are not checked
-    let mut members: Vec<(&SubdomainSystem, &[f64], &[f64])> = dual
+/// A member subdomain of this rank's pieces with its u_s and right-hand side.
+type Member<'a> = (&'a SubdomainSystem, &'a [f64], &'a [f64]);
+
+/// The subdomains of this rank's pieces, ascending like the share, with their u_s and f̂_s −
+/// B_sᵀλ, and u_s − g_s zero on the held DOFs (whose rows, reactions, are not checked).
+fn members<'a, C: Comm>(dual: &'a TfetiDual<'_, C>, u: &'a [Vec<f64>], rhs: &'a [Vec<f64>]) -> (Vec<Member<'a>>, Vec<Vec<f64>>) {
+    let mut members: Vec<Member<'a>> = dual
         .pieces
         .iter()
         .zip(u)
@@ -496,7 +515,7 @@ fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &Tfe
         .flat_map(|((p, us), f)| p.sys.subs.iter().enumerate().map(move |(m, sub)| (sub, p.sys.part(us, m), p.sys.part(f, m))))
         .collect();
     members.sort_by_key(|x| x.0.index);
-    let w: Vec<Vec<f64>> = members
+    let w = members
         .iter()
         .map(|(sub, us, _)| {
             let mut w = us.to_vec();
@@ -504,6 +523,23 @@ fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &Tfe
             w
         })
         .collect();
+    (members, w)
+}
+
+/// The recovered equilibrium of every subdomain of this rank ([`accuracy::Equilibrium`], as
+/// [`finish`] checks it).
+fn equilibria<C: Comm>(dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>]) -> Vec<accuracy::Equilibrium> {
+    let (members, w) = members(dual, u, rhs);
+    members.iter().zip(&w).map(|(&(sub, _, f), ws)| accuracy::Equilibrium::of(&sub.k, ws, f, &sub.held)).collect()
+}
+
+/// The post-solve path of the subdomains ([`finish`], one piece per subdomain, this rank's
+/// share): checks K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ),
+/// stresses, gather on rank 0 with the gluing jump; the bodies' figures summed over their
+/// subdomains.
+fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>], t: &mut Timings) -> Result<Solution> {
+    let mesh = &model.mesh;
+    let (members, w) = members(dual, u, rhs);
     let mine: Vec<PieceSolution<'_>> = members
         .iter()
         .zip(&w)

@@ -1,0 +1,240 @@
+//! Whether contact and friction can hold the bodies held by contact alone: before any solve, the
+//! equilibrium of their free rigid motions R_f asks for multipliers λ ∈ Λ (λν ≥ 0, the Tresca
+//! disc or ellipse, the Coulomb cone) with
+//!
+//! ```text
+//! G_f λ = e_f,   G_f = (B R_f)ᵀ,  e_f = R_fᵀ f,
+//! ```
+//!
+//! the rows of G = RᵀBᵀ that TFETI keeps for such a body. Where no such λ exists the problem
+//! has no solution (the body would slide or spin away). One second-order cone problem
+//! (Clarabel) decides it: the distance min_{λ ∈ Λ} ‖e_f − G_f λ‖ from the load to what the
+//! contact can supply. Where it is not 0, e_f − G_f λ* is the unbalanced part of the load and
+//! its direction d the motion it drives: d is normal to G_f(Λ) at G_f λ*, so dᵀG_f λ* is the
+//! largest force the contact can supply along d, against the load's dᵀe_f.
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT, ZeroConeT};
+
+use super::pairing::{Contact, SlipBound};
+use crate::error::{Error, Result};
+use crate::mesh::{rigid, Mesh};
+use crate::qp::coulomb::Coefficient;
+
+/// A body held by contact alone: its index and an orthonormal basis of the rigid motions its
+/// Dirichlet conditions leave free ([`rigid::free_modes`]).
+pub struct FreeBody {
+    pub body: usize,
+    pub modes: Vec<[f64; 6]>,
+}
+
+/// What the contact cannot hold: the body, the motion, the load's component along it and the
+/// largest force the contact can supply there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unheld {
+    pub body: usize,
+    pub motion: String,
+    pub load: f64,
+    pub supply: f64,
+}
+
+impl Unheld {
+    /// The one-line reason, naming the body.
+    pub fn error(&self, mesh: &Mesh, step: Option<(usize, usize)>) -> Error {
+        let at = step.map_or(String::new(), |(k, n)| format!(" at load step {k}/{n}"));
+        Error::numerical(
+            format!("body \"{}\"", mesh.bodies[self.body].name),
+            format!(
+                "no equilibrium exists{at}: contact and friction leave {:.3e} of the load unbalanced along its free motion ({}: the load {:.3e}, at most {:.3e} held); held by contact alone, the body would slide away",
+                self.load - self.supply.max(0.0),
+                self.motion,
+                self.load,
+                self.supply.max(0.0)
+            ),
+        )
+    }
+}
+
+/// The equilibrium rows of the free bodies' motions: G_f (column per multiplier), e_f, and each
+/// row's body and mode.
+struct Rows {
+    g: Vec<Vec<(usize, f64)>>,
+    e: Vec<f64>,
+    owner: Vec<(usize, [f64; 6])>,
+}
+
+/// Checks that λ ∈ Λ with G_f λ = e_f exists for the `free` bodies of `mesh` under `loads`
+/// (3 per node). Ok(None): it does (or the check could not decide); Ok(Some): what cannot be held.
+pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -> Result<Option<Unheld>> {
+    let friction = contact.has_friction();
+    let per = if friction { 3 } else { 1 };
+    // the pairs touching a free body, and their multipliers' columns
+    let touches = |v: usize| free.iter().any(|fb| mesh.bodies[fb.body].nodes.contains(&v));
+    let pairs: Vec<usize> = (0..contact.len()).filter(|&i| touches(contact.slave[i]) || touches(contact.master[i])).collect();
+    let n = per * pairs.len();
+    let mut rows = Rows { g: vec![], e: vec![], owner: vec![] };
+    for fb in free {
+        let frame = rigid::Frame::of(mesh, fb.body);
+        let nodes = mesh.bodies[fb.body].nodes.clone();
+        for m in &fb.modes {
+            let at = |x: [f64; 3], dir: [f64; 3]| frame.row(x, dir).iter().zip(m).map(|(a, b)| a * b).sum::<f64>();
+            let mut e = 0.0;
+            for v in nodes.clone() {
+                for d in 0..3 {
+                    let mut dir = [0.0; 3];
+                    dir[d] = 1.0;
+                    e += loads[3 * v + d] * at(mesh.nodes[v], dir);
+                }
+            }
+            let mut g = Vec::new();
+            for (c, &i) in pairs.iter().enumerate() {
+                let dirs = [contact.normal[i], contact.t1[i], contact.t2[i]];
+                for (k, &dir) in dirs.iter().take(per).enumerate() {
+                    // (B r)ᵢ = (r(slave) − r(master))·dir
+                    let mut x = 0.0;
+                    if nodes.contains(&contact.slave[i]) {
+                        x += at(mesh.nodes[contact.slave[i]], dir);
+                    }
+                    if nodes.contains(&contact.master[i]) {
+                        x -= at(mesh.nodes[contact.master[i]], dir);
+                    }
+                    if x != 0.0 {
+                        g.push((per * c + k, x));
+                    }
+                }
+            }
+            rows.g.push(g);
+            rows.e.push(e);
+            rows.owner.push((fb.body, *m));
+        }
+    }
+    let scale = rows.e.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if rows.e.is_empty() || scale == 0.0 || !scale.is_finite() {
+        return Ok(None);
+    }
+    let e: Vec<f64> = rows.e.iter().map(|v| v / scale).collect();
+    let cones = Cones::new(contact, &pairs, friction, scale);
+    let Some(x) = nearest(&rows.g, &e, n, &cones) else { return Ok(None) };
+    // the unbalanced part of the load, e − G λ*
+    let gl: Vec<f64> = rows.g.iter().map(|row| row.iter().map(|&(j, v)| v * x[j]).sum()).collect();
+    let mut d: Vec<f64> = e.iter().zip(&gl).map(|(a, b)| a - b).collect();
+    let dist = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let enorm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if !(dist > UNBALANCED * enorm) {
+        return Ok(None);
+    }
+    d.iter_mut().for_each(|v| *v /= dist);
+    let along = |v: &[f64]| d.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() * scale;
+    // the body that moves most along d, and its motion
+    let mut share: Vec<(usize, f64, [f64; 6])> = Vec::new();
+    for (j, &(b, m)) in rows.owner.iter().enumerate() {
+        match share.iter_mut().find(|s| s.0 == b) {
+            Some(s) => {
+                s.1 += d[j] * d[j];
+                (0..6).for_each(|q| s.2[q] += d[j] * m[q]);
+            }
+            None => share.push((b, d[j] * d[j], std::array::from_fn(|q| d[j] * m[q]))),
+        }
+    }
+    let (body, _, motion) = share.into_iter().fold((0, -1.0, [0.0; 6]), |a, s| if s.1 > a.1 { s } else { a });
+    Ok(Some(Unheld { body, motion: rigid::dominant(&motion), load: along(&e), supply: along(&gl) }))
+}
+
+/// A load the contact cannot meet closer than this (relative to ‖e_f‖) cannot be held.
+const UNBALANCED: f64 = 1e-6;
+
+/// Λ of the pairs as Clarabel's cones: rows s = h − A x per cone, after the equality rows.
+struct Cones {
+    a: Vec<(usize, usize, f64)>,
+    h: Vec<f64>,
+    zero: usize,
+    nonneg: usize,
+    socs: usize,
+}
+
+impl Cones {
+    fn new(contact: &Contact, pairs: &[usize], friction: bool, scale: f64) -> Self {
+        let per = if friction { 3 } else { 1 };
+        let mut c = Cones { a: vec![], h: vec![], zero: 0, nonneg: 0, socs: 0 };
+        // λτ = 0 where a pair has no friction among frictional ones
+        let none: Vec<usize> = pairs.iter().enumerate().filter(|&(_, &i)| friction && contact.bound[i] == SlipBound::None && contact.coulomb[i] == Coefficient::Fixed).map(|(c, _)| c).collect();
+        for &p in &none {
+            for k in 1..3 {
+                c.a.push((c.h.len(), per * p + k, 1.0));
+                c.h.push(0.0);
+            }
+        }
+        c.zero = c.h.len();
+        for p in 0..pairs.len() {
+            c.a.push((c.h.len(), per * p, -1.0));
+            c.h.push(0.0);
+        }
+        c.nonneg = pairs.len();
+        if !friction {
+            return c;
+        }
+        for (p, &i) in pairs.iter().enumerate() {
+            let (nu, t1, t2) = (per * p, per * p + 1, per * p + 2);
+            let r = c.h.len();
+            // s = (s₀, s₁, s₂) ∈ SOC: s₀ ≥ ‖(s₁, s₂)‖
+            let (head, a1, a2): (Vec<(usize, f64)>, f64, f64);
+            let mut h0 = 0.0;
+            match (contact.coulomb[i], contact.bound[i]) {
+                (Coefficient::Isotropic(mu), _) => (head, a1, a2) = (vec![(nu, -mu)], 1.0, 1.0),
+                // (λ₁/μ₁)² + (λ₂/μ₂)² ≤ λν²  ⇔  ‖(μ₂λ₁, μ₁λ₂)‖ ≤ μ₁μ₂λν
+                (Coefficient::Orthotropic(m1, m2), _) => (head, a1, a2) = (vec![(nu, -m1 * m2)], m2, m1),
+                (Coefficient::Fixed, SlipBound::Disc(g)) => {
+                    h0 = g / scale;
+                    (head, a1, a2) = (vec![], 1.0, 1.0);
+                }
+                (Coefficient::Fixed, SlipBound::Ellipse(g1, g2)) => {
+                    h0 = g1 * g2 / (scale * scale);
+                    (head, a1, a2) = (vec![], g2 / scale, g1 / scale);
+                }
+                (Coefficient::Fixed, SlipBound::None) => continue,
+            }
+            c.a.extend(head.into_iter().map(|(j, v)| (r, j, v)));
+            c.h.push(h0);
+            c.a.push((r + 1, t1, -a1));
+            c.h.push(0.0);
+            c.a.push((r + 2, t2, -a2));
+            c.h.push(0.0);
+            c.socs += 1;
+        }
+        c
+    }
+}
+
+/// λ* = argmin over Λ of ‖e − G λ‖ (with t ≥ ‖e − Gλ‖ minimized); None where Clarabel does not
+/// solve it.
+fn nearest(g: &[Vec<(usize, f64)>], e: &[f64], n: usize, cones: &Cones) -> Option<Vec<f64>> {
+    let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
+    // the cones of Λ first (s = h − A x), then (t, e − Gλ) ∈ SOC
+    for &(r, j, v) in &cones.a {
+        (ai.push(r), aj.push(j), av.push(v));
+    }
+    let r0 = cones.h.len();
+    (ai.push(r0), aj.push(n), av.push(-1.0));
+    for (r, row) in g.iter().enumerate() {
+        for &(j, v) in row {
+            (ai.push(r0 + 1 + r), aj.push(j), av.push(v));
+        }
+    }
+    let rows = r0 + 1 + g.len();
+    let a = CscMatrix::new_from_triplets(rows, n + 1, ai, aj, av);
+    let p = CscMatrix::new_from_triplets(n + 1, n + 1, vec![], vec![], vec![]);
+    let mut q = vec![0.0; n + 1];
+    q[n] = 1.0;
+    let h: Vec<f64> = cones.h.iter().copied().chain(std::iter::once(0.0)).chain(e.iter().copied()).collect();
+    let mut kinds: Vec<SupportedConeT<f64>> = Vec::new();
+    if cones.zero > 0 {
+        kinds.push(ZeroConeT(cones.zero));
+    }
+    kinds.push(NonnegativeConeT(cones.nonneg));
+    kinds.extend((0..cones.socs).map(|_| SecondOrderConeT(3)));
+    kinds.push(SecondOrderConeT(1 + g.len()));
+    let settings = DefaultSettings { verbose: false, max_iter: 200, max_threads: 1, ..DefaultSettings::default() };
+    let mut solver = DefaultSolver::new(&p, &q, &a, &h, &kinds, settings).ok()?;
+    solver.solve();
+    matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved).then(|| solver.solution.x.clone())
+}
