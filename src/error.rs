@@ -32,6 +32,10 @@ pub enum Error {
     },
     #[error("output {path}: {msg}")]
     Output { path: String, msg: String },
+    /// A run refused before it allocates because it would not fit in memory (`what`: the scene
+    /// key that sets its size), or an allocation that failed (`what`: the array).
+    #[error("{what}: {msg}")]
+    Memory { what: String, msg: String },
     /// An error raised on another MPI rank, forwarded so that every rank stops with it.
     #[error("{0}")]
     Remote(String),
@@ -55,7 +59,20 @@ impl Error {
     pub fn solver(what: impl Into<String>, source: impl std::error::Error + Send + Sync + 'static) -> Self {
         Error::Solver { what: what.into(), source: Box::new(source) }
     }
+    pub fn memory(what: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Memory { what: what.into(), msg: msg.into() }
+    }
+    /// An allocation of `bytes` for `what` that failed.
+    pub fn alloc(what: impl Into<String>, bytes: usize) -> Self {
+        Error::Memory { what: what.into(), msg: format!("could not allocate {} (out of memory)", human_bytes(bytes as f64)) }
+    }
     pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Output { path: path.into(), msg: msg.into() }
     }
+}
+
+/// A byte count for messages: `61.2 GB`, `512 MB`, `3.4 kB`, `12 B` (decimal units).
+pub fn human_bytes(b: f64) -> String {
+    let (v, unit) = [(1e12, "TB"), (1e9, "GB"), (1e6, "MB"), (1e3, "kB")].into_iter().find(|&(u, _)| b >= u).map_or((b, "B"), |(u, n)| (b / u, n));
+    if unit == "B" || v >= 100.0 { format!("{v:.0} {unit}") } else { format!("{v:.1} {unit}") }
 }

@@ -34,7 +34,10 @@ enum Cmd {
         /// Also write the solved Coulomb problem in the FCLIB global format (HDF5) to this path
         /// (the scene key `output.export_fclib`; monolithic dual, isotropic Coulomb).
         #[arg(long = "export-fclib", value_name = "PATH")]
-        export_fclib: Option<PathBuf>,
+        export_fclib: Option<PathBuf>,        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
+        /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
+        #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
+        max_memory: Option<u64>,
     },
     /// The paper's Table 1: iter/nA of the dual solvers on the seed scene for growing N, with
     /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
@@ -188,7 +191,10 @@ enum Cmd {
         /// Price the automatic decomposition for a run on this many ranks (default: the ranks
         /// `check` runs on).
         #[arg(long)]
-        ranks: Option<usize>,
+        ranks: Option<usize>,        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
+        /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
+        #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
+        max_memory: Option<u64>,
     },
 }
 
@@ -428,7 +434,10 @@ fn main() -> ExitCode {
         faer::set_global_parallelism(faer::Par::Seq);
     }
     let result = match cli.cmd {
-        Cmd::Solve { scene, mut set, out, quiet, export_fclib } => {
+        Cmd::Solve { scene, mut set, out, quiet, export_fclib, max_memory } => {
+            if let Some(b) = max_memory {
+                pipeline::memory::set_limit(b);
+            }
             if let Some(p) = export_fclib {
                 set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
             }
@@ -453,7 +462,10 @@ fn main() -> ExitCode {
             let args = tresca_feti::studies::coarse_cost::Args { scene, sets: set, subdomains, pieces, repeat };
             bench_coarse(&comm, &args)
         }
-        Cmd::Check { scene, set, ranks } => {
+        Cmd::Check { scene, set, ranks, max_memory } => {
+            if let Some(b) = max_memory {
+                pipeline::memory::set_limit(b);
+            }
             // validation is cheap and deterministic: every rank does it, rank 0 prints
             let r = match ranks {
                 Some(0) => Err(tresca_feti::Error::scene("--ranks", "must be at least 1")),

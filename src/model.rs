@@ -116,7 +116,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
             (Some(bx), _) => {
-                let mut geom = boxgen::generate(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]));
+                let mut geom = boxgen::try_generate(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]))?;
                 if let Some(c) = &bx.cylinder {
                     // the curved side moves out by the bulge, the nodes between in proportion
                     let (lo, hi) = (bx.min[2], bx.max[2]);
@@ -141,7 +141,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             }
             _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
         };
-        mesh.push_body(&b.name, geom);
+        mesh.try_push_body(&b.name, geom)?;
     }
     for (i, f) in scene.faces.iter().enumerate() {
         let key = |k: &str| format!("face[{i}].{k}");

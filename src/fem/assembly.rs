@@ -9,7 +9,7 @@ use super::element::{hex8_stiffness, hex_min_jacobian, quad4_nodal_areas};
 use super::material::Lame;
 use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;
-use crate::mesh::{Face, Mesh};
+use crate::mesh::{try_vec, Face, Mesh};
 
 /// Marks a constrained DOF in [`DofMap::free`].
 pub const FIXED: usize = usize::MAX;
@@ -112,6 +112,15 @@ pub fn node_graph(hexes: &[[usize; 8]], elems: impl Iterator<Item = usize>, nn: 
     (xadj, adj)
 }
 
+/// Why [`assemble_elements`] failed.
+#[derive(Debug)]
+pub enum AssemblyError {
+    /// An element (its index) and what is wrong with it.
+    Element(usize, &'static str),
+    /// An array of the matrix that could not be allocated.
+    Memory(Error),
+}
+
 /// One body's (or subdomain's) assembled system K_ff u_f = f_f.
 pub struct BodySystem {
     pub k: SymCsc,
@@ -127,7 +136,10 @@ pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads:
     let b = &mesh.bodies[body];
     let start = b.nodes.start;
     assemble_elements(&mesh.nodes, &mesh.hexes, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
-        .map_err(|(e, msg)| Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)))
+        .map_err(|e| match e {
+            AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)),
+            AssemblyError::Memory(e) => e,
+        })
 }
 
 /// Assembles K_ff and f_f over the elements `elems` of (`nodes`, `hexes`), whose nodes are
@@ -142,12 +154,23 @@ pub fn assemble_elements(
     lame: Lame,
     dofs: &DofMap,
     loads: &[f64],
-) -> std::result::Result<BodySystem, (usize, &'static str)> {
+) -> std::result::Result<BodySystem, AssemblyError> {
     let (xadj, adj) = node_graph(hexes, elems.clone(), nn, &local);
     // pattern: column of free DOF (v, c) holds free DOFs of v (components ≥ c) and of every
     // neighbour w > v, all three components — node-major numbering makes them sorted.
-    let mut col_ptr = Vec::with_capacity(dofs.nfree + 1);
-    let mut row_idx = Vec::new();
+    // The largest arrays (row indices and values, nnz each) are reserved first: counted here.
+    let free_of = |v: usize| (0..3).filter(|&c| dofs.free[3 * v + c] != FIXED).count();
+    let nnz: usize = (0..nn)
+        .map(|v| {
+            let own = free_of(v);
+            let nbr: usize = adj[xadj[v]..xadj[v + 1]].iter().filter(|&&w| w > v).map(|&w| free_of(w)).sum();
+            own * (own + 1) / 2 + own * nbr
+        })
+        .sum();
+    let mut col_ptr = try_vec::<usize>("stiffness column pointers", dofs.nfree + 1).map_err(AssemblyError::Memory)?;
+    let mut row_idx = try_vec::<usize>("stiffness row indices", nnz).map_err(AssemblyError::Memory)?;
+    let mut values = try_vec::<f64>("stiffness values", nnz).map_err(AssemblyError::Memory)?;
+    values.resize(nnz, 0.0);
     col_ptr.push(0);
     for v in 0..nn {
         for c in 0..3 {
@@ -172,12 +195,13 @@ pub fn assemble_elements(
             col_ptr.push(row_idx.len());
         }
     }
-    let mut k = SymCsc::from_pattern(dofs.nfree, col_ptr, row_idx);
+    debug_assert_eq!(row_idx.len(), nnz);
+    let mut k = SymCsc { n: dofs.nfree, col_ptr, row_idx, values };
     let mut f = dofs.restrict(loads);
     for e in elems {
         let x = hexes[e].map(|v| nodes[v]);
         if hex_min_jacobian(&x) <= 0.0 {
-            return Err((e, "inverted or degenerate (non-positive Jacobian)"));
+            return Err(AssemblyError::Element(e, "inverted or degenerate (non-positive Jacobian)"));
         }
         let ke = hex8_stiffness(&x, lame);
         let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(hexes[e][r / 3]) + r % 3);

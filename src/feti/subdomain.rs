@@ -28,7 +28,7 @@
 //! the node graph); K_s⁺x zeroes those entries of x, solves, and zeroes them again.
 
 use crate::error::{Error, Result};
-use crate::fem::assembly::{assemble_elements, DofMap};
+use crate::fem::assembly::{assemble_elements, AssemblyError, DofMap};
 use crate::fem::material::Lame;
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
@@ -261,7 +261,10 @@ impl SubdomainSystem {
         let fixed = fixing_dofs(coords, &r, kdim, &held).ok_or_else(|| Error::numerical(what(), "its nodes are collinear: no rigid-body fixing DOFs"))?;
         let all = DofMap::new(0..nn, &[]);
         let sys = assemble_elements(coords, part.hexes, 0..part.hexes.len(), nn, |v| v, lame, &all, &f)
-            .map_err(|(e, msg)| Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)))?;
+            .map_err(|e| match e {
+                AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)),
+                AssemblyError::Memory(e) => e,
+            })?;
         let k = sys.k;
         let mut zeroed: Vec<usize> = fixed.iter().chain(&held).copied().collect();
         zeroed.sort_unstable();

@@ -2,19 +2,27 @@
 //! `xmin, xmax, ymin, ymax, zmin, zmax`.
 
 use super::topology::hex_face;
-use super::BodyGeometry;
+use super::{try_vec, BodyGeometry};
+use crate::error::Result;
 
 /// Names of the box sides, in the order of the local hex faces that lie on them.
 pub const SIDES: [(&str, usize); 6] =
     [("xmin", 5), ("xmax", 3), ("ymin", 2), ("ymax", 4), ("zmin", 0), ("zmax", 1)];
 
-/// A box `[min, max]` with `n = [nx, ny, nz]` nodes per direction (each ≥ 2).
+/// A box `[min, max]` with `n = [nx, ny, nz]` nodes per direction (each ≥ 2); panics where
+/// memory runs out ([`try_generate`] returns the error).
 pub fn generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> BodyGeometry {
+    try_generate(min, max, n).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`generate`], with an allocation that fails (nodes, hexahedra, side quads) as an error.
+pub fn try_generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> Result<BodyGeometry> {
     let [nx, ny, nz] = n;
     assert!(nx >= 2 && ny >= 2 && nz >= 2, "box needs at least 2 nodes per direction");
     let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
     let coord = |d: usize, i: usize, nd: usize| min[d] + (max[d] - min[d]) * i as f64 / (nd - 1) as f64;
-    let mut nodes = Vec::with_capacity(nx * ny * nz);
+    let count = |a: usize, b: usize, c: usize| a.checked_mul(b).and_then(|x| x.checked_mul(c)).unwrap_or(usize::MAX);
+    let mut nodes = try_vec::<[f64; 3]>("box nodes", count(nx, ny, nz))?;
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
@@ -23,7 +31,7 @@ pub fn generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> BodyGeometry {
         }
     }
     let (ex, ey, ez) = (nx - 1, ny - 1, nz - 1);
-    let mut hexes = Vec::with_capacity(ex * ey * ez);
+    let mut hexes = try_vec::<[usize; 8]>("box hexahedra", count(ex, ey, ez))?;
     for k in 0..ez {
         for j in 0..ey {
             for i in 0..ex {
@@ -43,7 +51,12 @@ pub fn generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> BodyGeometry {
     let eid = |i: usize, j: usize, k: usize| i + ex * (j + ey * k);
     let mut faces = Vec::with_capacity(6);
     for (name, lf) in SIDES {
-        let mut quads = Vec::new();
+        let side = match name {
+            "xmin" | "xmax" => ey * ez,
+            "ymin" | "ymax" => ex * ez,
+            _ => ex * ey,
+        };
+        let mut quads = try_vec("box side quadrilaterals", side)?;
         match name {
             "xmin" | "xmax" => {
                 let i = if name == "xmin" { 0 } else { ex - 1 };
@@ -72,7 +85,7 @@ pub fn generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> BodyGeometry {
         }
         faces.push((name.to_string(), quads));
     }
-    BodyGeometry { nodes, hexes, faces }
+    Ok(BodyGeometry { nodes, hexes, faces })
 }
 
 #[cfg(test)]

@@ -26,8 +26,111 @@ const UNREADABLE: &str = "not a readable Gmsh 4.1 mesh";
 /// outward of its element; surfaces with no such quadrangle are left out.
 pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(&file, e))?;
+    let bytes = read_bytes(path).map_err(|e| match e {
+        Error::Memory { msg, .. } => Error::memory(&file, msg),
+        e => e,
+    })?;
     parse(&bytes, volume).map_err(|msg| Error::mesh(file, msg))
+}
+
+/// The whole file, its buffer reserved first: a file larger than the memory left is an error,
+/// not an abort.
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let file = path.display().to_string();
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(&file, e))?;
+    let len = f.metadata().map(|m| m.len() as usize).unwrap_or(0);
+    let mut bytes = super::try_vec::<u8>("the file's bytes", len.saturating_add(1))?;
+    f.read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
+    Ok(bytes)
+}
+
+/// Nodes and elements as the `$Nodes` and `$Elements` section headers give them (each at
+/// most the file's size in bytes), found by streaming the file — nothing of its size is
+/// allocated; `None` where the file cannot be opened or a header is not found (the reader then
+/// says what is wrong with it).
+pub fn header_counts(path: &Path) -> Option<(u64, u64, u64)> {
+    use std::io::{Seek, SeekFrom};
+    let mut f = std::fs::File::open(path).ok()?;
+    let size = f.metadata().ok()?.len();
+    let mut head = vec![0u8; 512];
+    let n = read_up_to(&mut f, &mut head);
+    let encoding = check_header(&head[..n]).ok()?;
+    // the offsets just past the lines `$Nodes` and `$Elements`, in one pass over the file
+    let tags: [&[u8]; 2] = [b"\n$Nodes", b"\n$Elements"];
+    let mut found = [None::<u64>; 2];
+    f.seek(SeekFrom::Start(0)).ok()?;
+    let mut buf = vec![0u8; 1 << 20];
+    let mut carry: Vec<u8> = Vec::new();
+    let mut base = 0u64; // file offset of carry[0]
+    loop {
+        let n = read_up_to(&mut f, &mut buf);
+        if n == 0 {
+            break;
+        }
+        carry.extend_from_slice(&buf[..n]);
+        for (k, tag) in tags.iter().enumerate() {
+            if found[k].is_some() {
+                continue;
+            }
+            let mut from = 0;
+            while let Some(p) = carry[from..].windows(tag.len()).position(|w| w == *tag) {
+                let end = from + p + tag.len();
+                match carry.get(end) {
+                    Some(b'\n') => {
+                        found[k] = Some(base + end as u64 + 1);
+                        break;
+                    }
+                    Some(b'\r') if carry.get(end + 1) == Some(&b'\n') => {
+                        found[k] = Some(base + end as u64 + 2);
+                        break;
+                    }
+                    _ => from += p + 1,
+                }
+            }
+        }
+        if found.iter().all(Option::is_some) {
+            break;
+        }
+        let keep = carry.len().min(16);
+        base += (carry.len() - keep) as u64;
+        carry.drain(..carry.len() - keep);
+    }
+    let mut second = |at: u64| -> Option<u64> {
+        f.seek(SeekFrom::Start(at)).ok()?;
+        let mut b = [0u8; 128];
+        let n = read_up_to(&mut f, &mut b);
+        match encoding {
+            Encoding::Ascii => std::str::from_utf8(&b[..n]).ok()?.split_whitespace().nth(1)?.parse().ok(),
+            Encoding::Binary { size_t, big_endian } if (1..=8).contains(&size_t) && n >= 2 * size_t => {
+                let w = &b[size_t..2 * size_t];
+                let mut x = [0u8; 8];
+                if big_endian {
+                    x[8 - size_t..].copy_from_slice(w);
+                    Some(u64::from_be_bytes(x))
+                } else {
+                    x[..size_t].copy_from_slice(w);
+                    Some(u64::from_le_bytes(x))
+                }
+            }
+            _ => None,
+        }
+    };
+    let nodes = second(found[0]?)?.min(size);
+    let elements = second(found[1]?)?.min(size);
+    Some((nodes, elements, size))
+}
+
+fn read_up_to(f: &mut std::fs::File, buf: &mut [u8]) -> usize {
+    use std::io::Read;
+    let mut n = 0;
+    while n < buf.len() {
+        match f.read(&mut buf[n..]) {
+            Ok(0) | Err(_) => break,
+            Ok(k) => n += k,
+        }
+    }
+    n
 }
 
 /// Everything but the file access; errors are one-line messages.

@@ -13,6 +13,21 @@ pub mod topology;
 
 use std::ops::Range;
 
+use crate::error::{Error, Result};
+
+/// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
+/// (instead of the allocator's abort).
+pub fn try_vec<T>(what: &str, n: usize) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| Error::alloc(what, n.saturating_mul(std::mem::size_of::<T>())))?;
+    Ok(v)
+}
+
+/// Room for `extra` more items in `v`, or the error naming `what`.
+pub fn try_grow<T>(v: &mut Vec<T>, what: &str, extra: usize) -> Result<()> {
+    v.try_reserve_exact(extra).map_err(|_| Error::alloc(what, v.len().saturating_add(extra).saturating_mul(std::mem::size_of::<T>())))
+}
+
 /// One quadrilateral of a named face: the element it bounds and its four nodes, ordered so that
 /// the right-hand rule gives the outward normal of that element.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,8 +82,17 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Appends a body, shifting its local numbering to the global one.
+    /// Appends a body, shifting its local numbering to the global one; panics where memory runs
+    /// out ([`Mesh::try_push_body`] returns the error).
     pub fn push_body(&mut self, name: &str, geom: BodyGeometry) {
+        self.try_push_body(name, geom).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`Mesh::push_body`], with a failed allocation of the mesh's node or element arrays as
+    /// an error.
+    pub fn try_push_body(&mut self, name: &str, geom: BodyGeometry) -> Result<()> {
+        try_grow(&mut self.nodes, "mesh nodes", geom.nodes.len())?;
+        try_grow(&mut self.hexes, "mesh hexahedra", geom.hexes.len())?;
         let n0 = self.nodes.len();
         let e0 = self.hexes.len();
         let body = self.bodies.len();
@@ -89,6 +113,7 @@ impl Mesh {
             nodes: n0..self.nodes.len(),
             elems: e0..self.hexes.len(),
         });
+        Ok(())
     }
 
     pub fn face(&self, name: &str) -> Option<&Face> {

@@ -13,6 +13,7 @@
 
 pub mod accuracy;
 pub mod finish;
+pub mod memory;
 pub mod monitor;
 pub mod path;
 pub mod plan;
@@ -470,11 +471,12 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         }
         Ok(ls)
     })?;
-    let mut model = t.phase(comm, "mesh", || model::build(&ls).and_then(|m| m.check_held().map(|()| m)))?;
+    let mut model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|m| m.check_held().map(|()| m)))?;
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
     let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common))?;
+    memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
@@ -736,19 +738,23 @@ fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec
 pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], ranks: usize) -> Result<String> {
     use std::fmt::Write;
     let mut ls = crate::scene::load(scene_path, overrides)?;
+    memory::check_before_mesh(comm, &ls)?;
     let model = model::build(&ls)?;
     model.check_held()?;
     held_by_contact(&mut ls.scene.decomposition, &model);
+    let mut chosen = None;
     let priced = if plan::automatic(&ls.scene.decomposition) {
         let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks)?;
         match plan::cheapest(&cands) {
             Some(c) if c.tfeti => ls.scene.decomposition.target_dofs = c.target_dofs,
             _ => ls.scene.decomposition.subdomains = Some(1),
         }
+        chosen = plan::cheapest(&cands).cloned();
         Some(plan::table(&cands, ranks))
     } else {
         None
     };
+    let needs = memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks);
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let mesh = &model.mesh;
@@ -814,6 +820,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     if let Some(p) = priced {
         let _ = write!(s, "{p}");
     }
+    let _ = write!(s, "{}", memory::summary(&needs, ranks));
     let _ = write!(s, "dual: {}", if dec.is_tfeti(&body_dofs(&model)) { "TFETI" } else { "monolithic" });
     Ok(s)
 }
