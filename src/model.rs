@@ -238,7 +238,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                         return Err(Error::scene(
                             format!("dirichlet[{i}]"),
                             format!(
-                                "prescribes component {} of node {v} at ({:.6}, {:.6}, {:.6}) as {:e}{at}, but dirichlet[{j}] prescribes it as {:e} (faces {} and {} share the node); give each held component one value",
+                                "prescribes component {} of node {v} at ({:.6}, {:.6}, {:.6}) as {}{at}, but dirichlet[{j}] prescribes it as {} (faces {} and {} share the node); give each held component one value",
                                 axis_name(c),
                                 p[0],
                                 p[1],
