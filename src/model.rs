@@ -2,8 +2,11 @@
 //! the named faces resolved, Dirichlet constraints and nodal loads. Every face name a scene
 //! uses is checked here, with the scene key in the error.
 
+use std::collections::HashMap;
+
 use crate::contact::hold::{self, FreeBody};
-use crate::contact::pairing::{self, Contact};
+use crate::contact::pairing::{self, Contact, SlipBound};
+use crate::qp::coulomb::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
 use crate::fem::material::Lame;
@@ -103,10 +106,32 @@ impl Model {
     }
 }
 
-fn face_index(mesh: &Mesh, key: String, name: &str) -> Result<usize> {
-    mesh.faces.iter().position(|f| f.name == name).ok_or_else(|| {
+/// `constraints` (node, component, value) split by the body whose node range holds the node,
+/// each body's in their order (so that "a later entry for the same DOF wins" still holds): one
+/// pass, instead of a scan of every constraint per body.
+pub fn constraints_by_body(mesh: &Mesh, constraints: &[(usize, usize, f64)]) -> Vec<Vec<(usize, usize, f64)>> {
+    let mut out = vec![Vec::new(); mesh.bodies.len()];
+    for &x in constraints {
+        let b = mesh.bodies.partition_point(|b| b.nodes.end <= x.0);
+        if let Some(o) = out.get_mut(b) {
+            o.push(x);
+        }
+    }
+    out
+}
+
+/// Face name → index into `mesh.faces` (built once: every entry's lookup is then O(1)).
+type FaceIndex = HashMap<String, usize>;
+
+fn face_index(mesh: &Mesh, faces: &FaceIndex, key: String, name: &str) -> Result<usize> {
+    faces.get(name).copied().ok_or_else(|| {
         Error::scene(key, format!("unknown face \"{name}\"; known faces: {}", mesh.face_names().join(", ")))
     })
+}
+
+/// The component's letter.
+fn axis_name(c: usize) -> &'static str {
+    ["x", "y", "z"][c]
 }
 
 /// Builds the model of a loaded scene.
@@ -136,6 +161,14 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                             p[d] += t[d];
                         }
                     }
+                    // the file's coordinates were checked (gmsh::read); the shift must keep them in range
+                    let far = geom.nodes.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+                    if far > crate::scene::range::MAX {
+                        return Err(Error::scene(
+                            format!("body[{i}].gmsh.translate"),
+                            format!("moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)", b.name, crate::scene::range::MAX),
+                        ));
+                    }
                 }
                 geom
             }
@@ -143,32 +176,36 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         };
         mesh.try_push_body(&b.name, geom)?;
     }
+    let body_index: HashMap<&str, usize> = scene.bodies.iter().enumerate().map(|(i, b)| (b.name.as_str(), i)).collect();
+    // the first face of each name (as `Mesh::face` finds it)
+    let mut faces: FaceIndex = HashMap::with_capacity(mesh.faces.len() + scene.faces.len());
+    for (k, f) in mesh.faces.iter().enumerate() {
+        faces.entry(f.name.clone()).or_insert(k);
+    }
     for (i, f) in scene.faces.iter().enumerate() {
         let key = |k: &str| format!("face[{i}].{k}");
-        let body = scene
-            .bodies
-            .iter()
-            .position(|b| b.name == f.body)
-            .ok_or_else(|| Error::scene(key("body"), format!("unknown body \"{}\"", f.body)))?;
+        let body = *body_index.get(f.body.as_str()).ok_or_else(|| Error::scene(key("body"), format!("unknown body \"{}\"", f.body)))?;
         let full = format!("{}.{}", f.body, f.name);
-        if mesh.face(&full).is_some() {
+        if faces.contains_key(&full) {
             return Err(Error::scene(key("name"), format!("face \"{full}\" already exists")));
         }
-        let src = face_index(&mesh, key("from"), &format!("{}.{}", f.body, f.from))?;
+        let src = face_index(&mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
         let inside = |p: [f64; 3]| (0..3).all(|d| p[d] >= f.min[d] && p[d] <= f.max[d]);
         let quads: Vec<_> =
             mesh.faces[src].quads.iter().filter(|q| q.nodes.iter().all(|&v| inside(mesh.nodes[v]))).cloned().collect();
         if quads.is_empty() {
             return Err(Error::scene(key("min"), format!("no quadrilateral of \"{}\" lies inside the given box", mesh.faces[src].name)));
         }
+        faces.insert(full.clone(), mesh.faces.len());
         mesh.faces.push(Face { name: full, body, quads });
     }
 
+    let materials = scene.material_index();
     let lame = scene
         .bodies
         .iter()
         .map(|b| {
-            let m = scene.material(&b.material).expect("validated");
+            let m = &scene.materials[*materials.get(b.material.as_str()).expect("validated")];
             Lame::from_young_poisson(m.e, m.nu)
         })
         .collect();
@@ -177,9 +214,15 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let factors = |f: &Option<Vec<f64>>| -> Vec<f64> { (1..=steps).map(|k| crate::scene::load_factor(f.as_deref(), k, steps)).collect() };
     let mut path = LoadPath { steps, ..Default::default() };
     let mut constraints = Vec::new();
+    // (node, component) → the first entry that holds it: a later entry must prescribe the same
+    // value at every load step (identical duplicates are accepted; the last entry used to win)
+    let mut holder: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut entry_face = Vec::with_capacity(scene.dirichlet.len());
     for (i, d) in scene.dirichlet.iter().enumerate() {
         path.dirichlet.push(factors(&d.factors));
-        let f = &mesh.faces[face_index(&mesh, format!("dirichlet[{i}].face"), &d.face)?];
+        let fi = face_index(&mesh, &faces, format!("dirichlet[{i}].face"), &d.face)?;
+        entry_face.push(fi);
+        let f = &mesh.faces[fi];
         for v in f.nodes() {
             for c in &d.components {
                 let c = match c {
@@ -187,6 +230,30 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                     Component::Y => 1,
                     Component::Z => 2,
                 };
+                if let Some(&j) = holder.get(&(v, c)) {
+                    let (a, b) = (scene.dirichlet[j].value[c], d.value[c]);
+                    let differ = |x: f64, y: f64| (x - y).abs() > 1e-12 * x.abs().max(y.abs());
+                    if let Some(k) = (0..steps).find(|&k| differ(a * path.dirichlet[j][k], b * path.dirichlet[i][k])) {
+                        let p = mesh.nodes[v];
+                        let at = if steps > 1 { format!(" at load step {}", k + 1) } else { String::new() };
+                        return Err(Error::scene(
+                            format!("dirichlet[{i}]"),
+                            format!(
+                                "prescribes component {} of node {v} at ({:.6}, {:.6}, {:.6}) as {}{at}, but dirichlet[{j}] prescribes it as {} (faces {} and {} share the node); give each held component one value",
+                                axis_name(c),
+                                p[0],
+                                p[1],
+                                p[2],
+                                b * path.dirichlet[i][k],
+                                a * path.dirichlet[j][k],
+                                mesh.faces[entry_face[j]].name,
+                                f.name
+                            ),
+                        ));
+                    }
+                } else {
+                    holder.insert((v, c), i);
+                }
                 constraints.push((v, c, d.value[c] * path.dirichlet[i][steps - 1]));
                 path.constraint_entry.push((i, d.value[c]));
             }
@@ -195,7 +262,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
 
     let mut loads = vec![0.0; 3 * mesh.nodes.len()];
     for (i, t) in scene.traction.iter().enumerate() {
-        let f = &mesh.faces[face_index(&mesh, format!("traction[{i}].face"), &t.face)?];
+        let f = &mesh.faces[face_index(&mesh, &faces, format!("traction[{i}].face"), &t.face)?];
         let mut unit = vec![0.0; loads.len()];
         add_traction(&mesh, f, t.p, 0, &mut unit);
         let fk = factors(&t.factors);
@@ -207,8 +274,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
 
     let mut contact = Vec::new();
     for (i, p) in scene.contact.pair.iter().enumerate() {
-        let s = face_index(&mesh, format!("contact.pair[{i}].slave"), &p.slave)?;
-        let m = face_index(&mesh, format!("contact.pair[{i}].master"), &p.master)?;
+        let s = face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?;
+        let m = face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?;
         if mesh.faces[s].body == mesh.faces[m].body {
             return Err(Error::scene(format!("contact.pair[{i}]"), "slave and master faces belong to the same body (self-contact is not supported)"));
         }
@@ -217,6 +284,29 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let contact_active = scene.contact.enabled && !contact.is_empty();
     let pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
 
+    // each body's constraints and contact pairs, bucketed once (not a scan of all per body)
+    let body_of = |v: usize| mesh.bodies.partition_point(|b| b.nodes.end <= v);
+    let mut body_constraints: Vec<Vec<(usize, usize)>> = vec![Vec::new(); mesh.bodies.len()];
+    for &(v, c, _) in &constraints {
+        body_constraints[body_of(v)].push((v, c));
+    }
+    let mut body_touches = vec![false; mesh.bodies.len()];
+    if contact_active {
+        for &(s, m) in &contact {
+            body_touches[mesh.faces[s].body] = true;
+            body_touches[mesh.faces[m].body] = true;
+        }
+    }
+    let mut body_pairs: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
+    if let Some(c) = &pairs {
+        for i in 0..c.len() {
+            let (bs, bm) = (body_of(c.slave[i]), body_of(c.master[i]));
+            body_pairs[bs].push(i);
+            if bm != bs {
+                body_pairs[bm].push(i);
+            }
+        }
+    }
     let mut floating = Vec::new();
     for (b, body) in mesh.bodies.iter().enumerate() {
         let ne = body.elems.len();
@@ -225,15 +315,15 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             let key = if scene.decomposition.target_dofs.is_some() { "decomposition.target_dofs" } else { "decomposition.subdomains" };
             return Err(Error::scene(key, format!("{parts} subdomains per body exceed the {ne} elements of body \"{}\"", body.name)));
         }
-        let held = constraints.iter().any(|&(v, _, _)| body.nodes.contains(&v));
-        let touches = contact_active && contact.iter().any(|&(s, m)| mesh.faces[s].body == b || mesh.faces[m].body == b);
+        let held = !body_constraints[b].is_empty();
+        let touches = body_touches[b];
         if !held && !touches {
             return Err(Error::scene(
                 "dirichlet",
                 format!("body \"{}\" floats: it has no Dirichlet condition{}", body.name, if contact_active { " and no contact" } else { " (contact is off)" }),
             ));
         }
-        let dirichlet = constraints.iter().filter(|x| body.nodes.contains(&x.0)).map(|&(v, c, _)| {
+        let dirichlet = body_constraints[b].iter().map(|&(v, c)| {
             let mut dir = [0.0; 3];
             dir[c] = 1.0;
             (v, dir)
@@ -245,25 +335,51 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         let Some(c) = pairs.as_ref().filter(|_| touches) else {
             return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by no Dirichlet condition", body.name, free.join(", "))));
         };
-        // the pairs' directions at the body's contact nodes: the normal, and with friction the tangents
+        // the pairs' directions at the body's contact nodes: the normal, and each tangent along
+        // which friction can carry a force (a slip bound g or coefficient μ > 0: a zero bound
+        // holds no sliding, like no friction at all)
         let mut rows = Vec::new();
-        for i in 0..c.len() {
+        let mut zero_bound = false;
+        for &i in &body_pairs[b] {
+            let holds = tangential_hold(c, i);
+            zero_bound |= holds != [true, true] && (c.bound[i] != SlipBound::None || c.coulomb[i] != Coefficient::Fixed);
             for v in [c.slave[i], c.master[i]].into_iter().filter(|v| body.nodes.contains(v)) {
                 rows.push((v, c.normal[i]));
-                if c.has_friction() {
-                    rows.extend([(v, c.t1[i]), (v, c.t2[i])]);
+                for (t, hold) in [(c.t1[i], holds[0]), (c.t2[i], holds[1])] {
+                    if hold {
+                        rows.push((v, t));
+                    }
                 }
             }
         }
         let unheld = free_motions(&mesh, b, dirichlet.chain(rows));
         if !unheld.is_empty() {
-            let hint = if c.has_friction() { "" } else { " (frictionless contact does not hold a sliding motion)" };
+            let hint = if zero_bound {
+                " (a zero slip bound or friction coefficient does not hold a sliding motion)"
+            } else if c.has_friction() {
+                ""
+            } else {
+                " (frictionless contact does not hold a sliding motion)"
+            };
             return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", body.name, unheld.join(", "))));
         }
         floating.push(b);
     }
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.hexes.len() };
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, path, floating })
+}
+
+/// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound
+/// (Tresca g·w, orthotropic g₁·w and g₂·w) or, for Coulomb, its coefficient (μ, or μ₁ and μ₂)
+/// is > 0.
+fn tangential_hold(c: &Contact, i: usize) -> [bool; 2] {
+    match (c.coulomb[i], c.bound[i]) {
+        (Coefficient::Isotropic(mu), _) => [mu > 0.0; 2],
+        (Coefficient::Orthotropic(a, b), _) => [a > 0.0, b > 0.0],
+        (Coefficient::Fixed, SlipBound::None) => [false; 2],
+        (Coefficient::Fixed, SlipBound::Disc(g)) => [g > 0.0; 2],
+        (Coefficient::Fixed, SlipBound::Ellipse(a, b)) => [a > 0.0, b > 0.0],
+    }
 }
 
 /// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words

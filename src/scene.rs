@@ -536,6 +536,44 @@ pub struct Factorization {
     pub ordering: OrderingKind,
 }
 
+/// The magnitudes double precision carries through the whole computation: Young's modulus
+/// (MPa), lengths (m: coordinates, element edges, radii), tractions, prescribed displacements
+/// and slip bounds must lie in `[MIN, MAX]` = 1e-30 … 1e30 (0 where 0 means "none").
+///
+/// Why this range: the arithmetic multiplies these inputs several deep. A stiffness entry is
+/// ~ E·h (≤ 1e60 when E and h are), an element volume ~ h³ (≤ 1e90), a nodal load ~ p·h²
+/// (≤ 1e90), a displacement ~ p·h/E, a dual operator entry ~ 1/(E·h); the Cholesky
+/// factorization and every squared norm (‖b‖², ‖Ku − f‖², the Gram matrices) multiply two of
+/// them and sum up to ~1e10 terms: ≤ 1e190 at the extremes, inside the 1e±308 of a double
+/// (and far above its subnormal range 1e-308, so no residual or stopping test underflows to 0).
+/// With E = 1e200 instead, E² already overflows and the solver stops at once with u = 0. The
+/// range is still 30 orders of magnitude either side of SI or mm/MPa units.
+pub mod range {
+    pub const MIN: f64 = 1e-30;
+    pub const MAX: f64 = 1e30;
+    /// The smallest 1 − 2ν (and 1 + ν) allowed: λ = Eν/((1+ν)(1−2ν)) is then at most ~1e8·E
+    /// (≤ 1e38), and the stiffness's condition number grows by at most ~1e8 over a compressible
+    /// material's, which leaves digits to solve at ε = 1e-8 on the meshes this code runs; ν
+    /// nearer 1/2 gives a K that double precision cannot factorize meaningfully (at
+    /// 1 − 2ν ~ 1e-16 not even 1 − 2ν itself has a correct digit). ν = 0.4999 (the stability
+    /// suite's `run/stress/nu_04999.toml`) has 1 − 2ν = 2e-4.
+    pub const POISSON_MARGIN: f64 = 1e-8;
+
+    /// Whether `v` lies in [MIN, MAX] (or is 0, when `zero_ok`).
+    pub fn carries(v: f64, zero_ok: bool) -> bool {
+        (zero_ok && v == 0.0) || (MIN..=MAX).contains(&v.abs())
+    }
+}
+
+/// The one-line reason for a value outside [`range`].
+fn out_of_range(what: &str, v: f64, unit: &str) -> String {
+    format!(
+        "{what} {v:e}{unit} lies outside {:e} … {:e}{unit}, the range double precision carries through the stiffness, loads and norms (scale the units)",
+        range::MIN,
+        range::MAX
+    )
+}
+
 /// Most nodes of one body: its 3 DOFs per node must fit the 32-bit indices of METIS.
 pub const MAX_BODY_NODES: usize = i32::MAX as usize / 3;
 
@@ -729,6 +767,8 @@ impl Scene {
         if self.materials.is_empty() {
             return Err(Error::scene("material", "at least one [[material]] is required"));
         }
+        // name → index (a set per kind: linear, not a scan of the entries before each)
+        let mut material_names = std::collections::HashSet::with_capacity(self.materials.len());
         for (i, m) in self.materials.iter().enumerate() {
             let k = |f: &str| format!("material[{i}].{f}");
             finite(k("E"), &[m.e])?;
@@ -739,22 +779,38 @@ impl Scene {
             if !(m.nu > -1.0 && m.nu < 0.5) {
                 return Err(Error::scene(k("nu"), format!("Poisson's ratio must lie in (-1, 0.5), got {}", m.nu)));
             }
-            if self.materials[..i].iter().any(|o| o.name == m.name) {
+            if !range::carries(m.e, false) {
+                return Err(Error::scene(k("E"), out_of_range("Young's modulus", m.e, " MPa")));
+            }
+            for (what, margin) in [("1 − 2ν", 1.0 - 2.0 * m.nu), ("1 + ν", 1.0 + m.nu)] {
+                if margin < range::POISSON_MARGIN {
+                    return Err(Error::scene(
+                        k("nu"),
+                        format!(
+                            "Poisson's ratio {} leaves {what} = {margin:.1e} < {:e}: λ = Eν/((1+ν)(1−2ν)) would swamp the stiffness (double precision cannot solve it)",
+                            m.nu,
+                            range::POISSON_MARGIN
+                        ),
+                    ));
+                }
+            }
+            if !material_names.insert(m.name.as_str()) {
                 return Err(Error::scene(k("name"), format!("duplicate material name \"{}\"", m.name)));
             }
         }
         if self.bodies.is_empty() {
             return Err(Error::scene("body", "at least one [[body]] is required"));
         }
+        let mut body_names = std::collections::HashSet::with_capacity(self.bodies.len());
         for (i, b) in self.bodies.iter().enumerate() {
             let k = |f: &str| format!("body[{i}].{f}");
             if b.name.is_empty() || b.name.contains('.') {
                 return Err(Error::scene(k("name"), format!("body names must be non-empty and contain no '.', got \"{}\"", b.name)));
             }
-            if self.bodies[..i].iter().any(|o| o.name == b.name) {
+            if !body_names.insert(b.name.as_str()) {
                 return Err(Error::scene(k("name"), format!("duplicate body name \"{}\"", b.name)));
             }
-            if !self.materials.iter().any(|m| m.name == b.material) {
+            if !material_names.contains(b.material.as_str()) {
                 return Err(Error::scene(k("material"), format!("unknown material \"{}\"", b.material)));
             }
             match (&b.boxed, &b.gmsh) {
@@ -769,6 +825,9 @@ impl Scene {
                         if !(c.radius.is_finite() && c.radius >= h) {
                             return Err(Error::scene(k("box.cylinder.radius"), format!("must be finite and at least the half-width {h} of the box in x, got {}", c.radius)));
                         }
+                        if !range::carries(c.radius, false) {
+                            return Err(Error::scene(k("box.cylinder.radius"), out_of_range("radius", c.radius, " m")));
+                        }
                         if bx.bulge(0.5 * (bx.min[0] + bx.max[0])) >= t {
                             return Err(Error::scene(k("box.cylinder.radius"), format!("the curved side would bulge more than the box's height {t}")));
                         }
@@ -782,6 +841,21 @@ impl Scene {
                     if let Some(n) = bx.nodes {
                         if n.iter().any(|&v| v < 2) {
                             return Err(Error::scene(k("box.nodes"), format!("need at least 2 nodes per direction, got {n:?}")));
+                        }
+                        // the length scale: element edges (extent / (nodes − 1)) and coordinates
+                        let edges: Vec<f64> = (0..3).map(|d| (bx.max[d] - bx.min[d]) / (n[d] - 1) as f64).collect();
+                        let (lo, hi) = edges.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &h| (a.min(h), b.max(h)));
+                        for (h, bad) in [(lo, lo < range::MIN), (hi, hi > range::MAX)] {
+                            if bad {
+                                return Err(Error::scene(
+                                    k("box"),
+                                    format!("body \"{}\": element edges of {h:.3e} m (extent / (nodes − 1)) lie outside {:e} … {:e} m, the length scale double precision carries through element volumes (∝ h³) and stiffness (∝ E·h); scale the units", b.name, range::MIN, range::MAX),
+                                ));
+                            }
+                        }
+                        let far = bx.min.iter().chain(&bx.max).fold(0.0f64, |a, v| a.max(v.abs()));
+                        if far > range::MAX {
+                            return Err(Error::scene(k("box"), format!("body \"{}\": coordinates up to {far:.3e} m lie outside ±{:e} m; move the box nearer the origin or scale the units", b.name, range::MAX)));
                         }
                         let total: f64 = n.iter().map(|&v| v as f64).product();
                         if total > MAX_BODY_NODES as f64 {
@@ -802,6 +876,13 @@ impl Scene {
                 _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
             }
         }
+        // a nonzero load or prescribed value outside the range (see [`range`])
+        let carried = |key: String, what: &str, v: &[f64], unit: &str| -> Result<()> {
+            match v.iter().find(|x| !range::carries(**x, true)) {
+                Some(&x) => Err(Error::scene(key, out_of_range(what, x, unit))),
+                None => Ok(()),
+            }
+        };
         for (i, f) in self.faces.iter().enumerate() {
             finite(format!("face[{i}].min"), &f.min)?;
             finite(format!("face[{i}].max"), &f.max)?;
@@ -827,12 +908,14 @@ impl Scene {
         }
         for (i, d) in self.dirichlet.iter().enumerate() {
             finite(format!("dirichlet[{i}].value"), &d.value)?;
+            carried(format!("dirichlet[{i}].value"), "a nonzero prescribed displacement", &d.value, " m")?;
             if d.components.is_empty() {
                 return Err(Error::scene(format!("dirichlet[{i}].components"), "must name at least one of x, y, z"));
             }
         }
         for (i, t) in self.traction.iter().enumerate() {
             finite(format!("traction[{i}].p"), &t.p)?;
+            carried(format!("traction[{i}].p"), "a nonzero traction", &t.p, " MPa")?;
         }
         for (i, p) in self.contact.pair.iter().enumerate() {
             let k = |f: &str| format!("contact.pair[{i}].{f}");
@@ -850,12 +933,14 @@ impl Scene {
                     if !(g.is_finite() && *g >= 0.0) {
                         return Err(Error::scene(k("friction.g"), format!("slip bound must be finite and ≥ 0, got {g}")));
                     }
+                    carried(k("friction.g"), "a nonzero slip bound", &[*g], " MPa")?;
                 }
                 Friction::Orthotropic { g1, g2, direction } => {
                     for (name, g) in [("g1", g1), ("g2", g2)] {
                         if !(g.is_finite() && *g >= 0.0) {
                             return Err(Error::scene(k(&format!("friction.{name}")), format!("slip bound must be finite and ≥ 0, got {g}")));
                         }
+                        carried(k(&format!("friction.{name}")), "a nonzero slip bound", &[*g], " MPa")?;
                     }
                     finite(k("friction.direction"), direction)?;
                     if direction.iter().all(|&v| v == 0.0) {
@@ -911,7 +996,13 @@ impl Scene {
         toml::to_string(self).unwrap_or_else(|e| format!("# scene could not be serialized: {e}"))
     }
 
+    /// The material named `name` (a scan: for one lookup; [`Scene::material_index`] for many).
     pub fn material(&self, name: &str) -> Option<&Material> {
         self.materials.iter().find(|m| m.name == name)
+    }
+
+    /// Material name → index, for looking up every body's material in linear time.
+    pub fn material_index(&self) -> std::collections::HashMap<&str, usize> {
+        self.materials.iter().enumerate().map(|(i, m)| (m.name.as_str(), i)).collect()
     }
 }

@@ -614,6 +614,19 @@ fn build(
         }
         file_hexes.push(h);
     }
+    // A hexahedron listed twice (the same 8 nodes, in any order, under another tag) would be
+    // counted twice: its faces would stop being boundary faces (a clamped face loses them).
+    let mut seen: HashMap<[usize; 8], u64> = HashMap::with_capacity(file_hexes.len());
+    for (h, &(etag, _)) in file_hexes.iter().zip(&hex_tags) {
+        let mut key = *h;
+        key.sort_unstable();
+        if let Some(first) = seen.insert(key, etag) {
+            return Err(format!(
+                "hexahedra {first} and {etag} have the same 8 nodes (an element listed twice); remove one"
+            ));
+        }
+    }
+    check_scale(&coords, &file_hexes, &hex_tags)?;
     let mut local = vec![usize::MAX; coords.len()];
     let mut nodes = Vec::new();
     for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
@@ -654,6 +667,9 @@ fn build(
         }
     }
     let mut faces: Vec<(String, Vec<FaceQuad>)> = Vec::new();
+    // name → index into `faces`, and the quads each face holds (groups of one name merge)
+    let mut face_of: HashMap<String, usize> = HashMap::new();
+    let mut face_seen: Vec<HashSet<(usize, [usize; 4])>> = Vec::new();
     for (tag, ents) in groups {
         let name = group_name(names, 2, tag);
         let mut seen: HashSet<(usize, [usize; 4])> = HashSet::new();
@@ -671,15 +687,19 @@ fn build(
         if list.is_empty() {
             continue;
         }
-        match faces.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, existing)) => {
+        match face_of.get(&name) {
+            Some(&f) => {
                 for fq in list {
-                    if !existing.contains(&fq) {
-                        existing.push(fq);
+                    if face_seen[f].insert((fq.elem, fq.nodes)) {
+                        faces[f].1.push(fq);
                     }
                 }
             }
-            None => faces.push((name, list)),
+            None => {
+                face_of.insert(name.clone(), faces.len());
+                face_seen.push(seen);
+                faces.push((name, list));
+            }
         }
     }
     Ok(BodyGeometry {
@@ -687,6 +707,51 @@ fn build(
         hexes,
         faces,
     })
+}
+
+/// The length scale of the body: every element's longest edge and every coordinate must lie
+/// within what double precision carries through element volumes (∝ h³) and the stiffness
+/// (∝ E·h): [`crate::scene::range`]. (An element collapsed to a point is left to the
+/// orientation check, which calls it degenerate.)
+fn check_scale(coords: &[[f64; 3]], hexes: &[[usize; 8]], tags: &[(u64, &[u64])]) -> Result<(), String> {
+    use crate::scene::range::{MAX, MIN};
+    const EDGES: [[usize; 2]; 12] = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]];
+    // (edge, element tag) of the shortest and the longest longest-edge
+    let mut lo: Option<(f64, u64)> = None;
+    let mut hi: Option<(f64, u64)> = None;
+    for (h, &(etag, _)) in hexes.iter().zip(tags) {
+        let len = |[a, b]: [usize; 2]| {
+            let (p, q) = (coords[h[a]], coords[h[b]]);
+            // scaled first: the squares of 1e-200 or 1e200 do not survive
+            let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+            let m = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if m == 0.0 || !m.is_finite() {
+                m
+            } else {
+                m * d.iter().map(|v| (v / m) * (v / m)).sum::<f64>().sqrt()
+            }
+        };
+        let e = EDGES.iter().map(|&ab| len(ab)).fold(0.0f64, f64::max);
+        if e > 0.0 && lo.is_none_or(|l| e < l.0) {
+            lo = Some((e, etag));
+        }
+        if hi.is_none_or(|l| e > l.0) {
+            hi = Some((e, etag));
+        }
+    }
+    for (found, bad) in [(lo, lo.is_some_and(|l| l.0 < MIN)), (hi, hi.is_some_and(|l| l.0 > MAX))] {
+        if let (Some((e, etag)), true) = (found, bad) {
+            return Err(format!(
+                "element edges of {e:.3e} m (hexahedron {etag}) lie outside {MIN:e} … {MAX:e} m, the length scale double precision carries through element volumes (∝ h³) and stiffness (∝ E·h); scale the mesh"
+            ));
+        }
+    }
+    let used: HashSet<usize> = hexes.iter().flatten().copied().collect();
+    let far = used.iter().flat_map(|&v| coords[v]).fold(0.0f64, |a, v| a.max(v.abs()));
+    if far > MAX {
+        return Err(format!("coordinates up to {far:.3e} m lie outside ±{MAX:e} m; move the mesh nearer the origin or scale it"));
+    }
+    Ok(())
 }
 
 /// Local nodes of a file quadrangle, or `None` if one of them is not a node of the body.

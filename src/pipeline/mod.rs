@@ -172,10 +172,11 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
     let mesh = &model.mesh;
     let mine: Vec<usize> = (0..mesh.bodies.len()).filter(|&b| owner(b, comm.size()) == comm.rank()).collect();
     let systems = t.phase(comm, "assemble", || {
+        let by_body = model::constraints_by_body(mesh, &model.constraints);
         mine.iter()
             .map(|&b| {
                 let body = &mesh.bodies[b];
-                let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+                let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
                 let loads = &model.loads[3 * body.nodes.start..3 * body.nodes.end];
                 assemble_body(mesh, b, model.lame[b], &dofs, loads).map(|s| (b, dofs, s))
             })
@@ -264,9 +265,10 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         if walk.on_path {
             b = t.phase(comm, "load", || {
                 let (cons, loads) = model.state(k);
+                let by_body = model::constraints_by_body(&model.mesh, &cons);
                 Ok(dual.set_load(contact, |lb| {
                     let body = &model.mesh.bodies[lb.body];
-                    let dofs = DofMap::new(body.nodes.clone(), &cons);
+                    let dofs = DofMap::new(body.nodes.clone(), &by_body[lb.body]);
                     let f = crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
                     (dofs, f)
                 }, &walk.jump))
@@ -762,8 +764,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
     let _ = writeln!(s, "mesh: {} bodies, {} nodes, {} hexahedra", mesh.bodies.len(), mesh.nodes.len(), mesh.hexes.len());
     let mut free_total = 0;
-    for body in &mesh.bodies {
-        let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+    let by_body = model::constraints_by_body(mesh, &model.constraints);
+    for (body, cons) in mesh.bodies.iter().zip(&by_body) {
+        let dofs = DofMap::new(body.nodes.clone(), cons);
         free_total += dofs.nfree;
         let _ = writeln!(
             s,

@@ -154,9 +154,10 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         c
     };
     if !dec.tfeti {
+        let by_body = crate::model::constraints_by_body(mesh, &model.constraints);
         let f = fills(nb, &|b| {
             let body = &mesh.bodies[b];
-            let dofs = DofMap::new(body.nodes.clone(), &model.constraints);
+            let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
             let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
             let (xadj, adj) = node_graph(&mesh.hexes, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
             Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
