@@ -5,6 +5,7 @@
 //! under a temporary name and renamed only when everything succeeded, so a failed run leaves
 //! no result file behind.
 
+pub mod guard;
 pub mod hdf5;
 pub mod xdmf;
 

@@ -441,11 +441,14 @@ pub struct ContactOutcome {
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
+    let out_key = if out.is_some() { "--out" } else { "output.path" };
     let ls = t.phase(comm, "scene", || {
         let mut ls = crate::scene::load(scene_path, overrides)?;
         if let Some(o) = out {
             ls.scene.output.path = Some(o);
         }
+        // no result may overwrite an input or another result: refused before any work
+        output::guard::check(&ls, out_key)?;
         Ok(ls)
     })?;
     let mut model = t.phase(comm, "mesh", || model::build(&ls))?;
