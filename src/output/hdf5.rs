@@ -102,21 +102,29 @@ fn estimated_bytes(data: &OutputData) -> u64 {
     mesh + fields(&data.fields) + data.steps.iter().map(|s| fields(&s.fields)).sum::<u64>() + attrs + 4096 * objects as u64 + 65536
 }
 
-/// Writes named f64 arrays (each with its shape) to a new serial HDF5 file; a partly written
-/// file is removed.
+/// Writes named f64 arrays (each with its shape) to a new serial HDF5 file, under
+/// `<path>.tmp` renamed when complete: a failure leaves no file.
 pub fn write_arrays(path: &Path, arrays: &[(&str, Vec<usize>, &[f64])]) -> Result<()> {
     let shown = path.display().to_string();
+    let tmp = super::tmp(path);
+    super::tmpfiles::track(&tmp);
     let result = (|| -> std::result::Result<(), ::hdf5::Error> {
-        let file = ::hdf5::File::create(path)?;
+        let file = ::hdf5::File::create(&tmp)?;
         for (name, shape, v) in arrays {
             file.new_dataset::<f64>().shape(shape.clone()).create(*name)?.write_raw(v)?;
         }
-        Ok(())
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(path);
-        Error::output(&shown, e.to_string())
-    })
+        file.close()
+    })()
+    .map_err(|e| Error::output(&shown, h5_text(&e)))
+    .and_then(|()| {
+        let _held = super::tmpfiles::hold();
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(&shown, e))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    super::tmpfiles::untrack(&tmp);
+    result
 }
 
 /// Reads a file written by [`write`] back.
