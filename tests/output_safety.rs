@@ -142,13 +142,22 @@ fn a_result_set_is_written_whole_or_not_at_all() {
     assert_eq!(names(&dir), ["r.json"], "a partial set remains");
 }
 
-/// Mounts a 64 KiB tmpfs at `dir` (root only); false (with a note) where that fails.
-fn tiny_disk(dir: &Path) -> bool {
+/// A 64 KiB tmpfs mounted at a folder, unmounted when dropped (a failing test too).
+struct TinyDisk(PathBuf);
+
+impl Drop for TinyDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// Mounts a 64 KiB tmpfs at `dir` (root only); None (with a note) where that fails.
+fn tiny_disk(dir: &Path) -> Option<TinyDisk> {
     let ok = Command::new("mount").args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"]).arg(dir).status().is_ok_and(|s| s.success());
     if !ok {
         eprintln!("note: cannot mount a tmpfs at {} (not root?): the full-disk test is skipped", dir.display());
     }
-    ok
+    ok.then(|| TinyDisk(dir.to_path_buf()))
 }
 
 /// Defect 2: a full disk under `mpirun -n 2` (and on one rank) ends every rank within 60 s
@@ -160,9 +169,7 @@ fn a_full_disk_ends_every_rank_with_no_space_left() {
     let dir = tmpdir("full");
     let disk = dir.join("disk");
     std::fs::create_dir_all(&disk).unwrap();
-    if !tiny_disk(&disk) {
-        return;
-    }
+    let Some(_mounted) = tiny_disk(&disk) else { return };
     let scene = root().join("run/seed.toml");
     let out = disk.join("r.h5");
     let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=8", "--out", out.to_str().unwrap(), "-q"];
@@ -190,7 +197,6 @@ fn a_full_disk_ends_every_rank_with_no_space_left() {
             eprintln!("{ranks} rank(s), space check {check}: failed cleanly in {took:.1} s: {}", errs[0]);
         }
     }
-    let _ = Command::new("umount").arg(&disk).status();
 }
 
 /// Defect 4: SIGTERM while the run is in the output phase (held there by
