@@ -429,6 +429,13 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     };
     let comm = MpiComm::new(universe.world());
+    // SIGINT/SIGTERM: the temporary result files are removed, one line says so (rank 0)
+    if let Err(e) = tresca_feti::output::tmpfiles::remove_on_signal(comm.is_root()) {
+        if comm.is_root() {
+            eprintln!("error: cannot watch for signals: {e}");
+        }
+        return ExitCode::FAILURE;
+    }
     if comm.size() > 1 {
         // one rank per core: faer must not start threads of its own
         faer::set_global_parallelism(faer::Par::Seq);

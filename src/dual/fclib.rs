@@ -235,12 +235,15 @@ fn write_file(path: &Path, g: &Global, title: &str) -> Result<()> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);
-    let result = write_h5(&tmp, g, title)
-        .map_err(|msg| Error::output(&shown, msg))
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(&shown, e)));
+    crate::output::tmpfiles::track(&tmp);
+    let result = write_h5(&tmp, g, title).map_err(|msg| Error::output(&shown, msg)).and_then(|()| {
+        let _held = crate::output::tmpfiles::hold();
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(&shown, e))
+    });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    crate::output::tmpfiles::untrack(&tmp);
     result
 }
 

@@ -62,6 +62,7 @@ pub fn write(path: &Path, data: &OutputData) -> Result<()> {
 pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Result<()> {
     let shown = path.display().to_string();
     comm.agree(validate(data).map_err(|msg| Error::output(&shown, msg)))?;
+    comm.agree(if comm.is_root() { check_room(path, data) } else { Ok(()) })?;
     let result = write_file(comm, path, data);
     if result.is_err() && comm.is_root() {
         let _ = std::fs::remove_file(path);
@@ -72,21 +73,58 @@ pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Re
     })
 }
 
-/// Writes named f64 arrays (each with its shape) to a new serial HDF5 file; a partly written
-/// file is removed.
+/// Refuses, before the file is created, to write `data` where the file system lacks room for
+/// it: a disk that fills up in the middle of a collective write can leave the ranks' HDF5
+/// metadata apart, and closing the file then waits forever (see [`write_file`]).
+/// `TRESCA_FETI_SPACE_CHECK=off` skips the check (to test the failure in the middle).
+fn check_room(path: &Path, data: &OutputData) -> Result<()> {
+    if std::env::var("TRESCA_FETI_SPACE_CHECK").is_ok_and(|v| v == "off") {
+        return Ok(());
+    }
+    let need = estimated_bytes(data);
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    match free_bytes(dir) {
+        Some(free) if free < need => Err(Error::output(
+            path.display().to_string(),
+            format!("needs about {need} bytes, its file system has {free} free ({})", std::io::Error::from_raw_os_error(libc::ENOSPC)),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// An upper bound of the file's size: every dataset's values (whole), the attributes, and
+/// room for HDF5's own structures (object headers, heaps, B-trees).
+fn estimated_bytes(data: &OutputData) -> u64 {
+    let fields = |fs: &[Field]| -> u64 { fs.iter().map(|f| (mesh_len(data, f.center) * f.ncomp * 8) as u64).sum() };
+    let mesh = (data.nnodes() * 3 * 8 + data.ncells() * 8 * 8) as u64;
+    let attrs: u64 = data.attributes.iter().map(|(k, v)| (k.len() + v.len()) as u64).sum();
+    let objects = 4 + data.fields.len() + data.attributes.len() + data.steps.iter().map(|s| 1 + s.fields.len()).sum::<usize>();
+    mesh + fields(&data.fields) + data.steps.iter().map(|s| fields(&s.fields)).sum::<u64>() + attrs + 4096 * objects as u64 + 65536
+}
+
+/// Writes named f64 arrays (each with its shape) to a new serial HDF5 file, under
+/// `<path>.tmp` renamed when complete: a failure leaves no file.
 pub fn write_arrays(path: &Path, arrays: &[(&str, Vec<usize>, &[f64])]) -> Result<()> {
     let shown = path.display().to_string();
+    let tmp = super::tmp(path);
+    super::tmpfiles::track(&tmp);
     let result = (|| -> std::result::Result<(), ::hdf5::Error> {
-        let file = ::hdf5::File::create(path)?;
+        let file = ::hdf5::File::create(&tmp)?;
         for (name, shape, v) in arrays {
             file.new_dataset::<f64>().shape(shape.clone()).create(*name)?.write_raw(v)?;
         }
-        Ok(())
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(path);
-        Error::output(&shown, e.to_string())
-    })
+        file.close()
+    })()
+    .map_err(|e| Error::output(&shown, h5_text(&e)))
+    .and_then(|()| {
+        let _held = super::tmpfiles::hold();
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(&shown, e))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    super::tmpfiles::untrack(&tmp);
+    result
 }
 
 /// Reads a file written by [`write`] back.
@@ -223,11 +261,19 @@ fn center_str(c: Center) -> &'static str {
 
 /// Turns an hdf5 error into a one-line message prefixed by what was being done.
 fn ctx(what: impl std::fmt::Display) -> impl FnOnce(::hdf5::Error) -> Error {
-    move |e| {
-        Error::output(
-            String::new(),
-            format!("{what}: {}", one_line(&e.to_string())),
-        )
+    move |e| Error::output(String::new(), format!("{what}: {}", h5_text(&e)))
+}
+
+/// One line for an HDF5 error: the top of its stack and, where it differs, the innermost
+/// frame — the cause the operating system or MPI-IO gave (e.g. "No space left on device"),
+/// which the top ("can't write data") does not say.
+fn h5_text(e: &::hdf5::Error) -> String {
+    let Some(stack) = e.stack() else { return one_line(&e.to_string()) };
+    let descs: Vec<String> = stack.iter().map(|f| one_line(f.desc())).filter(|d| !d.is_empty()).collect();
+    match (descs.first(), descs.last()) {
+        (Some(top), Some(cause)) if top != cause => format!("{top}: {cause}"),
+        (Some(top), _) => top.clone(),
+        _ => one_line(&e.to_string()),
     }
 }
 
@@ -235,67 +281,128 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
-    let file = File::with_options()
-        .with_fapl(|p| match comm.mpi_comm() {
-            Some(raw) => p.mpio(raw, None),
-            None => p,
-        })
-        .with_fcpl(|p| {
-            p.attr_creation_order(AttrCreationOrder::Indexed)
-                .link_creation_order(LinkCreationOrder::Indexed)
-        })
-        .create(tmp)
-        .map_err(ctx("cannot create file"))?;
-    write_contents(comm, &file, data)?;
-    // Every child handle is dropped by now, so this really closes (and flushes) the file.
-    file.close().map_err(ctx("closing file"))
+/// What each collective step of writing one file needs: the ranks, and the file, to name it
+/// in a message before the message travels to the other ranks.
+struct Writer<'a, C: Comm> {
+    comm: &'a C,
+    path: &'a Path,
 }
 
-fn write_contents<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<()> {
-    let mesh = file.create_group(MESH).map_err(ctx("creating /mesh"))?;
+impl<C: Comm> Writer<'_, C> {
+    /// Agrees on one collective step's result over the ranks ([`Comm::agree`]): when any rank
+    /// failed, every rank returns the error (naming the file) of the lowest failing rank.
+    fn all<T>(&self, r: Result<T>) -> Result<T> {
+        self.comm.agree(r.map_err(|e| match e {
+            Error::Output { path, msg } if path.is_empty() => Error::output(self.path.display().to_string(), msg),
+            other => other,
+        }))
+    }
+
+    /// The cause of a failed write that HDF5's stack does not give (MPI-IO reports a short
+    /// write as "file write failed"): when the file's file system has less room left than the
+    /// `need`ed bytes, `" (<the OS's text for ENOSPC>)"`, else nothing.
+    fn no_space(&self, need: u64) -> String {
+        let dir = self.path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        match free_bytes(dir) {
+            Some(free) if free < need.max(1) => format!(" ({})", std::io::Error::from_raw_os_error(libc::ENOSPC)),
+            _ => String::new(),
+        }
+    }
+}
+
+/// Bytes an unprivileged writer may still use on the file system holding `dir` (statvfs).
+fn free_bytes(dir: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
+    let mut st = std::mem::MaybeUninit::<libc::statvfs>::uninit();
+    // SAFETY: `c` is a NUL-terminated path and `st` a buffer statvfs fills on success only.
+    let st = unsafe {
+        if libc::statvfs(c.as_ptr(), st.as_mut_ptr()) != 0 {
+            return None;
+        }
+        st.assume_init()
+    };
+    Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+}
+
+/// Creates, fills and closes the file. Every rank runs the same sequence of collective HDF5
+/// calls: each fallible step is agreed ([`Comm::agree`]) before the next one, so an error on
+/// one rank (MPI-IO's "No space left on device" in a collective write) stops every rank at
+/// the same point, and the file is closed (collectively) by all of them.
+fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
+    let w = Writer { comm, path: tmp };
+    let file = w.all(
+        File::with_options()
+            .with_fapl(|p| match comm.mpi_comm() {
+                Some(raw) => p.mpio(raw, None),
+                None => p,
+            })
+            .with_fcpl(|p| {
+                p.attr_creation_order(AttrCreationOrder::Indexed)
+                    .link_creation_order(LinkCreationOrder::Indexed)
+            })
+            .create(tmp)
+            .map_err(ctx("cannot create file")),
+    )?;
+    let written = write_contents(&w, &file, data);
+    if written.is_err() && comm.is_root() {
+        // HDF5 flushes its metadata when the file closes, rank 0 writing it: on a full disk
+        // that fails on rank 0 alone and the ranks part ways inside H5Fclose (a hang). The
+        // file is going anyway: emptied, it leaves room for that last small write.
+        let _ = std::fs::OpenOptions::new().write(true).open(tmp).and_then(|f| f.set_len(0));
+    }
+    // Every child handle is dropped by now, so this really closes (and flushes) the file; after
+    // an error it is closed all the same, by every rank.
+    let closed = w.all(file.close().map_err(|e| ctx(format!("closing file{}", w.no_space(1)))(e)));
+    written.and(closed)
+}
+
+fn write_contents<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) -> Result<()> {
+    let mesh = create_group(w, file, MESH)?;
     let rows = data.mesh_rows.as_ref().map(|m| (m.node_rows.as_slice(), m.cell_rows.as_slice()));
     let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
-    write_dataset(comm, &mesh, COORDINATES, &[data.nnodes(), 3], rows.map(|r| r.0), &coords)?;
-    let hexes = data
-        .hexahedra
-        .iter()
-        .flatten()
-        .map(|&n| i64::try_from(n))
-        .collect::<std::result::Result<Vec<i64>, _>>()
-        .map_err(|_| Error::output(String::new(), "node index does not fit in i64"))?;
-    write_dataset(comm, &mesh, HEXAHEDRA, &[data.ncells(), 8], rows.map(|r| r.1), &hexes)?;
+    write_dataset(w, &mesh, COORDINATES, &[data.nnodes(), 3], rows.map(|r| r.0), &coords)?;
+    let hexes = w.all(
+        data.hexahedra
+            .iter()
+            .flatten()
+            .map(|&n| i64::try_from(n))
+            .collect::<std::result::Result<Vec<i64>, _>>()
+            .map_err(|_| Error::output(String::new(), "node index does not fit in i64")),
+    )?;
+    write_dataset(w, &mesh, HEXAHEDRA, &[data.ncells(), 8], rows.map(|r| r.1), &hexes)?;
     drop(mesh);
 
-    let fields = create_group(file, FIELDS)?;
-    write_fields(comm, &fields, data, &data.fields, &data.rows)?;
+    let fields = create_group(w, file, FIELDS)?;
+    write_fields(w, &fields, data, &data.fields, &data.rows)?;
     drop(fields);
     if !data.steps.is_empty() {
-        write_steps(comm, file, data)?;
+        write_steps(w, file, data)?;
     }
 
     for (name, value) in &data.attributes {
-        write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m))?;
+        w.all(write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m)))?;
     }
     Ok(())
 }
 
 /// Creates the group `name` in `parent`, tracking the creation order of its links and
 /// attributes (so [`read`] gives them back in that order).
-fn create_group(parent: &Group, name: &str) -> Result<Group> {
-    parent
+/// Collective: agreed over the ranks.
+fn create_group<C: Comm>(w: &Writer<'_, C>, parent: &Group, name: &str) -> Result<Group> {
+    w.all(parent
         .create_group_builder()
         .with_gcpl(|p| {
             p.link_creation_order(LinkCreationOrder::Indexed)
                 .attr_creation_order(AttrCreationOrder::Indexed)
         })
         .create(name)
-        .map_err(ctx(format!("creating {}/{name}", parent.name().trim_end_matches('/'))))
+        .map_err(ctx(format!("creating {}/{name}", parent.name().trim_end_matches('/')))))
 }
 
 /// Writes `fields` into `group`, one dataset each with its `center` attribute: the rows `rows`
 /// of the distributed ones, the replicated ones whole (see [`write_dataset`]).
-fn write_fields<C: Comm>(comm: &C, group: &Group, data: &OutputData, fields: &[Field], rows: &Rows) -> Result<()> {
+fn write_fields<C: Comm>(w: &Writer<'_, C>, group: &Group, data: &OutputData, fields: &[Field], rows: &Rows) -> Result<()> {
     for f in fields {
         let len = mesh_len(data, f.center);
         let rows = rows.get(&f.name).map(Vec::as_slice);
@@ -305,22 +412,24 @@ fn write_fields<C: Comm>(comm: &C, group: &Group, data: &OutputData, fields: &[F
             vec![len, f.ncomp]
         };
         let ds = match &f.values {
-            Values::F64(v) => write_dataset(comm, group, &f.name, &shape, rows, v)?,
-            Values::I32(v) => write_dataset(comm, group, &f.name, &shape, rows, v)?,
+            Values::F64(v) => write_dataset(w, group, &f.name, &shape, rows, v)?,
+            Values::I32(v) => write_dataset(w, group, &f.name, &shape, rows, v)?,
         };
-        write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
-            .map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name)))?;
+        w.all(
+            write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
+                .map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name))),
+        )?;
     }
     Ok(())
 }
 
 /// Writes `/steps`: one group per step with its `time` attribute and its fields.
-fn write_steps<C: Comm>(comm: &C, file: &File, data: &OutputData) -> Result<()> {
-    let steps = create_group(file, STEPS)?;
+fn write_steps<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) -> Result<()> {
+    let steps = create_group(w, file, STEPS)?;
     for (i, step) in data.steps.iter().enumerate() {
-        let group = create_group(&steps, &step_name(i))?;
-        write_time_attr(&group, step.time)?;
-        write_fields(comm, &group, data, &step.fields, &step.rows)?;
+        let group = create_group(w, &steps, &step_name(i))?;
+        w.all(write_time_attr(&group, step.time))?;
+        write_fields(w, &group, data, &step.fields, &step.rows)?;
     }
     Ok(())
 }
@@ -415,29 +524,25 @@ fn gather_block<T: Bits, C: Comm>(comm: &C, len: usize, ncomp: usize, rows: &[us
 /// None), gathered by [`gather_block`] from every rank's rows `rows` (values `v` in their order)
 /// where it is distributed. Collective (a rank with nothing to write still takes part with an
 /// empty selection), and through collective MPI-IO transfers under MPI.
-fn write_dataset<T: Bits, C: Comm>(comm: &C, group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T]) -> Result<Dataset> {
+fn write_dataset<T: Bits, C: Comm>(w: &Writer<'_, C>, group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T]) -> Result<Dataset> {
     use hdf5_sys::h5::hsize_t;
     use hdf5_sys::h5d::{H5Dget_space, H5Dwrite};
     use hdf5_sys::h5p::{H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER, H5P_DEFAULT};
     use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_hyperslab, H5Sselect_none};
     let what = || format!("dataset {}/{name}", group.name());
     let ncomp = shape.get(1).copied().unwrap_or(1);
-    let (lo, hi) = block(shape[0], comm.rank(), comm.size());
+    let (lo, hi) = block(shape[0], w.comm.rank(), w.comm.size());
     let gathered;
     let vals = match rows {
         Some(r) => {
-            gathered = gather_block(comm, shape[0], ncomp, r, v);
+            gathered = gather_block(w.comm, shape[0], ncomp, r, v);
             &gathered[..]
         }
         None => &v[lo * ncomp..hi * ncomp],
     };
-    let ds = group
-        .new_dataset::<T>()
-        .shape(shape.to_vec())
-        .create(name)
-        .map_err(|e| ctx(format!("creating {}", what()))(e))?;
-    let mem_type = ::hdf5::Datatype::from_type::<T>().map_err(|e| ctx(format!("datatype of {}", what()))(e))?;
-    let collective = comm.mpi_comm().is_some();
+    let ds = w.all(group.new_dataset::<T>().shape(shape.to_vec()).create(name).map_err(|e| ctx(format!("creating {}", what()))(e)))?;
+    let mem_type = w.all(::hdf5::Datatype::from_type::<T>().map_err(|e| ctx(format!("datatype of {}", what()))(e)))?;
+    let collective = w.comm.mpi_comm().is_some();
     // SAFETY: plain HDF5 C calls on ids this function owns (closed below) or that `ds` keeps
     // alive; the buffer holds `vals.len()` elements of `T`, matching the memory space. They run
     // under hdf5-metno's global lock, like its own calls (HDF5 is not thread-safe).
@@ -466,16 +571,20 @@ fn write_dataset<T: Bits, C: Comm>(comm: &C, group: &Group, name: &str, shape: &
         let one = std::mem::MaybeUninit::<T>::uninit();
         let buf = if vals.is_empty() { one.as_ptr() } else { vals.as_ptr() };
         let st = H5Dwrite(ds.id(), mem_type.id(), mspace, fspace, dxpl, buf.cast());
+        // the reason, read off HDF5's error stack before another call clears it
+        let why = (st < 0).then(|| ::hdf5::Error::query().map_or_else(|e| e.to_string(), |e| h5_text(&e)));
         if collective {
             H5Pclose(dxpl);
         }
         H5Sclose(mspace);
         H5Sclose(fspace);
-        st
+        why
     });
-    if status < 0 {
-        return Err(Error::output(String::new(), format!("writing {}: H5Dwrite failed", what())));
-    }
+    // one rank's failed share of a collective write stops every rank here
+    w.all(match status {
+        Some(why) => Err(Error::output(String::new(), format!("writing {}: {why}{}", what(), w.no_space(std::mem::size_of_val(vals) as u64)))),
+        None => Ok(()),
+    })?;
     Ok(ds)
 }
 
@@ -488,9 +597,9 @@ fn write_str_attr(loc: &Location, name: &str, value: &str) -> std::result::Resul
         .new_attr::<VarLenUnicode>()
         .shape(())
         .create(name)
-        .map_err(|e| format!("creating attribute {name:?}: {}", one_line(&e.to_string())))?;
+        .map_err(|e| format!("creating attribute {name:?}: {}", h5_text(&e)))?;
     attr.write_scalar(&v)
-        .map_err(|e| format!("writing attribute {name:?}: {}", one_line(&e.to_string())))
+        .map_err(|e| format!("writing attribute {name:?}: {}", h5_text(&e)))
 }
 
 // ---------------------------------------------------------------------------------------------

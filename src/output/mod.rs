@@ -1,11 +1,15 @@
 //! Results on disk: one HDF5 file with an XDMF sidecar for ParaView, and a JSON report.
 //!
 //! Owns the [`OutputData`] description (mesh + named node/cell fields + string attributes, and
-//! the [`Step`]s of a load path) that the pipeline fills, and the writers. Files are written
-//! under a temporary name and renamed only when everything succeeded, so a failed run leaves
-//! no result file behind.
+//! the [`Step`]s of a load path) that the pipeline fills, and the writers. A result set is
+//! written under temporary names ([`stage`]: `<name>.tmp`, tracked by [`tmpfiles`] for
+//! signals), read back and completed there, and renamed into place only when all of it
+//! succeeded ([`Staged::commit`]); a rename that fails takes back the ones before it, so a
+//! failed run leaves neither a result file nor a temporary one behind.
 
+pub mod guard;
 pub mod hdf5;
+pub mod tmpfiles;
 pub mod xdmf;
 
 /// Where a field lives.
@@ -132,10 +136,15 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);
-    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    tmpfiles::track(&tmp);
+    let written = std::fs::write(&tmp, bytes).and_then(|()| {
+        let _held = tmpfiles::hold();
+        std::fs::rename(&tmp, path)
+    });
     if written.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    tmpfiles::untrack(&tmp);
     written.map_err(io)
 }
 
@@ -150,11 +159,87 @@ fn tmp(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
+/// A result set under its temporary names, until [`Staged::commit`] renames it into place;
+/// dropped uncommitted, its temporary files are removed (rank 0).
+pub struct Staged {
+    /// Final names: the HDF5 file, then the XDMF and JSON sidecars where written.
+    targets: Vec<PathBuf>,
+    /// `<target>.tmp`, in the same order.
+    temps: Vec<PathBuf>,
+    /// Where the JSON report is in `targets`, if written.
+    json: Option<usize>,
+    root: bool,
+    committed: bool,
+}
+
+impl Staged {
+    /// The HDF5 file under its temporary name (to read back before the commit).
+    pub fn h5_temp(&self) -> &Path {
+        &self.temps[0]
+    }
+
+    /// Replaces the staged JSON report (rank 0): the report once the phases it times are
+    /// over. Nothing to do when the set has none.
+    pub fn rewrite_report<C: Comm>(&self, comm: &C, report: &serde_json::Value) -> Result<()> {
+        comm.agree(match self.json {
+            Some(i) if self.root => write_json(&self.temps[i], &self.targets[i], report),
+            _ => Ok(()),
+        })
+    }
+
+    /// Renames every file of the set into place (rank 0, agreed); if one rename fails, the
+    /// files of the set already renamed are removed too: no part of the set remains. Returns
+    /// the final paths.
+    pub fn commit<C: Comm>(mut self, comm: &C) -> Result<Vec<PathBuf>> {
+        let renamed = comm.agree(if self.root { rename_all(&self.temps, &self.targets) } else { Ok(()) });
+        self.committed = renamed.is_ok();
+        renamed.map(|()| self.targets.clone())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if self.committed {
+            return;
+        }
+        for t in &self.temps {
+            if self.root {
+                let _ = std::fs::remove_file(t);
+            }
+            tmpfiles::untrack(t);
+        }
+    }
+}
+
+/// Renames each of `temps` to its `targets`, under [`tmpfiles::hold`]; on a failure removes
+/// the targets renamed so far and the temporary files left.
+fn rename_all(temps: &[PathBuf], targets: &[PathBuf]) -> Result<()> {
+    let _held = tmpfiles::hold();
+    for (i, (t, p)) in temps.iter().zip(targets).enumerate() {
+        if let Err(e) = std::fs::rename(t, p) {
+            for done in &targets[..i] {
+                let _ = std::fs::remove_file(done);
+            }
+            for left in &temps[i..] {
+                let _ = std::fs::remove_file(left);
+            }
+            return Err(Error::io(p.display().to_string(), e));
+        }
+    }
+    Ok(())
+}
+
 /// Writes the HDF5 file (all ranks together, [`hdf5::write_collective`]), the XDMF sidecar (if
-/// `xdmf`) and the JSON report (if given; both by rank 0), each first under `<name>.tmp`; only
-/// when all succeeded on every rank are they renamed to their final names. On failure the
-/// temporary files are removed and every rank returns the error. Returns the final paths.
+/// `xdmf`) and the JSON report (if given; both by rank 0), each under `<name>.tmp`, and
+/// renames them to their final names when all succeeded on every rank ([`stage`], then
+/// [`Staged::commit`]). On failure no file of the set remains and every rank returns the
+/// error. Returns the final paths.
 pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<Vec<PathBuf>> {
+    stage(comm, h5, data, xdmf, report)?.commit(comm)
+}
+
+/// The writing half of [`write_all`]: the set under its temporary names, nothing renamed.
+pub fn stage<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<Staged> {
     let dir = comm.agree(match h5.parent().filter(|d| !d.as_os_str().is_empty()) {
         Some(dir) if comm.is_root() => std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display().to_string(), e)),
         _ => Ok(()),
@@ -164,20 +249,18 @@ pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, re
     if xdmf {
         targets.push(sibling(h5, "xdmf"));
     }
-    if report.is_some() {
+    let json = report.map(|_| {
         targets.push(sibling(h5, "json"));
-    }
-    let temps: Vec<PathBuf> = targets.iter().map(|p| tmp(p)).collect();
-    let written = comm.agree(hdf5::write_collective(comm, &temps[0], data));
-    let result = written.and_then(|()| {
-        comm.agree(if comm.is_root() { finish(h5, data, xdmf, report, &targets, &temps) } else { Ok(()) })
+        targets.len() - 1
     });
-    if result.is_err() && comm.is_root() {
-        for t in &temps {
-            let _ = std::fs::remove_file(t);
-        }
+    let temps: Vec<PathBuf> = targets.iter().map(|p| tmp(p)).collect();
+    for t in &temps {
+        tmpfiles::track(t);
     }
-    result.map(|_| targets)
+    let staged = Staged { targets, temps, json, root: comm.is_root(), committed: false };
+    comm.agree(hdf5::write_collective(comm, staged.h5_temp(), data))?;
+    comm.agree(if comm.is_root() { write_sidecars(&staged, h5, data, xdmf, report) } else { Ok(()) })?;
+    Ok(staged)
 }
 
 /// Replaces the JSON report beside `h5` (rank 0; written to a temporary file, then renamed):
@@ -185,29 +268,30 @@ pub fn write_all<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, re
 pub fn rewrite_report<C: Comm>(comm: &C, h5: &Path, report: &serde_json::Value) -> Result<()> {
     comm.agree(if comm.is_root() {
         let (path, temp) = (sibling(h5, "json"), tmp(&sibling(h5, "json")));
-        serde_json::to_string_pretty(report)
-            .map_err(|e| Error::output(path.display().to_string(), e.to_string()))
-            .and_then(|text| std::fs::write(&temp, text + "\n").map_err(|e| Error::io(temp.display().to_string(), e)))
-            .and_then(|()| std::fs::rename(&temp, &path).map_err(|e| Error::io(path.display().to_string(), e)))
+        tmpfiles::track(&temp);
+        let r = write_json(&temp, &path, report).and_then(|()| rename_all(std::slice::from_ref(&temp), std::slice::from_ref(&path)));
+        let _ = std::fs::remove_file(&temp);
+        tmpfiles::untrack(&temp);
+        r
     } else {
         Ok(())
     })
 }
 
-/// Rank 0's part of [`write_all`]: the sidecars and the renames.
-fn finish(h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>, targets: &[PathBuf], temps: &[PathBuf]) -> Result<()> {
-    let mut i = 1;
+/// The JSON text of `report` into `temp` (`shown` names the result in messages).
+fn write_json(temp: &Path, shown: &Path, report: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(report).map_err(|e| Error::output(shown.display().to_string(), e.to_string()))?;
+    std::fs::write(temp, text + "\n").map_err(|e| Error::io(temp.display().to_string(), e))
+}
+
+/// Rank 0's part of [`stage`]: the sidecars under their temporary names.
+fn write_sidecars(staged: &Staged, h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<()> {
     if xdmf {
         let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        xdmf::write(&temps[i], &name, data)?;
-        i += 1;
+        xdmf::write(&staged.temps[1], &name, data)?;
     }
-    if let Some(r) = report {
-        let text = serde_json::to_string_pretty(r).map_err(|e| Error::output(targets[i].display().to_string(), e.to_string()))?;
-        std::fs::write(&temps[i], text + "\n").map_err(|e| Error::io(temps[i].display().to_string(), e))?;
-    }
-    for (t, p) in temps.iter().zip(targets) {
-        std::fs::rename(t, p).map_err(|e| Error::io(p.display().to_string(), e))?;
+    if let (Some(r), Some(i)) = (report, staged.json) {
+        write_json(&staged.temps[i], &staged.targets[i], r)?;
     }
     Ok(())
 }

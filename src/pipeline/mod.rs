@@ -100,6 +100,14 @@ fn injected_fault<C: Comm>(comm: &C, phase: &str) -> Option<Error> {
         .then(|| Error::numerical("injected fault", format!("phase {phase} on rank {}", comm.rank())))
 }
 
+/// `TRESCA_FETI_PAUSE=<phase>` sleeps 60 s at a point of that phase (`output`: the result
+/// set written under its temporary names, not yet renamed), so a test can signal the run there.
+fn pause_for_tests(phase: &str) {
+    if std::env::var("TRESCA_FETI_PAUSE").is_ok_and(|p| p == phase) {
+        std::thread::sleep(std::time::Duration::from_secs(60));
+    }
+}
+
 /// Figures of one body's linear solve (TFETI: summed over its subdomains).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BodyStats {
@@ -466,11 +474,14 @@ pub struct ContactOutcome {
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
+    let out_key = if out.is_some() { "--out" } else { "output.path" };
     let ls = t.phase(comm, "scene", || {
         let mut ls = crate::scene::load(scene_path, overrides)?;
         if let Some(o) = out {
             ls.scene.output.path = Some(o);
         }
+        // no result may overwrite an input or another result: refused before any work
+        output::guard::check(&ls, out_key)?;
         Ok(ls)
     })?;
     let mut model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|m| m.check_held().map(|()| m)))?;
@@ -526,9 +537,14 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     comm.broadcast_bytes(0, &mut text);
     let history_text = String::from_utf8_lossy(&text).into_owned();
     let data = output_data(comm, &ls, &model, &sol, outcome.as_ref(), &before_output, &report_text, &history_text);
-    let files = t.phase(comm, "output", || output::write_all(comm, &h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&json)))?;
+    // the set stays under temporary names until it is complete: read back, report rewritten
+    let staged = t.phase(comm, "output", || {
+        let staged = output::stage(comm, &h5, &data, ls.scene.output.xdmf, ls.scene.output.report.then_some(&json))?;
+        pause_for_tests("output");
+        Ok(staged)
+    })?;
     if ls.scene.output.verify {
-        let checked = t.phase(comm, "verify", || output::hdf5::verify(&h5, &data))?;
+        let checked = t.phase(comm, "verify", || output::hdf5::verify(staged.h5_temp(), &data))?;
         let mut total = [checked as u64];
         comm.sum_u64(&mut total);
         report.output_verified_values = Some(total[0]);
@@ -537,8 +553,9 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     if ls.scene.output.report {
         // the sidecar written with the file lacked the output phase's own time
         let json = comm.agree(serde_json::to_value(&report).map_err(|e| Error::output(h5.display().to_string(), format!("report: {e}"))))?;
-        output::rewrite_report(comm, &h5, &json)?;
+        staged.rewrite_report(comm, &json)?;
     }
+    let files = staged.commit(comm)?;
     Ok(Summary { report, files, solution: sol })
 }
 

@@ -1,0 +1,237 @@
+//! Result paths that must not cost the user data or hang the run: a result naming an input or
+//! another result is refused before any work; a result path that is a directory or FIFO is
+//! refused; a full disk under `mpirun -n 2` ends every rank with ENOSPC's text; a result set
+//! appears whole or not at all; SIGTERM in the output phase leaves no `*.tmp` behind.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{mpirun_cmd, root, tmpdir, BIN};
+
+const SEED: &str = include_str!("../run/seed.toml");
+
+/// Runs `cmd` in `dir` for at most `limit` (killed past it; `None` then).
+fn run_within(mut cmd: Command, dir: &Path, limit: Duration) -> Option<Output> {
+    let mut child = cmd.current_dir(dir).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    let t0 = Instant::now();
+    while t0.elapsed() < limit {
+        if child.try_wait().unwrap().is_some() {
+            return Some(child.wait_with_output().unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// `tresca-feti solve ARGS` in `dir` (60 s at most).
+fn solve_in(dir: &Path, args: &[&str]) -> Output {
+    let mut c = Command::new(BIN);
+    c.arg("solve").args(args);
+    run_within(c, dir, Duration::from_secs(60)).expect("solve ran past 60 s")
+}
+
+/// The lines of stderr that are ours (`error: …`).
+fn errors(o: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.starts_with("error:")).map(String::from).collect()
+}
+
+/// Failed with exit code 1, no panic, exactly one line on stderr, containing every `expect`.
+fn assert_refused(o: &Output, expect: &[&str]) {
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "stdout {} stderr {stderr}", String::from_utf8_lossy(&o.stdout));
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "not one line: {stderr}");
+    for e in expect {
+        assert!(lines[0].contains(e), "expected `{e}` in: {}", lines[0]);
+    }
+}
+
+/// The files in `dir` (names), sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).map(|d| d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect()).unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// A scratch folder holding the seed scene (`scene.toml`), the Gmsh scene (`gmsh.toml`) and
+/// its mesh (`mesh/two_blocks.msh`).
+fn inputs(name: &str) -> PathBuf {
+    let dir = tmpdir(name);
+    std::fs::write(dir.join("scene.toml"), SEED).unwrap();
+    std::fs::create_dir_all(dir.join("mesh")).unwrap();
+    std::fs::copy(root().join("mesh/two_blocks.msh"), dir.join("mesh/two_blocks.msh")).unwrap();
+    let gmsh = std::fs::read_to_string(root().join("run/gmsh_blocks.toml")).unwrap();
+    assert!(gmsh.contains("\"../mesh/two_blocks.msh\""));
+    std::fs::write(dir.join("gmsh.toml"), gmsh.replace("\"../mesh/two_blocks.msh\"", "\"mesh/two_blocks.msh\"")).unwrap();
+    dir
+}
+
+/// Defect 1: `--out` (or an export, or a sidecar) naming the scene, a mesh it reads (also
+/// through another spelling or a hard link) or another result is refused before any work,
+/// naming both paths; the inputs are unchanged and nothing is written.
+#[test]
+fn a_result_path_naming_an_input_or_another_result_is_refused() {
+    let dir = inputs("inputs");
+    let scene = std::fs::read(dir.join("scene.toml")).unwrap();
+    let mesh = std::fs::read(dir.join("mesh/two_blocks.msh")).unwrap();
+    std::fs::hard_link(dir.join("scene.toml"), dir.join("link.h5")).unwrap();
+    std::fs::write(dir.join("s.json"), SEED).unwrap();
+    let n3 = ["--set", "mesh.n=3", "-q"];
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["scene.toml", "--out", "scene.toml"], &["--out", "the scene file", "scene.toml"]),
+        (&["scene.toml", "--out", "./mesh/../scene.toml"], &["--out", "./mesh/../scene.toml", "the scene file scene.toml"]),
+        (&["scene.toml", "--out", "link.h5"], &["--out", "link.h5", "the scene file scene.toml"]),
+        (&["gmsh.toml", "--out", "mesh/two_blocks.msh"], &["--out", "mesh/two_blocks.msh", "the mesh of body[0]"]),
+        (&["s.json", "--out", "s.h5", "--set", "output.xdmf=false"], &["--out", "its JSON report s.json", "the scene file s.json"]),
+        (&["scene.toml", "--out", "r.h5", "--export-fclib", "./r.h5"], &["output.export_fclib", "./r.h5", "the result file r.h5"]),
+        (&["scene.toml", "--out", "r.h5", "--export-fclib", "r.xdmf"], &["output.export_fclib", "r.xdmf", "its XDMF sidecar r.xdmf"]),
+        (&["scene.toml", "--out", "r.h5", "--set", "output.export_dual=\"scene.toml\""], &["output.export_dual", "the scene file scene.toml"]),
+        (&["scene.toml", "--out", "r.xdmf"], &["--out", "its XDMF sidecar r.xdmf is also the result file r.xdmf"]),
+    ];
+    for (args, expect) in cases {
+        let mut a = args.to_vec();
+        a.extend_from_slice(&n3);
+        let o = solve_in(&dir, &a);
+        assert_refused(&o, expect);
+        assert!(errors(&o)[0].contains("choose another path") || errors(&o)[0].contains("its own path"), "{:?}", errors(&o));
+    }
+    assert_eq!(std::fs::read(dir.join("scene.toml")).unwrap(), scene, "the scene was overwritten");
+    assert_eq!(std::fs::read(dir.join("mesh/two_blocks.msh")).unwrap(), mesh, "the mesh was overwritten");
+    assert_eq!(names(&dir), ["gmsh.toml", "link.h5", "mesh", "s.json", "scene.toml"]);
+    assert_eq!(names(&dir.join("mesh")), ["two_blocks.msh"]);
+}
+
+/// Defect 3 (paths): a result path that exists and is not a regular file (a FIFO, a
+/// directory, also as a sidecar's path) is refused before any work, naming it; it stays as
+/// it was and no result file appears.
+#[test]
+fn a_result_path_that_is_not_a_regular_file_is_refused() {
+    let dir = inputs("special");
+    assert!(Command::new("mkfifo").arg(dir.join("fifo.h5")).status().unwrap().success());
+    std::fs::create_dir(dir.join("dir.h5")).unwrap();
+    std::fs::create_dir(dir.join("r.json")).unwrap();
+    for (out, expect) in [("fifo.h5", "a FIFO"), ("dir.h5", "a directory"), ("r.h5", "a directory")] {
+        let o = solve_in(&dir, &["scene.toml", "--out", out, "--set", "mesh.n=3", "-q"]);
+        let named = if out == "r.h5" { "its JSON report r.json" } else { out };
+        assert_refused(&o, &["--out", named, expect, "regular file"]);
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(dir.join("fifo.h5")).unwrap().file_type().is_fifo());
+    assert_eq!(names(&dir), ["dir.h5", "fifo.h5", "gmsh.toml", "mesh", "r.json", "scene.toml"]);
+    assert!(names(&dir.join("dir.h5")).is_empty() && names(&dir.join("r.json")).is_empty());
+}
+
+/// Defect 3 (the set): a result set whose JSON sidecar cannot be renamed into place (its path
+/// is a directory) leaves nothing: neither the HDF5 file and XDMF renamed before it, nor a
+/// temporary file. Through the library, which does not run the path check.
+#[test]
+fn a_result_set_is_written_whole_or_not_at_all() {
+    let dir = tmpdir("set");
+    let h5 = dir.join("r.h5");
+    std::fs::create_dir(dir.join("r.json")).unwrap();
+    let report = serde_json::json!({ "x": 1 });
+    let data = tresca_feti::output::OutputData::default();
+    let e = tresca_feti::output::write_all(&tresca_feti::comm::SerialComm, &h5, &data, true, Some(&report)).unwrap_err().to_string();
+    assert!(e.contains("r.json"), "{e}");
+    assert_eq!(names(&dir), ["r.json"], "a partial set remains");
+}
+
+/// A 64 KiB tmpfs mounted at a folder, unmounted when dropped (a failing test too).
+struct TinyDisk(PathBuf);
+
+impl Drop for TinyDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// Mounts a 64 KiB tmpfs at `dir` (root only); None (with a note) where that fails.
+fn tiny_disk(dir: &Path) -> Option<TinyDisk> {
+    let ok = Command::new("mount").args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"]).arg(dir).status().is_ok_and(|s| s.success());
+    if !ok {
+        eprintln!("note: cannot mount a tmpfs at {} (not root?): the full-disk test is skipped", dir.display());
+    }
+    ok.then(|| TinyDisk(dir.to_path_buf()))
+}
+
+/// Defect 2: a full disk under `mpirun -n 2` (and on one rank) ends every rank within 60 s
+/// (it hung until killed), exit ≠ 0, one error line with the OS's ENOSPC text, and neither a
+/// temporary nor a result file remains — both when the room is checked before writing and when
+/// the disk fills in the middle of the collective write (`TRESCA_FETI_SPACE_CHECK=off`).
+#[test]
+fn a_full_disk_ends_every_rank_with_no_space_left() {
+    let dir = tmpdir("full");
+    let disk = dir.join("disk");
+    std::fs::create_dir_all(&disk).unwrap();
+    let Some(_mounted) = tiny_disk(&disk) else { return };
+    let scene = root().join("run/seed.toml");
+    let out = disk.join("r.h5");
+    let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=8", "--out", out.to_str().unwrap(), "-q"];
+    let enospc = std::io::Error::from_raw_os_error(28).to_string();
+    let enospc = enospc.split(" (os error").next().unwrap().to_string();
+    for check in ["on", "off"] {
+        for ranks in [2, 1] {
+            let mut c = if ranks == 1 {
+                let mut c = Command::new(BIN);
+                c.args(args);
+                c
+            } else {
+                mpirun_cmd(ranks, &args)
+            };
+            c.env("TRESCA_FETI_SPACE_CHECK", check);
+            let t0 = Instant::now();
+            let o = run_within(c, &dir, Duration::from_secs(60));
+            let took = t0.elapsed().as_secs_f64();
+            let Some(o) = o else { panic!("{ranks} rank(s), space check {check}: still running after 60 s (a hang)") };
+            let errs = errors(&o);
+            assert!(!o.status.success(), "{ranks} rank(s), check {check}: succeeded");
+            assert_eq!(errs.len(), 1, "{ranks} rank(s), check {check}: {}", String::from_utf8_lossy(&o.stderr));
+            assert!(errs[0].contains(&enospc) && errs[0].contains("r.h5"), "{ranks} rank(s), check {check}: {}", errs[0]);
+            assert!(names(&disk).is_empty(), "{ranks} rank(s), check {check}: left {:?}", names(&disk));
+            eprintln!("{ranks} rank(s), space check {check}: failed cleanly in {took:.1} s: {}", errs[0]);
+        }
+    }
+}
+
+/// Defect 4: SIGTERM while the run is in the output phase (held there by
+/// `TRESCA_FETI_PAUSE=output`, the set under its temporary names) removes the temporary
+/// files: exit ≠ 0, one line, no `*.tmp` and no result file.
+#[test]
+fn sigterm_in_the_output_phase_leaves_no_temporary_file() {
+    let dir = tmpdir("signal");
+    let scene = root().join("run/seed.toml");
+    let out = dir.join("o").join("r.h5");
+    let mut child = Command::new(BIN)
+        .args(["solve", scene.to_str().unwrap(), "--set", "mesh.n=3", "--out", out.to_str().unwrap(), "-q"])
+        .env("TRESCA_FETI_PAUSE", "output")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    let tmp = dir.join("o").join("r.h5.tmp");
+    while !tmp.exists() && t0.elapsed() < Duration::from_secs(50) {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(tmp.exists(), "the run never wrote {}", tmp.display());
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while child.try_wait().unwrap().is_none() {
+        assert!(Instant::now() < deadline, "still running 20 s after SIGTERM");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert!(!o.status.success());
+    let left = names(&dir.join("o"));
+    assert!(left.is_empty(), "left behind: {left:?}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("SIGTERM"), "{stderr}");
+}
