@@ -56,6 +56,24 @@ impl SymCsc {
         y
     }
 
+    /// y = |A| |x| (entrywise absolute values): the size of the terms whose sums A x forms.
+    pub fn abs_mul(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.n];
+        for j in 0..self.n {
+            let xj = x[j].abs();
+            let mut acc = 0.0;
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let (i, v) = (self.row_idx[p], self.values[p].abs());
+                y[i] += v * xj;
+                if i != j {
+                    acc += v * x[i].abs();
+                }
+            }
+            y[j] += acc;
+        }
+        y
+    }
+
     /// The principal submatrix on the unknowns d with `at[d] != usize::MAX`, renumbered to
     /// `at[d]` (which must grow with d).
     pub fn principal(&self, at: &[usize]) -> SymCsc {

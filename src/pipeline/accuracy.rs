@@ -42,9 +42,7 @@ impl Equilibrium {
     /// not checked).
     pub fn of(k: &SymCsc, x: &[f64], rhs: &[f64], held: &[usize]) -> Self {
         let mut kx = k.mul(x);
-        let mut abs = k.clone();
-        abs.values.iter_mut().for_each(|v| *v = v.abs());
-        let mut scale = abs.mul(&x.iter().map(|v| v.abs()).collect::<Vec<_>>());
+        let mut scale = k.abs_mul(x);
         for &d in held {
             kx[d] = rhs[d];
             scale[d] = 0.0;
@@ -131,7 +129,7 @@ impl Verdict {
     /// 1000), not below [`EPS_FLOOR`]; None when ε is already there or the miss is not finite.
     pub fn tighter_eps(&self) -> Option<f64> {
         let miss = self.excess.max(self.kkt / kkt_bound(self.eps));
-        if !miss.is_finite() || self.eps <= EPS_FLOOR {
+        if !miss.is_finite() || self.excess.is_nan() || self.kkt.is_nan() || self.eps <= EPS_FLOOR {
             return None;
         }
         Some((self.eps / (10.0 * miss).clamp(10.0, 1000.0)).max(EPS_FLOOR))
