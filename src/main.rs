@@ -34,7 +34,8 @@ enum Cmd {
         /// Also write the solved Coulomb problem in the FCLIB global format (HDF5) to this path
         /// (the scene key `output.export_fclib`; monolithic dual, isotropic Coulomb).
         #[arg(long = "export-fclib", value_name = "PATH")]
-        export_fclib: Option<PathBuf>,        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
+        export_fclib: Option<PathBuf>,
+        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
         /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
         #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
         max_memory: Option<u64>,
@@ -191,7 +192,8 @@ enum Cmd {
         /// Price the automatic decomposition for a run on this many ranks (default: the ranks
         /// `check` runs on).
         #[arg(long)]
-        ranks: Option<usize>,        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
+        ranks: Option<usize>,
+        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
         /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
         #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
         max_memory: Option<u64>,

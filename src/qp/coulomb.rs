@@ -96,10 +96,10 @@ pub fn solve<S: Space>(
         p.common.sigma.get_or_insert(sol.info.sigma_est);
         let (old, new) = (normals(&x), normals(&sol.lambda));
         let diff: Vec<f64> = new.iter().zip(&old).map(|(a, b)| a - b).collect();
-        // relative to the larger of the two: λν falling to 0 (every pair opening) is a change of
-        // 1, not an overflow; both 0 is no change
-        let scale = space.norm(&new).max(space.norm(&old));
-        change = if scale > 0.0 { space.norm(&diff) / scale } else { 0.0 };
+        // relative to the new λν; λν falling to 0 (every pair opening) is a change of 1, not an
+        // overflow; both 0 is no change
+        let (dn, nn) = (space.norm(&diff), space.norm(&new));
+        change = if nn > 0.0 { dn / nn } else if dn > 0.0 { 1.0 } else { 0.0 };
         if !change.is_finite() {
             return Err(QpError::NotFinite { what: "the Coulomb fixed point's normal multipliers", outer: it });
         }
