@@ -5,39 +5,11 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-use common::{fields, mpirun, mpirun_cmd, root, tmpdir, BIN};
+use common::{assert_clean_failure, fields, mpirun, mpirun_cmd, root, run, tmpdir};
 use tresca_feti::output::{OutputData, Values};
 
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
-}
-
 const SEED: &str = include_str!("../run/seed.toml");
-
-/// Writes `scene` into a fresh directory, solves it there and checks the failure is clean.
-fn assert_clean_failure(name: &str, scene: &str, extra: &[&str], expect: &[&str]) {
-    let dir = tmpdir(name);
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, scene).unwrap();
-    let out = dir.join("out").join("result.h5");
-    let mut args = vec!["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    let o = run(&args);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{name}: succeeded; stdout {}", String::from_utf8_lossy(&o.stdout));
-    assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
-    assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{name}: not one line: {stderr}");
-    assert!(lines[0].starts_with("error: "), "{name}: {stderr}");
-    for e in expect {
-        assert!(lines[0].contains(e), "{name}: expected `{e}` in: {}", lines[0]);
-    }
-    let left: Vec<_> = std::fs::read_dir(dir.join("out")).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
-    assert!(left.is_empty(), "{name}: files left behind: {left:?}");
-}
 
 fn seed_with(from: &str, to: &str) -> String {
     assert!(SEED.contains(from), "seed.toml has no `{from}`");

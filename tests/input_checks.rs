@@ -6,42 +6,13 @@
 
 mod common;
 
-use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use common::{root, tmpdir, BIN};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
-}
+use common::{assert_clean_failure, root, run, tmpdir};
 
 const SEED: &str = include_str!("../run/seed.toml");
 const FLOATING: &str = include_str!("../run/validation/floating_block.toml");
 const GMSH: &str = include_str!("../run/gmsh_blocks.toml");
-
-/// Writes `scene` into a fresh directory, solves it there and checks the failure is clean:
-/// exit code 1, one line on stderr starting `error: ` holding every `expect`, no result file.
-fn assert_clean_failure(name: &str, scene: &str, extra: &[&str], expect: &[&str]) {
-    let dir = tmpdir(name);
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, scene).unwrap();
-    let out = dir.join("out").join("result.h5");
-    let mut args = vec!["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    let o = run(&args);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{name}: succeeded; stdout {}", String::from_utf8_lossy(&o.stdout));
-    assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
-    assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{name}: not one line: {stderr}");
-    assert!(lines[0].starts_with("error: "), "{name}: {stderr}");
-    for e in expect {
-        assert!(lines[0].contains(e), "{name}: expected `{e}` in: {}", lines[0]);
-    }
-    let left: Vec<_> = std::fs::read_dir(dir.join("out")).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
-    assert!(left.is_empty(), "{name}: files left behind: {left:?}");
-}
 
 /// `tresca-feti check` of `scene` (written to a fresh directory): its stdout, or the stderr
 /// as the panic message.
