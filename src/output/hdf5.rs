@@ -25,7 +25,7 @@
 //! [`write`] writes the file in place; [`super::write_all`] gives it a temporary name and
 //! renames it only when every output file succeeded.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use ::hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
 use ::hdf5::types::{IntSize, TypeDescriptor, VarLenAscii, VarLenUnicode};
@@ -63,7 +63,8 @@ pub fn write_collective<C: Comm>(comm: &C, path: &Path, data: &OutputData) -> Re
     let shown = path.display().to_string();
     comm.agree(validate(data).map_err(|msg| Error::output(&shown, msg)))?;
     comm.agree(if comm.is_root() { check_room(path, data) } else { Ok(()) })?;
-    let result = write_file(comm, path, data);
+    let mut reserve = comm.agree(if comm.is_root() { Reserve::hold(path, metadata_bytes(data)) } else { Ok(Reserve(None)) })?;
+    let result = write_file(comm, path, data, &mut reserve);
     if result.is_err() && comm.is_root() {
         let _ = std::fs::remove_file(path);
     }
@@ -92,14 +93,60 @@ fn check_room(path: &Path, data: &OutputData) -> Result<()> {
     }
 }
 
-/// An upper bound of the file's size: every dataset's values (whole), the attributes, and
-/// room for HDF5's own structures (object headers, heaps, B-trees).
+/// An upper bound of the file's size: every dataset's values (whole) and its metadata
+/// ([`metadata_bytes`]).
 fn estimated_bytes(data: &OutputData) -> u64 {
     let fields = |fs: &[Field]| -> u64 { fs.iter().map(|f| (mesh_len(data, f.center) * f.ncomp * 8) as u64).sum() };
     let mesh = (data.nnodes() * 3 * 8 + data.ncells() * 8 * 8) as u64;
+    mesh + fields(&data.fields) + data.steps.iter().map(|s| fields(&s.fields)).sum::<u64>() + metadata_bytes(data)
+}
+
+/// An upper bound of what HDF5 writes besides the datasets' values: the attributes and room
+/// for its own structures (object headers, heaps, B-trees).
+fn metadata_bytes(data: &OutputData) -> u64 {
     let attrs: u64 = data.attributes.iter().map(|(k, v)| (k.len() + v.len()) as u64).sum();
     let objects = 4 + data.fields.len() + data.attributes.len() + data.steps.iter().map(|s| 1 + s.fields.len()).sum::<usize>();
-    mesh + fields(&data.fields) + data.steps.iter().map(|s| fields(&s.fields)).sum::<u64>() + attrs + 4096 * objects as u64 + 65536
+    attrs + 4096 * objects as u64 + 65536
+}
+
+/// Room held on the file's file system for HDF5's metadata until the file closes (rank 0's
+/// `<file>.reserve`, allocated before the file is created): HDF5 writes most of its metadata
+/// while closing, and a disk full by then fails that write on some ranks only, which leaves
+/// the ranks apart inside H5Fclose (a hang). Given back just before the close.
+struct Reserve(Option<PathBuf>);
+
+impl Reserve {
+    /// Allocates `bytes` beside `path` (rank 0); fails with the OS's ENOSPC text when there
+    /// is no room even for that.
+    fn hold(path: &Path, bytes: u64) -> Result<Reserve> {
+        let mut name = path.as_os_str().to_owned();
+        name.push(".reserve");
+        let r = PathBuf::from(name);
+        super::tmpfiles::track(&r);
+        let reserve = Reserve(Some(r.clone()));
+        let io = |e: std::io::Error| Error::output(path.display().to_string(), format!("cannot hold {bytes} bytes for its metadata: {e}"));
+        let f = std::fs::File::create(&r).map_err(io)?;
+        use std::os::unix::io::AsRawFd;
+        // SAFETY: a valid open descriptor; posix_fallocate returns an error number, sets no errno
+        match unsafe { libc::posix_fallocate(f.as_raw_fd(), 0, bytes as libc::off_t) } {
+            0 => Ok(reserve),
+            e => Err(io(std::io::Error::from_raw_os_error(e))),
+        }
+    }
+
+    /// Gives the room back (removes the file); idempotent.
+    fn release(&mut self) {
+        if let Some(r) = self.0.take() {
+            let _ = std::fs::remove_file(&r);
+            super::tmpfiles::untrack(&r);
+        }
+    }
+}
+
+impl Drop for Reserve {
+    fn drop(&mut self) {
+        self.release();
+    }
 }
 
 /// Writes named f64 arrays (each with its shape) to a new serial HDF5 file, under
@@ -329,7 +376,7 @@ fn free_bytes(dir: &Path) -> Option<u64> {
 /// calls: each fallible step is agreed ([`Comm::agree`]) before the next one, so an error on
 /// one rank (MPI-IO's "No space left on device" in a collective write) stops every rank at
 /// the same point, and the file is closed (collectively) by all of them.
-fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
+fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData, reserve: &mut Reserve) -> Result<()> {
     let w = Writer { comm, path: tmp };
     let file = w.all(
         File::with_options()
@@ -351,10 +398,32 @@ fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData) -> Result<()> {
         // file is going anyway: emptied, it leaves room for that last small write.
         let _ = std::fs::OpenOptions::new().write(true).open(tmp).and_then(|f| f.set_len(0));
     }
+    // the room held for the metadata is given back before any rank's close writes it
+    reserve.release();
+    let _ = w.all(Ok(()));
     // Every child handle is dropped by now, so this really closes (and flushes) the file; after
     // an error it is closed all the same, by every rank.
     let closed = w.all(file.close().map_err(|e| ctx(format!("closing file{}", w.no_space(1)))(e)));
-    written.and(closed)
+    let whole = if written.is_ok() && closed.is_ok() { w.all(if comm.is_root() { whole_on_disk(tmp, data) } else { Ok(()) }) } else { Ok(()) };
+    written.and(closed).and(whole)
+}
+
+/// After a write that reported success: the file must hold at least its datasets' bytes. Open
+/// MPI's MPI-IO (ompio) prints "No space left on device" for a short collective write and
+/// still returns success, leaving holes; a file allocated short of its values on a file system
+/// with less room left than the shortfall is that (a compressing file system with room is not).
+fn whole_on_disk(path: &Path, data: &OutputData) -> Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let values = estimated_bytes(data) - metadata_bytes(data);
+    let allocated = std::fs::metadata(path).map(|m| m.blocks() * 512).unwrap_or(u64::MAX);
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    match free_bytes(dir) {
+        Some(free) if allocated < values && free < values - allocated => Err(Error::output(
+            path.display().to_string(),
+            format!("the file holds {allocated} of its {values} bytes of values ({})", std::io::Error::from_raw_os_error(libc::ENOSPC)),
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn write_contents<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) -> Result<()> {

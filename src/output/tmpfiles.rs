@@ -2,9 +2,9 @@
 //! SIGTERM. Owns the process-wide list of the temporary files that exist (writers [`track`]
 //! one before creating it and [`untrack`] it once renamed or removed) and the signal thread
 //! ([`remove_on_signal`]): signal-hook's handler only wakes that thread (async-signal-safe);
-//! the thread, an ordinary one, removes every tracked file, says so in one line (rank 0) and
-//! ends the process with 128 + the signal's number. Renames into place run under [`hold`], so
-//! a signal never interleaves with them.
+//! the thread, an ordinary one, removes every tracked file, says so in one line (rank 0, where
+//! there was one) and ends the process with 128 + the signal's number. Renames into place run
+//! under [`hold`], so a signal never interleaves with them.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
@@ -45,7 +45,8 @@ pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
             for f in files.iter() {
                 let _ = std::fs::remove_file(f);
             }
-            if loud {
+            // nothing removed: a rank that mpirun ends after another failed (its error is said)
+            if loud && !files.is_empty() {
                 let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
                 eprintln!("error: interrupted by {name}; removed {} temporary file(s)", files.len());
             }
