@@ -15,7 +15,8 @@ use crate::linalg::sparse::SymCsc;
 
 /// The largest relative residual of a piece's recovered equilibrium.
 pub const EQUILIBRIUM_BOUND: f64 = 1e-6;
-/// A backward error at most this is rounding, whatever the relative residual.
+/// A residual at most this times the problem's largest ‖ |K||x| + |rhs| ‖ is rounding, whatever
+/// the relative residual.
 pub const ROUNDING_BOUND: f64 = 1e-12;
 /// KKT residuals up to this multiple of ε pass (the stability suite's default factor).
 pub const KKT_FACTOR: f64 = 100.0;
