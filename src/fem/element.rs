@@ -36,9 +36,15 @@ pub fn hex_gradients(x: &HexCoords, xi: [f64; 3]) -> ([[f64; 3]; 8], f64) {
         let f = [1.0 + r[0] * xi[0], 1.0 + r[1] * xi[1], 1.0 + r[2] * xi[2]];
         dref[a] = [0.125 * r[0] * f[1] * f[2], 0.125 * f[0] * r[1] * f[2], 0.125 * f[0] * f[1] * r[2]];
     }
+    physical_gradients(x, &dref)
+}
+
+/// Physical shape-function gradients and det J of an isoparametric element with nodes `x`
+/// from the reference gradients `dref` (∂N_a/∂ξ) at one point: ∇N_a = J⁻¹ ∇_ξ N_a.
+pub fn physical_gradients<const N: usize>(x: &[[f64; 3]; N], dref: &[[f64; 3]; N]) -> ([[f64; 3]; N], f64) {
     // J[i][j] = ∂x_j/∂ξ_i
     let mut j = [[0.0; 3]; 3];
-    for a in 0..8 {
+    for a in 0..N {
         for i in 0..3 {
             for k in 0..3 {
                 j[i][k] += dref[a][i] * x[a][k];
@@ -67,8 +73,8 @@ pub fn hex_gradients(x: &HexCoords, xi: [f64; 3]) -> ([[f64; 3]; 8], f64) {
         ],
     ];
     // ∇N_a = J⁻¹ ∇_ξ N_a
-    let mut g = [[0.0; 3]; 8];
-    for a in 0..8 {
+    let mut g = [[0.0; 3]; N];
+    for a in 0..N {
         for i in 0..3 {
             g[a][i] = inv[i][0] * dref[a][0] + inv[i][1] * dref[a][1] + inv[i][2] * dref[a][2];
         }
@@ -106,36 +112,49 @@ pub fn hex8_stiffness(x: &HexCoords, m: Lame) -> HexMatrix {
     let mut k = [[0.0; 24]; 24];
     for xi in hex_gauss_points() {
         let (g, det) = hex_gradients(x, xi);
-        for a in 0..8 {
-            for b in 0..8 {
-                let dot = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
-                for i in 0..3 {
-                    for j in 0..3 {
-                        let mut v = m.lambda * g[a][i] * g[b][j] + m.mu * g[a][j] * g[b][i];
-                        if i == j {
-                            v += m.mu * dot;
-                        }
-                        k[3 * a + i][3 * b + j] += v * det;
+        add_stiffness(&g, det, m, |r, c, v| k[r][c] += v);
+    }
+    k
+}
+
+/// One quadrature point's part of an element stiffness: `add(3a + i, 3b + j, v)` for every node
+/// pair with v = w (λ ∂ᵢN_a ∂ⱼN_b + μ δᵢⱼ ∇N_a·∇N_b + μ ∂ⱼN_a ∂ᵢN_b), `g` the physical
+/// gradients there and `w` the weight times det J.
+pub fn add_stiffness(g: &[[f64; 3]], w: f64, m: Lame, mut add: impl FnMut(usize, usize, f64)) {
+    for a in 0..g.len() {
+        for b in 0..g.len() {
+            let dot = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let mut v = m.lambda * g[a][i] * g[b][j] + m.mu * g[a][j] * g[b][i];
+                    if i == j {
+                        v += m.mu * dot;
                     }
+                    add(3 * a + i, 3 * b + j, v * w);
                 }
             }
         }
     }
-    k
+}
+
+/// Small strain (Voigt, engineering shears) from the physical gradients `g` at a point and the
+/// nodal displacements `u`.
+pub fn strain(g: &[[f64; 3]], u: &[[f64; 3]]) -> [f64; 6] {
+    let mut du = [[0.0; 3]; 3]; // du[i][j] = ∂u_i/∂x_j
+    for (ga, ua) in g.iter().zip(u) {
+        for i in 0..3 {
+            for j in 0..3 {
+                du[i][j] += ua[i] * ga[j];
+            }
+        }
+    }
+    [du[0][0], du[1][1], du[2][2], du[0][1] + du[1][0], du[1][2] + du[2][1], du[2][0] + du[0][2]]
 }
 
 /// Small strain (Voigt, engineering shears) at reference point `xi` from nodal displacements.
 pub fn hex8_strain(x: &HexCoords, u: &[[f64; 3]; 8], xi: [f64; 3]) -> [f64; 6] {
     let (g, _) = hex_gradients(x, xi);
-    let mut du = [[0.0; 3]; 3]; // du[i][j] = ∂u_i/∂x_j
-    for a in 0..8 {
-        for i in 0..3 {
-            for j in 0..3 {
-                du[i][j] += u[a][i] * g[a][j];
-            }
-        }
-    }
-    [du[0][0], du[1][1], du[2][2], du[0][1] + du[1][0], du[1][2] + du[2][1], du[2][0] + du[0][2]]
+    strain(&g, u)
 }
 
 /// Stress at the element centre.
