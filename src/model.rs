@@ -397,12 +397,12 @@ impl Model {
     /// whole mesh and load vector must still be there (before TFETI releases them).
     pub fn check_held(&self) -> Result<()> {
         let Some(c) = self.pairs.as_ref().filter(|_| !self.floating.is_empty()) else { return Ok(()) };
+        let by_body = constraints_by_body(&self.mesh, &self.constraints);
         let free: Vec<FreeBody> = self
             .floating
             .iter()
             .map(|&b| {
-                let nodes = &self.mesh.bodies[b].nodes;
-                let rows = self.constraints.iter().filter(|x| nodes.contains(&x.0)).map(|&(v, k, _)| {
+                let rows = by_body[b].iter().map(|&(v, k, _)| {
                     let mut dir = [0.0; 3];
                     dir[k] = 1.0;
                     (v, dir)
