@@ -94,7 +94,7 @@ impl Model {
     /// [`LoadPath::forces`]).
     pub fn release_mesh(&mut self) {
         self.mesh.nodes = Vec::new();
-        self.mesh.hexes = Vec::new();
+        self.mesh.cells = Vec::new();
         self.loads = Vec::new();
     }
 }
@@ -141,7 +141,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
             (Some(bx), _) => {
-                let mut geom = boxgen::try_generate(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]))?;
+                let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), bx.cells.unwrap_or(scene.mesh.cells).kind())?;
                 if let Some(c) = &bx.cylinder {
                     // the curved side moves out by the bulge, the nodes between in proportion
                     let (lo, hi) = (bx.min[2], bx.max[2]);
@@ -191,13 +191,13 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         let src = face_index(&mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
         let inside = |p: [f64; 3]| (0..3).all(|d| p[d] >= f.min[d] && p[d] <= f.max[d]);
-        let quads: Vec<_> =
-            mesh.faces[src].quads.iter().filter(|q| q.nodes.iter().all(|&v| inside(mesh.nodes[v]))).cloned().collect();
-        if quads.is_empty() {
-            return Err(Error::scene(key("min"), format!("no quadrilateral of \"{}\" lies inside the given box", mesh.faces[src].name)));
+        let facets: Vec<_> =
+            mesh.faces[src].facets.iter().filter(|q| q.nodes().iter().all(|&v| inside(mesh.nodes[v]))).copied().collect();
+        if facets.is_empty() {
+            return Err(Error::scene(key("min"), format!("no facet of \"{}\" lies inside the given box", mesh.faces[src].name)));
         }
         faces.insert(full.clone(), mesh.faces.len());
-        mesh.faces.push(Face { name: full, body, quads });
+        mesh.faces.push(Face { name: full, body, facets });
     }
 
     let materials = scene.material_index();
@@ -365,7 +365,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         floating.push(b);
     }
-    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.hexes.len() };
+    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len() };
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, path, floating })
 }
 

@@ -51,6 +51,34 @@ pub struct MeshSettings {
     /// Nodes per edge of every box body that gives no `nodes` of its own (the paper's N).
     #[serde(default = "default_n")]
     pub n: usize,
+    /// The cells of every box body that names none of its own: `hex8` (default), `tet4`,
+    /// `tet10` (each hexahedron cut into six tetrahedra).
+    #[serde(default, skip_serializing_if = "BoxCells::is_hex8")]
+    pub cells: BoxCells,
+}
+
+/// The cells a box body is meshed with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoxCells {
+    #[default]
+    Hex8,
+    Tet4,
+    Tet10,
+}
+
+impl BoxCells {
+    pub fn is_hex8(&self) -> bool {
+        *self == BoxCells::Hex8
+    }
+
+    pub fn kind(self) -> crate::mesh::CellKind {
+        match self {
+            BoxCells::Hex8 => crate::mesh::CellKind::Hex8,
+            BoxCells::Tet4 => crate::mesh::CellKind::Tet4,
+            BoxCells::Tet10 => crate::mesh::CellKind::Tet10,
+        }
+    }
 }
 
 fn default_n() -> usize {
@@ -59,7 +87,7 @@ fn default_n() -> usize {
 
 impl Default for MeshSettings {
     fn default() -> Self {
-        MeshSettings { n: default_n() }
+        MeshSettings { n: default_n(), cells: BoxCells::Hex8 }
     }
 }
 
@@ -98,6 +126,9 @@ pub struct BoxDef {
     /// line, bulging outward); the nodes between follow linearly so the opposite side stays flat.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cylinder: Option<Cylinder>,
+    /// The cells; defaults to `mesh.cells`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cells: Option<BoxCells>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

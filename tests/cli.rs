@@ -420,7 +420,7 @@ fn on_1_2_3_ranks(name: &str, sets: &[&str]) -> Vec<(String, OutputData)> {
         assert_eq!(counters(stdout), counters(&runs[0].0));
         // the mesh is written as each rank's rows: the same file whatever the rank count
         assert_eq!(data.coordinates, runs[0].1.coordinates);
-        assert_eq!(data.hexahedra, runs[0].1.hexahedra);
+        assert_eq!(data.cells, runs[0].1.cells);
         for (a, b) in data.fields.iter().zip(&runs[0].1.fields).filter(|(a, _)| a.name != "rank") {
             assert_eq!(a.name, b.name);
             assert_eq!(a.values, b.values, "field {} differs between rank counts", a.name);

@@ -96,7 +96,7 @@ fn the_same_run_twice_gives_bitwise_identical_output() {
             assert_eq!(line(&out_a, prefix), line(&out_b, prefix), "{case}");
         }
         assert_eq!(a.coordinates, b.coordinates, "{case}");
-        assert_eq!(a.hexahedra, b.hexahedra, "{case}");
+        assert_eq!(a.cells, b.cells, "{case}");
         assert_eq!(a.fields.len(), b.fields.len(), "{case}");
         for (fa, fb) in a.fields.iter().zip(&b.fields) {
             assert_eq!(fa.name, fb.name, "{case}");

@@ -125,9 +125,9 @@ fn errors(mesh: &Mesh, u: &[[f64; 3]]) -> (f64, f64) {
     let gp = [-(0.6f64).sqrt(), 0.0, (0.6f64).sqrt()];
     let gw = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
     let (mut l2, mut h1) = (0.0, 0.0);
-    for e in 0..mesh.hexes.len() {
-        let x = mesh.hex_coords(e);
-        let ue = mesh.hexes[e].map(|v| u[v]);
+    for e in 0..mesh.cells.len() {
+        let x: [[f64; 3]; 8] = mesh.cell_coords(e).try_into().unwrap();
+        let ue: [[f64; 3]; 8] = std::array::from_fn(|a| u[mesh.cells[e].nodes()[a]]);
         for (a, &xa) in gp.iter().enumerate() {
             for (b, &xb) in gp.iter().enumerate() {
                 for (c, &xc) in gp.iter().enumerate() {

@@ -99,8 +99,8 @@ fn gmsh_seed_geometry_counts_and_matches_the_generated_box() {
     let ls = scene::load(&gscene, &["contact.enabled=false".into()]).unwrap();
     let gm = model::build(&ls).unwrap();
     assert_eq!(gm.mesh.nodes.len(), 2 * 7 * 4 * 4);
-    assert_eq!(gm.mesh.hexes.len(), 2 * 54);
-    let counts: Vec<(String, usize)> = gm.mesh.faces.iter().map(|f| (f.name.clone(), f.quads.len())).collect();
+    assert_eq!(gm.mesh.cells.len(), 2 * 54);
+    let counts: Vec<(String, usize)> = gm.mesh.faces.iter().map(|f| (f.name.clone(), f.facets.len())).collect();
     for (name, n) in [("upper.upper_top", 18), ("upper.upper_bottom", 18), ("upper.upper_left", 9), ("upper.upper_right", 9), ("lower.lower_top", 18), ("lower.lower_left", 9)] {
         assert!(counts.contains(&(name.to_string(), n)), "{name}: {counts:?}");
     }
@@ -141,7 +141,7 @@ fn written_file_reads_back_as_computed() {
     let m = model::build(&scene::load(&scene_path, &sets.map(String::from)).unwrap()).unwrap();
     let back = output::hdf5::read(&h5).unwrap();
     assert_eq!(back.coordinates, m.mesh.nodes);
-    assert_eq!(back.hexahedra, m.mesh.hexes);
+    assert_eq!(back.cells, m.mesh.cells);
     let field = |name: &str| back.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
     assert_eq!(field("displacement").values, Values::F64(s.solution.displacement.iter().flatten().copied().collect()));
     assert_eq!(field("von_mises").values, Values::F64(s.solution.von_mises.clone()));

@@ -23,7 +23,8 @@
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
-use crate::fem::element::quad4_nodal_areas;
+use crate::fem::cell::{facet_nodal_areas, facet_normal_area};
+use crate::mesh::FacetKind;
 use crate::mesh::{Face, Mesh};
 use crate::qp::coulomb::Coefficient;
 use crate::qp::sets::{Disc, Ellipse, TangentSet};
@@ -117,14 +118,19 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
     a.map(|v| v / n)
 }
 
-/// Area-weighted outward normals at the nodes of a face (sum of the quads' cross products).
+/// Area-weighted outward normals at the nodes of a face (sum of the facets' area vectors).
 fn node_normals(mesh: &Mesh, face: &Face) -> HashMap<usize, [f64; 3]> {
     let mut out: HashMap<usize, [f64; 3]> = HashMap::new();
-    for q in &face.quads {
-        let x = mesh.quad_coords(q);
-        // the cross product of the diagonals is twice the area vector of a (warped) quad
-        let n = cross(sub(x[2], x[0]), sub(x[3], x[1]));
-        for &v in &q.nodes {
+    for q in &face.facets {
+        let x = mesh.facet_coords(q);
+        // twice the area vector: for a (warped) quad4 the cross product of the diagonals, for a
+        // tri3 that of two edges
+        let n = match q.kind {
+            FacetKind::Quad4 => cross(sub(x[2], x[0]), sub(x[3], x[1])),
+            FacetKind::Tri3 => cross(sub(x[1], x[0]), sub(x[2], x[0])),
+            k => facet_normal_area(k, &x).map(|v| 2.0 * v),
+        };
+        for &v in q.nodes() {
             let e = out.entry(v).or_insert([0.0; 3]);
             for d in 0..3 {
                 e[d] += n[d];
@@ -137,9 +143,9 @@ fn node_normals(mesh: &Mesh, face: &Face) -> HashMap<usize, [f64; 3]> {
 /// Consistent nodal areas ∫ φᵢ dA of a face.
 fn node_areas(mesh: &Mesh, face: &Face) -> HashMap<usize, f64> {
     let mut out = HashMap::new();
-    for q in &face.quads {
-        let w = quad4_nodal_areas(&mesh.quad_coords(q));
-        for (a, &v) in q.nodes.iter().enumerate() {
+    for q in &face.facets {
+        let w = facet_nodal_areas(q.kind, &mesh.facet_coords(q));
+        for (a, &v) in q.nodes().iter().enumerate() {
             *out.entry(v).or_insert(0.0) += w[a];
         }
     }

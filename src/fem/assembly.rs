@@ -5,11 +5,11 @@
 
 use std::ops::Range;
 
-use super::element::{hex8_stiffness, hex_min_jacobian, quad4_nodal_areas};
+use super::cell::{cell_min_jacobian, cell_stiffness, facet_nodal_areas};
 use super::material::Lame;
 use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;
-use crate::mesh::{try_vec, Face, Mesh};
+use crate::mesh::{try_vec, Cell, Face, Mesh, MAX_CELL_DOFS};
 
 /// Marks a constrained DOF in [`DofMap::free`].
 pub const FIXED: usize = usize::MAX;
@@ -88,12 +88,12 @@ impl DofMap {
 
 /// Node adjacency of the elements `elems` in a local node numbering `local` (0..nn; CSR,
 /// sorted, without the node itself).
-pub fn node_graph(hexes: &[[usize; 8]], elems: impl Iterator<Item = usize>, nn: usize, local: impl Fn(usize) -> usize) -> (Vec<usize>, Vec<usize>) {
+pub fn node_graph(cells: &[Cell], elems: impl Iterator<Item = usize>, nn: usize, local: impl Fn(usize) -> usize) -> (Vec<usize>, Vec<usize>) {
     let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); nn];
     for e in elems {
-        let h = hexes[e].map(&local);
-        for &a in &h {
-            for &b in &h {
+        let h = cells[e].map(&local);
+        for &a in h.nodes() {
+            for &b in h.nodes() {
                 if a != b {
                     nbr[a].push(b as u32);
                 }
@@ -135,19 +135,19 @@ pub struct BodySystem {
 pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Result<BodySystem> {
     let b = &mesh.bodies[body];
     let start = b.nodes.start;
-    assemble_elements(&mesh.nodes, &mesh.hexes, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
+    assemble_elements(&mesh.nodes, &mesh.cells, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
         .map_err(|e| match e {
             AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)),
             AssemblyError::Memory(e) => e,
         })
 }
 
-/// Assembles K_ff and f_f over the elements `elems` of (`nodes`, `hexes`), whose nodes are
+/// Assembles K_ff and f_f over the elements `elems` of (`nodes`, `cells`), whose nodes are
 /// numbered `local(v)` in 0..nn; DOF `3·local(v) + c` of `dofs` (its `nodes` range is not
 /// used). On an inverted element returns the element and what is wrong with it.
 pub fn assemble_elements(
     nodes: &[[f64; 3]],
-    hexes: &[[usize; 8]],
+    cells: &[Cell],
     elems: impl Iterator<Item = usize> + Clone,
     nn: usize,
     local: impl Fn(usize) -> usize,
@@ -155,7 +155,7 @@ pub fn assemble_elements(
     dofs: &DofMap,
     loads: &[f64],
 ) -> std::result::Result<BodySystem, AssemblyError> {
-    let (xadj, adj) = node_graph(hexes, elems.clone(), nn, &local);
+    let (xadj, adj) = node_graph(cells, elems.clone(), nn, &local);
     // pattern: column of free DOF (v, c) holds free DOFs of v (components ≥ c) and of every
     // neighbour w > v, all three components — node-major numbering makes them sorted.
     // The largest arrays (row indices and values, nnz each) are reserved first: counted here.
@@ -199,23 +199,29 @@ pub fn assemble_elements(
     let mut k = SymCsc { n: dofs.nfree, col_ptr, row_idx, values };
     let mut f = dofs.restrict(loads);
     for e in elems {
-        let x = hexes[e].map(|v| nodes[v]);
-        if hex_min_jacobian(&x) <= 0.0 {
+        let cell = &cells[e];
+        let x = cell.coords(nodes);
+        if cell_min_jacobian(cell.kind, &x) <= 0.0 {
             return Err(AssemblyError::Element(e, "inverted or degenerate (non-positive Jacobian)"));
         }
-        let ke = hex8_stiffness(&x, lame);
-        let ld: [usize; 24] = std::array::from_fn(|r| 3 * local(hexes[e][r / 3]) + r % 3);
-        lift(&ke, &ld, dofs, &mut f);
-        for q in 0..24 {
+        let ke = cell_stiffness(cell.kind, &x, lame);
+        let (nd, ke) = ke.rows();
+        let mut ld = [0usize; MAX_CELL_DOFS];
+        for (r, d) in ld[..nd].iter_mut().enumerate() {
+            *d = 3 * local(cell.nodes()[r / 3]) + r % 3;
+        }
+        let ld = &ld[..nd];
+        lift(ke, ld, dofs, &mut f);
+        for q in 0..nd {
             let j = dofs.free[ld[q]];
             if j == FIXED {
                 continue;
             }
-            for p in 0..24 {
+            for p in 0..nd {
                 let i = dofs.free[ld[p]];
                 if i != FIXED && i >= j {
                     let pos = k.position(i, j).expect("assembly pattern covers every element entry");
-                    k.values[pos] += ke[p][q];
+                    k.values[pos] += ke[p * nd + q];
                 }
             }
         }
@@ -223,17 +229,18 @@ pub fn assemble_elements(
     Ok(BodySystem { k, f, graph: (xadj, adj) })
 }
 
-/// f_f −= K_fc u_c of one element (`ld`: its local DOFs).
-fn lift(ke: &[[f64; 24]; 24], ld: &[usize; 24], dofs: &DofMap, f: &mut [f64]) {
-    for q in 0..24 {
+/// f_f −= K_fc u_c of one element (`ke` its stiffness row by row, `ld` its local DOFs).
+fn lift(ke: &[f64], ld: &[usize], dofs: &DofMap, f: &mut [f64]) {
+    let nd = ld.len();
+    for q in 0..nd {
         let uc = dofs.prescribed[ld[q]];
         if dofs.free[ld[q]] != FIXED || uc == 0.0 {
             continue;
         }
-        for p in 0..24 {
+        for p in 0..nd {
             let i = dofs.free[ld[p]];
             if i != FIXED {
-                f[i] -= ke[p][q] * uc;
+                f[i] -= ke[p * nd + q] * uc;
             }
         }
     }
@@ -245,21 +252,22 @@ pub fn body_rhs(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f6
     let b = &mesh.bodies[body];
     let mut f = dofs.restrict(loads);
     for e in b.elems.clone() {
-        let ld: [usize; 24] = std::array::from_fn(|r| 3 * (mesh.hexes[e][r / 3] - b.nodes.start) + r % 3);
+        let cell = &mesh.cells[e];
+        let ld: Vec<usize> = (0..3 * cell.kind.len()).map(|r| 3 * (cell.nodes()[r / 3] - b.nodes.start) + r % 3).collect();
         if ld.iter().all(|&d| dofs.free[d] != FIXED || dofs.prescribed[d] == 0.0) {
             continue;
         }
-        lift(&hex8_stiffness(&mesh.hex_coords(e), lame), &ld, dofs, &mut f);
+        lift(cell_stiffness(cell.kind, &mesh.cell_coords(e), lame).rows().1, &ld, dofs, &mut f);
     }
     f
 }
 
-/// Consistent nodal forces of a uniform traction `p` on `face` (2×2 Gauss per quad), added into
+/// Consistent nodal forces of a uniform traction `p` on `face` (∫ N_a dA per facet), added into
 /// `loads` (per local DOF of the body that starts at node `node0`).
 pub fn add_traction(mesh: &Mesh, face: &Face, p: [f64; 3], node0: usize, loads: &mut [f64]) {
-    for q in &face.quads {
-        let w = quad4_nodal_areas(&mesh.quad_coords(q));
-        for (a, &v) in q.nodes.iter().enumerate() {
+    for q in &face.facets {
+        let w = facet_nodal_areas(q.kind, &mesh.facet_coords(q));
+        for (a, &v) in q.nodes().iter().enumerate() {
             for c in 0..3 {
                 loads[3 * (v - node0) + c] += w[a] * p[c];
             }

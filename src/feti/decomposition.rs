@@ -70,7 +70,7 @@ pub fn decompose_each(mesh: &Mesh, parts: &[usize]) -> Result<Decomposition> {
                     format!("part {p} of {parts} is empty; ask for fewer subdomains"),
                 ));
             }
-            let mut nodes: Vec<usize> = es.iter().flat_map(|&e| mesh.hexes[e]).collect();
+            let mut nodes: Vec<usize> = es.iter().flat_map(|&e| mesh.cells[e].nodes().to_vec()).collect();
             nodes.sort_unstable();
             nodes.dedup();
             subdomains.push(Subdomain { body: b, elems: es, nodes });
@@ -97,8 +97,13 @@ fn partition(mesh: &Mesh, elems: std::ops::Range<usize>, parts: usize) -> std::r
     let mut eind = Vec::with_capacity(8 * ne);
     let mut map = std::collections::HashMap::new();
     eptr.push(0);
+    // corners only (a tet10's edge nodes would join cells that share an edge); cells that share a
+    // face share 4 corners in a hexahedral mesh, 3 where triangles occur
+    let hex_only = elems.clone().all(|e| mesh.cells[e].kind == crate::mesh::CellKind::Hex8);
+    let ncommon = if hex_only { 4 } else { 3 };
     for e in elems {
-        for v in mesh.hexes[e] {
+        let c = &mesh.cells[e];
+        for v in &c.nodes()[..c.kind.corners()] {
             let next = map.len();
             eind.push(idx(*map.entry(v).or_insert(next))?);
         }
@@ -106,7 +111,7 @@ fn partition(mesh: &Mesh, elems: std::ops::Range<usize>, parts: usize) -> std::r
     }
     let mut part = vec![0; ne];
     crate::linalg::ordering::metis_exclusive(|| -> std::result::Result<(), String> {
-        let dual = metis::mesh_to_dual(&eptr, &eind, 4).map_err(|e| format!("dual graph: {e}"))?;
+        let dual = metis::mesh_to_dual(&eptr, &eind, ncommon).map_err(|e| format!("dual graph: {e}"))?;
         let (xadj, adjncy) = (dual.xadj().to_vec(), dual.adjncy().to_vec());
         metis::Graph::new(1, idx(parts)?, &xadj, &adjncy)
             .map_err(|e| format!("{e}"))?
@@ -136,7 +141,7 @@ mod tests {
             let d = decompose(&mesh, s).unwrap();
             assert_eq!(d.subdomains.len(), 2 * s);
             // every element in exactly one subdomain of its own body
-            let mut seen = vec![0; mesh.hexes.len()];
+            let mut seen = vec![0; mesh.cells.len()];
             for sd in &d.subdomains {
                 for &e in &sd.elems {
                     seen[e] += 1;
@@ -179,14 +184,13 @@ mod tests {
         assert!(e.starts_with("decomposition.subdomains"), "{e}");
     }
 
-    /// Connected components of a set of hexes under face adjacency.
+    /// Connected components of a set of cells under face adjacency.
     fn components(mesh: &Mesh, elems: &[usize]) -> usize {
         let mut faces: std::collections::HashMap<[usize; 4], Vec<usize>> = std::collections::HashMap::new();
         for (k, &e) in elems.iter().enumerate() {
-            for f in crate::mesh::topology::HEX_FACES {
-                let mut key = f.map(|l| mesh.hexes[e][l]);
-                key.sort_unstable();
-                faces.entry(key).or_default().push(k);
+            let c = &mesh.cells[e];
+            for f in 0..c.kind.faces().len() {
+                faces.entry(c.facet(e, f).key()).or_default().push(k);
             }
         }
         let mut parent: Vec<usize> = (0..elems.len()).collect();

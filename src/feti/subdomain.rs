@@ -33,7 +33,7 @@ use crate::fem::material::Lame;
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::linalg::sparse::SymCsc;
-use crate::mesh::Mesh;
+use crate::mesh::{Cell, Mesh};
 use crate::feti::decomposition::Subdomain;
 use crate::scene::OrderingKind;
 
@@ -230,7 +230,7 @@ pub struct SubdomainMesh<'a> {
     /// Coordinates of its nodes.
     pub coords: &'a [[f64; 3]],
     /// Its elements' nodes, local.
-    pub hexes: &'a [[usize; 8]],
+    pub cells: &'a [Cell],
     /// The global index of each element, its body's name and the body's first element (for
     /// messages).
     pub elems: &'a [usize],
@@ -243,9 +243,9 @@ impl SubdomainSystem {
     #[allow(clippy::too_many_arguments)]
     pub fn new(mesh: &Mesh, sd: &Subdomain, index: usize, lame: Lame, ordering: OrderingKind, f: Vec<f64>, held: Vec<usize>, g: Vec<f64>) -> Result<Self> {
         let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-        let hexes: Vec<[usize; 8]> = sd.elems.iter().map(|&e| mesh.hexes[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect();
+        let cells: Vec<Cell> = sd.elems.iter().map(|&e| mesh.cells[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect();
         let body = &mesh.bodies[sd.body];
-        let part = SubdomainMesh { coords: &coords, hexes: &hexes, elems: &sd.elems, body: &body.name, body_elems_start: body.elems.start };
+        let part = SubdomainMesh { coords: &coords, cells: &cells, elems: &sd.elems, body: &body.name, body_elems_start: body.elems.start };
         Self::from_part(&part, index, lame, ordering, f, held, g)
     }
 
@@ -260,7 +260,7 @@ impl SubdomainSystem {
         let (r, kdim) = held_kernel(coords, &held).ok_or_else(|| Error::numerical(what(), "its held DOFs stop a rigid motion only weakly: keep its Dirichlet rows"))?;
         let fixed = fixing_dofs(coords, &r, kdim, &held).ok_or_else(|| Error::numerical(what(), "its nodes are collinear: no rigid-body fixing DOFs"))?;
         let all = DofMap::new(0..nn, &[]);
-        let sys = assemble_elements(coords, part.hexes, 0..part.hexes.len(), nn, |v| v, lame, &all, &f)
+        let sys = assemble_elements(coords, part.cells, 0..part.cells.len(), nn, |v| v, lame, &all, &f)
             .map_err(|e| match e {
                 AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)),
                 AssemblyError::Memory(e) => e,

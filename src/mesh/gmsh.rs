@@ -11,8 +11,8 @@ use std::path::Path;
 
 use mshio::{ElementType, MshFile, MshParserError};
 
-use super::topology::{boundary_faces, find_boundary_quad};
-use super::{BodyGeometry, FaceQuad};
+use super::topology::{boundary_faces, find_boundary_facet};
+use super::{BodyGeometry, Cell, Facet};
 use crate::error::{Error, Result};
 
 /// Prefix of every message about a file that cannot be parsed at all.
@@ -651,8 +651,10 @@ fn build(
         }
     }
 
+    let cells: Vec<Cell> = hexes.iter().map(|h| Cell::hex8(*h)).collect();
+
     // Faces: named physical surfaces, in tag order, merged by name.
-    let boundary = boundary_faces(&hexes);
+    let boundary = boundary_faces(&cells);
     let mut groups: BTreeMap<i32, Vec<i32>> = BTreeMap::new(); // group -> surface entities
     for ((d, t), _) in names.iter() {
         if *d == 2 {
@@ -666,21 +668,21 @@ fn build(
             groups.entry(t).or_default().push(s);
         }
     }
-    let mut faces: Vec<(String, Vec<FaceQuad>)> = Vec::new();
+    let mut faces: Vec<(String, Vec<Facet>)> = Vec::new();
     // name → index into `faces`, and the quads each face holds (groups of one name merge)
     let mut face_of: HashMap<String, usize> = HashMap::new();
     let mut face_seen: Vec<HashSet<(usize, [usize; 4])>> = Vec::new();
     for (tag, ents) in groups {
         let name = group_name(names, 2, tag);
         let mut seen: HashSet<(usize, [usize; 4])> = HashSet::new();
-        let mut list: Vec<FaceQuad> = Vec::new();
+        let mut list: Vec<Facet> = Vec::new();
         for q in ents.iter().filter_map(|s| quads.get(s)).flatten() {
             let Some(loc) = quad_local(q, &index, &local) else {
                 continue;
             };
-            if let Some(fq) = find_boundary_quad(&boundary, loc) {
-                if seen.insert((fq.elem, fq.nodes)) {
-                    list.push(fq.clone());
+            if let Some(fq) = find_boundary_facet(&boundary, &loc) {
+                if seen.insert((fq.elem, fq.key())) {
+                    list.push(*fq);
                 }
             }
         }
@@ -690,7 +692,7 @@ fn build(
         match face_of.get(&name) {
             Some(&f) => {
                 for fq in list {
-                    if face_seen[f].insert((fq.elem, fq.nodes)) {
+                    if face_seen[f].insert((fq.elem, fq.key())) {
                         faces[f].1.push(fq);
                     }
                 }
@@ -702,11 +704,7 @@ fn build(
             }
         }
     }
-    Ok(BodyGeometry {
-        nodes,
-        hexes,
-        faces,
-    })
+    Ok(BodyGeometry { nodes, cells, faces })
 }
 
 /// The length scale of the body: every element's longest edge and every coordinate must lie
@@ -813,8 +811,8 @@ mod tests {
             .join(name)
     }
 
-    fn normal(g: &BodyGeometry, q: &[usize; 4]) -> [f64; 3] {
-        let p = q.map(|v| g.nodes[v]);
+    fn normal(g: &BodyGeometry, q: &[usize]) -> [f64; 3] {
+        let p: Vec<[f64; 3]> = q.iter().map(|&v| g.nodes[v]).collect();
         let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
         let b = [p[3][0] - p[0][0], p[3][1] - p[0][1], p[3][2] - p[0][2]];
         [
@@ -833,14 +831,14 @@ mod tests {
             .unwrap_or_else(|| panic!("no face {name}"));
         assert_eq!(quads.len(), count, "{name}");
         for q in quads {
-            let n = normal(g, &q.nodes);
+            let n = normal(g, q.nodes());
             assert!(n[axis] * sign > 0.0, "{name}: quad not outward");
             assert!(
                 n[(axis + 1) % 3].abs() < 1e-12 && n[(axis + 2) % 3].abs() < 1e-12,
                 "{name}"
             );
             assert!(
-                q.nodes.iter().all(|v| g.hexes[q.elem].contains(v)),
+                q.nodes().iter().all(|v| g.cells[q.elem].nodes().contains(v)),
                 "{name}: quad not on its element"
             );
         }
@@ -848,7 +846,7 @@ mod tests {
 
     fn check_body(g: &BodyGeometry, zmin: f64) {
         assert_eq!(g.nodes.len(), 7 * 4 * 4);
-        assert_eq!(g.hexes.len(), 54);
+        assert_eq!(g.cells.len(), 54);
         for p in &g.nodes {
             assert!(
                 (0.0..=2.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]),
@@ -856,13 +854,14 @@ mod tests {
             );
             assert!((zmin..=zmin + 1.0).contains(&p[2]), "{p:?}");
         }
-        for h in &g.hexes {
+        for h in &g.cells {
+            let h: [usize; 8] = h.nodes().try_into().unwrap();
             assert!(corner_jacobians(&h.map(|v| g.nodes[v]))
                 .iter()
                 .all(|&j| j > 0.0));
         }
         let mut used = vec![false; g.nodes.len()];
-        g.hexes.iter().flatten().for_each(|&v| used[v] = true);
+        g.cells.iter().flat_map(|c| c.nodes().to_vec()).for_each(|v| used[v] = true);
         assert!(used.iter().all(|&u| u), "unused node kept");
     }
 
@@ -900,7 +899,7 @@ mod tests {
         for (p, q) in a.nodes.iter().zip(&b.nodes) {
             assert!((0..3).all(|d| (p[d] - q[d]).abs() < 1e-14), "{p:?} {q:?}");
         }
-        assert_eq!(a.hexes, b.hexes);
+        assert_eq!(a.cells, b.cells);
         assert_eq!(a.faces.len(), b.faces.len());
         for (fa, fb) in a.faces.iter().zip(&b.faces) {
             assert_eq!(fa.0, fb.0);
@@ -912,7 +911,7 @@ mod tests {
     fn whole_file_without_volume() {
         let g = read(&mesh_file("two_blocks.msh"), None).expect("all");
         assert_eq!(g.nodes.len(), 224);
-        assert_eq!(g.hexes.len(), 108);
+        assert_eq!(g.cells.len(), 108);
         // The blocks do not share nodes, so both sides of the interface are boundary.
         let names: Vec<&str> = g.faces.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names.len(), 6);
@@ -1097,7 +1096,7 @@ mod tests {
         // Mirrored connectivity (all corner Jacobians negative) is reordered.
         let mirrored = [1, 4, 3, 2, 5, 8, 7, 6];
         let g = parse(one_hex(tags, mirrored, [5, 6, 7, 8]).as_bytes(), None).expect("mirrored");
-        assert!(corner_jacobians(&g.hexes[0].map(|v| g.nodes[v]))
+        assert!(corner_jacobians(&<[usize; 8]>::try_from(g.cells[0].nodes()).unwrap().map(|v| g.nodes[v]))
             .iter()
             .all(|&j| j > 0.0));
         check_face(&g, "5", 1, 2, 1.0);

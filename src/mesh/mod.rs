@@ -1,12 +1,12 @@
-//! Meshes: hexahedral bodies with named boundary faces.
+//! Meshes: bodies of hexahedra, tetrahedra and wedges (mixed) with named boundary faces.
 //!
-//! Owns the [`Mesh`] (all bodies, global node and element numbering, one node set per body —
-//! bodies never share nodes), the structured box generator ([`boxgen`]), the Gmsh 4.1 importer
-//! ([`gmsh`]), the boundary topology shared by both ([`topology`]) and a body's rigid motions
-//! ([`rigid`]). Node order inside a hexahedron is the VTK/Gmsh/XDMF one: bottom face 0-1-2-3
-//! counter-clockwise seen from above, top face 4-5-6-7 above it.
+//! Owns the [`Mesh`] (all bodies, global node and cell numbering, one node set per body —
+//! bodies never share nodes), the cell and facet types ([`cell`]), the structured box generator
+//! ([`boxgen`]), the Gmsh 4.1 importer ([`gmsh`]), the boundary topology shared by both
+//! ([`topology`]) and a body's rigid motions ([`rigid`]).
 
 pub mod boxgen;
+pub mod cell;
 pub mod gmsh;
 pub mod rigid;
 pub mod topology;
@@ -14,6 +14,8 @@ pub mod topology;
 use std::ops::Range;
 
 use crate::error::{Error, Result};
+
+pub use cell::{Cell, CellKind, Facet, FacetKind, MAX_CELL_DOFS};
 
 /// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
 /// (instead of the allocator's abort).
@@ -28,27 +30,19 @@ pub fn try_grow<T>(v: &mut Vec<T>, what: &str, extra: usize) -> Result<()> {
     v.try_reserve_exact(extra).map_err(|_| Error::alloc(what, v.len().saturating_add(extra).saturating_mul(std::mem::size_of::<T>())))
 }
 
-/// One quadrilateral of a named face: the element it bounds and its four nodes, ordered so that
-/// the right-hand rule gives the outward normal of that element.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FaceQuad {
-    pub elem: usize,
-    pub nodes: [usize; 4],
-}
-
 /// A named part of a body's boundary, e.g. `upper.zmax` or a Gmsh physical surface.
 #[derive(Clone, Debug)]
 pub struct Face {
     /// Full name, `<body>.<face>`.
     pub name: String,
     pub body: usize,
-    pub quads: Vec<FaceQuad>,
+    pub facets: Vec<Facet>,
 }
 
 impl Face {
     /// The distinct nodes of the face, sorted.
     pub fn nodes(&self) -> Vec<usize> {
-        let mut v: Vec<usize> = self.quads.iter().flat_map(|q| q.nodes).collect();
+        let mut v: Vec<usize> = self.facets.iter().flat_map(|q| q.nodes().to_vec()).collect();
         v.sort_unstable();
         v.dedup();
         v
@@ -67,16 +61,16 @@ pub struct BodyMesh {
 #[derive(Clone, Debug, Default)]
 pub struct BodyGeometry {
     pub nodes: Vec<[f64; 3]>,
-    pub hexes: Vec<[usize; 8]>,
-    /// (short face name, quads in local numbering)
-    pub faces: Vec<(String, Vec<FaceQuad>)>,
+    pub cells: Vec<Cell>,
+    /// (short face name, facets in local numbering)
+    pub faces: Vec<(String, Vec<Facet>)>,
 }
 
 /// All bodies of a scene in one global numbering.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
     pub nodes: Vec<[f64; 3]>,
-    pub hexes: Vec<[usize; 8]>,
+    pub cells: Vec<Cell>,
     pub bodies: Vec<BodyMesh>,
     pub faces: Vec<Face>,
 }
@@ -92,26 +86,23 @@ impl Mesh {
     /// an error.
     pub fn try_push_body(&mut self, name: &str, geom: BodyGeometry) -> Result<()> {
         try_grow(&mut self.nodes, "mesh nodes", geom.nodes.len())?;
-        try_grow(&mut self.hexes, "mesh hexahedra", geom.hexes.len())?;
+        try_grow(&mut self.cells, "mesh cells", geom.cells.len())?;
         let n0 = self.nodes.len();
-        let e0 = self.hexes.len();
+        let e0 = self.cells.len();
         let body = self.bodies.len();
         self.nodes.extend_from_slice(&geom.nodes);
-        self.hexes.extend(geom.hexes.iter().map(|h| h.map(|v| v + n0)));
-        for (fname, quads) in geom.faces {
+        self.cells.extend(geom.cells.iter().map(|h| h.map(|v| v + n0)));
+        for (fname, facets) in geom.faces {
             self.faces.push(Face {
                 name: format!("{name}.{fname}"),
                 body,
-                quads: quads
-                    .into_iter()
-                    .map(|q| FaceQuad { elem: q.elem + e0, nodes: q.nodes.map(|v| v + n0) })
-                    .collect(),
+                facets: facets.into_iter().map(|q| q.map(q.elem + e0, |v| v + n0)).collect(),
             });
         }
         self.bodies.push(BodyMesh {
             name: name.to_string(),
             nodes: n0..self.nodes.len(),
-            elems: e0..self.hexes.len(),
+            elems: e0..self.cells.len(),
         });
         Ok(())
     }
@@ -126,19 +117,59 @@ impl Mesh {
 
     /// Body index of every element.
     pub fn elem_body(&self) -> Vec<usize> {
-        let mut out = vec![0; self.hexes.len()];
+        let mut out = vec![0; self.cells.len()];
         for (b, body) in self.bodies.iter().enumerate() {
             out[body.elems.clone()].fill(b);
         }
         out
     }
 
-    /// Corner coordinates of element `e`.
-    pub fn hex_coords(&self, e: usize) -> [[f64; 3]; 8] {
-        self.hexes[e].map(|v| self.nodes[v])
+    /// Node coordinates of cell `e`.
+    pub fn cell_coords(&self, e: usize) -> Vec<[f64; 3]> {
+        self.cells[e].coords(&self.nodes)
     }
 
-    pub fn quad_coords(&self, q: &FaceQuad) -> [[f64; 3]; 4] {
-        q.nodes.map(|v| self.nodes[v])
+    pub fn facet_coords(&self, q: &Facet) -> Vec<[f64; 3]> {
+        q.nodes().iter().map(|&v| self.nodes[v]).collect()
+    }
+
+    /// How many cells of each type (types in [`CellKind::ALL`] order, absent ones left out).
+    pub fn cell_counts(&self) -> Vec<(CellKind, usize)> {
+        cell_counts(&self.cells)
+    }
+}
+
+/// How many of `cells` are of each type (in [`CellKind::ALL`] order, absent ones left out).
+pub fn cell_counts(cells: &[Cell]) -> Vec<(CellKind, usize)> {
+    let mut n = [0usize; 4];
+    for c in cells {
+        n[c.kind.code()] += 1;
+    }
+    CellKind::ALL.iter().zip(n).filter(|(_, k)| *k > 0).map(|(&t, k)| (t, k)).collect()
+}
+
+/// "1000 hexahedra", "24 4-node tetrahedra and 8 wedges".
+pub fn describe_cells(cells: &[Cell]) -> String {
+    let parts: Vec<String> = cell_counts(cells).iter().map(|(t, k)| format!("{k} {}", t.plural())).collect();
+    match parts.len() {
+        0 => "no cells".into(),
+        _ => parts.join(" and "),
+    }
+}
+
+/// "64 quadrilaterals", "32 triangles and 8 quadrilaterals".
+pub fn describe_facets(facets: &[Facet]) -> String {
+    let kinds = [FacetKind::Tri3, FacetKind::Quad4, FacetKind::Tri6, FacetKind::Quad8];
+    let parts: Vec<String> = kinds
+        .iter()
+        .filter_map(|&k| {
+            let n = facets.iter().filter(|f| f.kind == k).count();
+            (n > 0).then(|| format!("{n} {}", k.plural()))
+        })
+        .collect();
+    if parts.is_empty() {
+        "no facets".into()
+    } else {
+        parts.join(" and ")
     }
 }

@@ -41,11 +41,11 @@ pub struct Field {
 pub struct OutputData {
     /// `/mesh/coordinates`, nnodes × 3 (this rank's rows only where `mesh_rows` is set).
     pub coordinates: Vec<[f64; 3]>,
-    /// `/mesh/hexahedra`, nelems × 8, VTK/XDMF node order, global node numbers (this rank's
-    /// rows only where `mesh_rows` is set).
-    pub hexahedra: Vec<[usize; 8]>,
+    /// The cells, Gmsh/VTK node order, global node numbers (this rank's rows only where
+    /// `mesh_rows` is set).
+    pub cells: Vec<crate::mesh::Cell>,
     /// A distributed mesh: the sizes of the whole mesh and the rows this rank holds of it.
-    /// None: `coordinates` and `hexahedra` are the whole mesh (on every rank).
+    /// None: `coordinates` and `cells` are the whole mesh (on every rank).
     pub mesh_rows: Option<MeshRows>,
     pub fields: Vec<Field>,
     /// String attributes on the root group (resolved scene, versions, timings, report).
@@ -68,7 +68,7 @@ pub struct MeshRows {
     pub cells: usize,
     /// The nodes whose coordinates this rank holds, in the order of `coordinates`.
     pub node_rows: Vec<usize>,
-    /// The cells whose hexahedra this rank holds, in the order of `hexahedra`.
+    /// The cells this rank holds, in the order of `cells`.
     pub cell_rows: Vec<usize>,
 }
 
@@ -80,7 +80,7 @@ impl OutputData {
 
     /// Cells of the whole mesh.
     pub fn ncells(&self) -> usize {
-        self.mesh_rows.as_ref().map_or(self.hexahedra.len(), |m| m.cells)
+        self.mesh_rows.as_ref().map_or(self.cells.len(), |m| m.cells)
     }
 }
 

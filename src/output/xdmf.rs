@@ -322,7 +322,7 @@ mod tests {
         let g = crate::mesh::boxgen::generate([0.0; 3], [0.2, 1.0, 1.0], [3, 2, 2]);
         OutputData {
             coordinates: g.nodes,
-            hexahedra: g.hexes,
+            cells: g.cells,
             mesh_rows: None,
             fields: vec![
                 Field {

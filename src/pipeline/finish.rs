@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::{LocalFields, LocalMesh, Solution, Timings};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
-use crate::fem::element::hex8_center_stress;
+use crate::fem::cell::cell_center_stress;
 use crate::fem::material::von_mises;
 use crate::linalg::sparse::SymCsc;
 use crate::fem::material::Lame;
@@ -33,7 +33,7 @@ pub struct PieceLayout {
     /// Global element indices, ascending.
     pub elems: Vec<usize>,
     /// The elements' nodes, piece-local.
-    pub hexes: Vec<[usize; 8]>,
+    pub cells: Vec<crate::mesh::Cell>,
     /// Nodes shared with other pieces (TFETI), 0 for a body.
     pub interface_nodes: usize,
     /// The piece in messages ("body \"upper\"", "subdomain 3 (body \"upper\")").
@@ -52,7 +52,7 @@ impl PieceLayout {
             coords: mesh.nodes[body.nodes.clone()].to_vec(),
             writes: vec![true; body.nodes.len()],
             elems: body.elems.clone().collect(),
-            hexes: mesh.hexes[body.elems.clone()].iter().map(|h| h.map(|v| v - n0)).collect(),
+            cells: mesh.cells[body.elems.clone()].iter().map(|h| h.map(|v| v - n0)).collect(),
             interface_nodes: 0,
             name: format!("body \"{}\"", body.name),
         }
@@ -140,12 +140,14 @@ pub fn finish<C: Comm>(comm: &C, lame: &[Lame], size: MeshSize, pieces: usize, l
             }
             let lame = lame[pl.body];
             buf.extend(pl.elems.iter().map(|&e| e as f64));
-            for (&e, hex) in pl.elems.iter().zip(&pl.hexes) {
-                let vm = von_mises(&hex8_center_stress(&hex.map(|l| pl.coords[l]), &hex.map(|l| ps.nodal[l]), lame));
+            for (&e, cell) in pl.elems.iter().zip(&pl.cells) {
+                let x: Vec<[f64; 3]> = cell.nodes().iter().map(|&l| pl.coords[l]).collect();
+                let u: Vec<[f64; 3]> = cell.nodes().iter().map(|&l| ps.nodal[l]).collect();
+                let vm = von_mises(&cell_center_stress(cell.kind, &x, &u, lame));
                 buf.push(vm);
                 local.cells.push(e);
                 local.von_mises.push(vm);
-                lm.hexahedra.push(hex.map(|l| pl.nodes[l]));
+                lm.cells.push(cell.map(|l| pl.nodes[l]));
                 lm.cell_body.push(pl.body);
                 lm.cell_piece.push(pl.index);
             }

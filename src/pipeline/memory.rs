@@ -115,7 +115,7 @@ impl MeshCount {
         MeshCount {
             nodes: model.size.nodes as f64,
             elements: model.size.elements as f64,
-            quads: mesh.faces.iter().map(|f| f.quads.len() as f64).sum(),
+            quads: mesh.faces.iter().map(|f| f.facets.len() as f64).sum(),
             files: 0.0,
             body_dofs,
             key: key_of(ls, largest),

@@ -146,7 +146,7 @@ pub struct Solution {
 #[derive(Clone, Debug, Default)]
 pub struct LocalMesh {
     pub coordinates: Vec<[f64; 3]>,
-    pub hexahedra: Vec<[usize; 8]>,
+    pub cells: Vec<crate::mesh::Cell>,
     pub cell_body: Vec<usize>,
     pub cell_piece: Vec<usize>,
 }
@@ -732,7 +732,7 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
         }
     }
     let mesh_rows = Some(MeshRows { nodes: model.size.nodes, cells: model.size.elements, node_rows: sol.local.nodes.clone(), cell_rows: sol.local.cells.clone() });
-    OutputData { coordinates: lm.coordinates.clone(), hexahedra: lm.hexahedra.clone(), mesh_rows, fields, attributes, rows, steps }
+    OutputData { coordinates: lm.coordinates.clone(), cells: lm.cells.clone(), mesh_rows, fields, attributes, rows, steps }
 }
 
 type Rows = std::collections::BTreeMap<String, Vec<usize>>;
@@ -779,7 +779,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let mesh = &model.mesh;
     let mut s = String::new();
     let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
-    let _ = writeln!(s, "mesh: {} bodies, {} nodes, {} hexahedra", mesh.bodies.len(), mesh.nodes.len(), mesh.hexes.len());
+    let _ = writeln!(s, "mesh: {} bodies, {} nodes, {}", mesh.bodies.len(), mesh.nodes.len(), crate::mesh::describe_cells(&mesh.cells));
     let mut free_total = 0;
     let by_body = model::constraints_by_body(mesh, &model.constraints);
     for (body, cons) in mesh.bodies.iter().zip(&by_body) {
@@ -798,7 +798,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     let _ = writeln!(s, "faces:");
     for f in &mesh.faces {
-        let _ = writeln!(s, "  {}: {} quadrilaterals, {} nodes", f.name, f.quads.len(), f.nodes().len());
+        let _ = writeln!(s, "  {}: {}, {} nodes", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len());
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
     let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e})", load[0], load[1], load[2]);

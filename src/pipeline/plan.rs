@@ -159,7 +159,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             let body = &mesh.bodies[b];
             let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
             let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
-            let (xadj, adj) = node_graph(&mesh.hexes, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
+            let (xadj, adj) = node_graph(&mesh.cells, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
             Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
         })?;
         let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
@@ -196,7 +196,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
                 .iter()
                 .map(|&s| {
                     let sd = &d.subdomains[s];
-                    let (xadj, adj) = node_graph(&mesh.hexes, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
+                    let (xadj, adj) = node_graph(&mesh.cells, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
                     // the DOFs held inside the subdomain cost no fill
                     let mut free = vec![3u8; sd.nodes.len()];
                     elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);

@@ -194,7 +194,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
                         let p = share.position(s);
                         let pl = &share.layout[p];
                         let body = &model.mesh.bodies[pl.body];
-                        let part = SubdomainMesh { coords: &pl.coords, hexes: &pl.hexes, elems: &pl.elems, body: &body.name, body_elems_start: body.elems.start };
+                        let part = SubdomainMesh { coords: &pl.coords, cells: &pl.cells, elems: &pl.elems, body: &body.name, body_elems_start: body.elems.start };
                         SubdomainSystem::from_part(&part, s, model.lame[pl.body], ls.scene.factorization.ordering, loads[s].clone(), share.eliminated[p].clone(), held[p].clone())
                     })
                     .collect::<Result<Vec<_>>>()?;
@@ -282,7 +282,7 @@ impl Share {
                     coords: sd.nodes.iter().map(|&v| mesh.nodes[v]).collect(),
                     writes: sd.nodes.iter().map(|&v| d.copies[v][0].0 == s).collect(),
                     elems: sd.elems.clone(),
-                    hexes: sd.elems.iter().map(|&e| mesh.hexes[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect(),
+                    cells: sd.elems.iter().map(|&e| mesh.cells[e].map(|v| sd.local(v).expect("element node in its subdomain"))).collect(),
                     interface_nodes: sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count(),
                     name: format!("subdomain {s} (body \"{}\")", mesh.bodies[sd.body].name),
                 }
