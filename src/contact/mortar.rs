@@ -481,9 +481,10 @@ impl Plane {
     }
 
     /// The parametric coordinates of the point of `f` whose projection is `p` (Newton).
+    /// Stops when the step is below 10⁻¹³ or, below 10⁻⁹, stops shrinking (round-off).
     fn invert(&self, f: &Facet, p: V2) -> Option<V2> {
-        let mut xi = f.kind.centre();
-        for _ in 0..30 {
+        let (mut xi, mut last) = (f.kind.centre(), f64::INFINITY);
+        for _ in 0..50 {
             let (x, t) = f.map(&f.kind.shape(xi));
             let r = sub2(self.to2d(x), p);
             let j = [
@@ -499,9 +500,11 @@ impl Plane {
                 (j[0][0] * r[1] - j[1][0] * r[0]) / det,
             ];
             xi = [xi[0] - d[0], xi[1] - d[1]];
-            if d[0].abs() + d[1].abs() < 1e-14 {
+            let step = d[0].abs() + d[1].abs();
+            if step < 1e-13 || (step < 1e-9 && step > 0.5 * last) {
                 return Some(xi);
             }
+            last = step;
         }
         None
     }
@@ -1163,5 +1166,149 @@ mod tests {
     #[test]
     fn matching_tri3_is_node_to_node() {
         check_matching(true);
+    }
+
+    /// Linear normal offset of the master.
+    fn f_lin(x: f64, y: f64) -> f64 {
+        0.03 + 0.01 * x - 0.007 * y
+    }
+
+    /// Slave (tri or quad, ns cells) on a wobbly master (tri or quad, nm cells) over the unit
+    /// square, master at z = f_lin; the whole pair mapped by `rot` (a rigid motion).
+    fn nonmatching(
+        stri: bool,
+        ns: usize,
+        mtri: bool,
+        nm: usize,
+        rot: &dyn Fn(V3) -> V3,
+    ) -> (Vec<V3>, Patch, MortarRows) {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, ns, ns, stri, true, &|u, v| rot([u, v, 0.0]));
+        let w = wobbly(0.2 / nm as f64, f_lin);
+        let m = patch(&mut coords, nm, nm, mtri, false, &|u, v| rot(w(u, v)));
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        (coords, s, rows)
+    }
+
+    /// Test 2's checks, in the frame given by `rot` (slave nodes are rot([x, y, 0])).
+    fn check_nonmatching(s: &Patch, rows: &MortarRows, ns: usize, rot: &dyn Fn(V3) -> V3) {
+        assert_eq!(rows.len(), s.ids.len());
+        assert_eq!(rows.info.rows_dropped + rows.info.nodes_uncovered, 0);
+        let total: f64 = rows.area.iter().sum();
+        assert!((total - 1.0).abs() < 1e-13, "Σ D_ii = {total}");
+        let n = rot([0.0, 0.0, 1.0]);
+        let o = rot([0.0; 3]);
+        let n = sub(n, o);
+        for r in 0..rows.len() {
+            let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
+            assert!(
+                (masters - 1.0).abs() < 1e-12,
+                "row {r}: Σ M_ij/D_ii = {masters}"
+            );
+            let (i, j) = (r % (ns + 1), r / (ns + 1));
+            let (x, y) = (i as f64 / ns as f64, j as f64 / ns as f64);
+            assert!(
+                (rows.gap[r] - f_lin(x, y)).abs() < 1e-12,
+                "row {r} at ({x}, {y}): gap {} vs {}",
+                rows.gap[r],
+                f_lin(x, y)
+            );
+            assert!(norm(sub(rows.normal[r], n)) < 1e-14);
+            let q = rows.row_norms_squared()[r];
+            assert!(q > 1.0, "row {r}: ‖row‖² = {q}");
+        }
+    }
+
+    #[test]
+    fn nonmatching_quad4_on_finer_quad4_reproduces_linear_gap() {
+        let id = |x: V3| x;
+        let (_, s, rows) = nonmatching(false, 4, false, 7, &id);
+        check_nonmatching(&s, &rows, 4, &id);
+        assert!(rows.coupling.iter().all(|r| r.len() > 2));
+    }
+
+    #[test]
+    fn nonmatching_tri3_on_quad4_and_quad4_on_tri3_reproduce_linear_gap() {
+        let id = |x: V3| x;
+        let (_, s, rows) = nonmatching(true, 4, false, 7, &id);
+        check_nonmatching(&s, &rows, 4, &id);
+        let (_, s, rows) = nonmatching(false, 5, true, 3, &id);
+        check_nonmatching(&s, &rows, 5, &id);
+    }
+
+    /// A fixed "random" rotation (axis (1, −2, 3), angle 0.83) and a translation.
+    fn rotation(x: V3) -> V3 {
+        let k = scale([1.0, -2.0, 3.0], 1.0 / 14f64.sqrt());
+        let (c, s) = (0.83f64.cos(), 0.83f64.sin());
+        let mut y = scale(x, c);
+        axpy(&mut y, s, cross(k, x));
+        axpy(&mut y, dot(k, x) * (1.0 - c), k);
+        [y[0] + 0.4, y[1] - 1.3, y[2] + 2.1]
+    }
+
+    #[test]
+    fn rotated_nonmatching_pair_gives_the_same_rows() {
+        let id = |x: V3| x;
+        for (stri, ns, mtri, nm) in [
+            (false, 4, false, 7),
+            (true, 4, false, 7),
+            (false, 5, true, 3),
+        ] {
+            let (_, s, rows) = nonmatching(stri, ns, mtri, nm, &rotation);
+            check_nonmatching(&s, &rows, ns, &rotation);
+            let (_, _, flat) = nonmatching(stri, ns, mtri, nm, &id);
+            for r in 0..rows.len() {
+                assert!((rows.area[r] - flat.area[r]).abs() < 1e-14);
+                assert_eq!(rows.coupling[r].len(), flat.coupling[r].len());
+                for (a, b) in rows.coupling[r].iter().zip(&flat.coupling[r]) {
+                    assert!(a.0 == b.0 && (a.1 - b.1).abs() < 1e-12, "{a:?} vs {b:?}");
+                }
+            }
+        }
+    }
+
+    fn norms_range(rows: &MortarRows) -> (f64, f64) {
+        let q = rows.row_norms_squared();
+        (
+            q.iter().copied().fold(f64::INFINITY, f64::min),
+            q.iter().copied().fold(0.0, f64::max),
+        )
+    }
+
+    /// Master finer than the slave: every ‖row‖² = 1 + Σ_j (M_ij/D_ii)² lies in (1, 2), below
+    /// the node-to-node value 2.
+    #[test]
+    fn row_norms_squared_between_1_and_2_on_a_finer_master() {
+        let id = |x: V3| x;
+        for (stri, ns, mtri, nm) in [
+            (false, 4, false, 7),
+            (true, 4, false, 7),
+            (false, 3, true, 8),
+            (false, 4, false, 13),
+        ] {
+            let (_, _, rows) = nonmatching(stri, ns, mtri, nm, &id);
+            let (lo, hi) = norms_range(&rows);
+            assert!(lo > 1.0 && hi < 2.0, "{ns} on {nm}: ‖row‖² in [{lo}, {hi}]");
+        }
+    }
+
+    /// Master coarser than the slave: at the face's corners the dual weights extrapolate the
+    /// master (negative M_ij) and ‖row‖² exceeds 2 (2.16 for a 5×5 quad4 slave on a 3×3 tri3
+    /// master); interior rows stay below 2.
+    #[test]
+    fn row_norms_squared_exceed_2_at_corners_on_a_coarser_master() {
+        let id = |x: V3| x;
+        let (_, s, rows) = nonmatching(false, 5, true, 3, &id);
+        let (lo, hi) = norms_range(&rows);
+        assert!(lo > 1.0 && hi > 2.0 && hi < 2.3, "‖row‖² in [{lo}, {hi}]");
+        let q = rows.row_norms_squared();
+        assert!(q[0] > 2.0, "corner row: {}", q[0]);
+        for (r, &node) in rows.node.iter().enumerate() {
+            let k = s.ids.iter().position(|&n| n == node).unwrap();
+            let (i, j) = (k % 6, k / 6);
+            if (1..5).contains(&i) && (1..5).contains(&j) {
+                assert!(q[r] < 2.0, "interior row {r}: {}", q[r]);
+            }
+        }
     }
 }
