@@ -2,8 +2,10 @@
 //! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ
 //! ([`pairing`]), whether they can hold the bodies held by contact alone under the load
 //! ([`hold`]), and the contact state recovered from the dual solution ([`state`]: open /
-//! stick / slip, tractions, gaps, slip).
+//! stick / slip, tractions, gaps, slip); the dual mortar coupling of non-matching slave and
+//! master faces, with its R*-tree contact search ([`mortar`]).
 
 pub mod hold;
+pub mod mortar;
 pub mod pairing;
 pub mod state;
