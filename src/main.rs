@@ -528,13 +528,14 @@ fn print_summary(s: &pipeline::Summary) {
         let nnz_l: f64 = tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum();
         let mul = &tf.multipliers;
         println!(
-            "TFETI: {} subdomains {:?}{}, multipliers {} contact + {} gluing + {} Dirichlet ({} held DOFs eliminated), coarse {} × {}{}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
+            "TFETI: {} subdomains {:?}{}, multipliers {} contact + {} gluing + {} Dirichlet{} ({} held DOFs eliminated), coarse {} × {}{}, Σnnz(L) {nnz_l:.3e}, gluing jump {:.1e}, ‖Gλ−e‖/‖e‖ {:.1e}, projector {}",
             tf.subdomains.len(),
             tf.subdomains_per_body,
             if tf.corner_rows > 0 { format!(" in {} clusters (H-TFETI, {} corner rows)", tf.clusters, tf.corner_rows) } else { String::new() },
             mul.contact,
             mul.gluing,
             mul.dirichlet,
+            if mul.tie > 0 { format!(" + {} tie", mul.tie) } else { String::new() },
             tf.eliminated_dofs,
             tf.coarse_dim,
             tf.coarse_dim,

@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use crate::contact::hold::{self, FreeBody};
-use crate::contact::pairing::{self, Contact, SlipBound};
+use crate::contact::pairing::{self, Contact, SlipBound, Tied};
 use crate::qp::coulomb::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
@@ -28,8 +28,10 @@ pub struct Model {
     pub loads: Vec<f64>,
     /// Contact pairs as (slave face, master face) indices into `mesh.faces`.
     pub contact: Vec<(usize, usize)>,
-    /// The node-to-node pairs, only when contact is enabled.
+    /// The contact rows (node-to-node or mortar), only when contact is enabled.
     pub pairs: Option<Contact>,
+    /// The equality rows of the `[[tie]]` interfaces (empty: none).
+    pub ties: Tied,
     /// The load path; `constraints` and `loads` are its last step.
     pub path: LoadPath,
     /// Bodies whose Dirichlet conditions leave a rigid motion free that contact holds: solved
@@ -283,6 +285,16 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     }
     let contact_active = scene.contact.enabled && !contact.is_empty();
     let pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
+    let mut tie_faces = Vec::new();
+    for (i, t) in scene.ties.iter().enumerate() {
+        let s = face_index(&mesh, &faces, format!("tie[{i}].slave"), &t.slave)?;
+        let m = face_index(&mesh, &faces, format!("tie[{i}].master"), &t.master)?;
+        if mesh.faces[s].body == mesh.faces[m].body {
+            return Err(Error::scene(format!("tie[{i}]"), "slave and master faces belong to the same body"));
+        }
+        tie_faces.push((s, m));
+    }
+    let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
 
     // each body's constraints and contact pairs, bucketed once (not a scan of all per body)
     let body_of = |v: usize| mesh.bodies.partition_point(|b| b.nodes.end <= v);
@@ -297,13 +309,26 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             body_touches[mesh.faces[m].body] = true;
         }
     }
+    // tied nodes hold every rigid motion they take part in, in all three directions
+    let mut body_tied: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
+    for row in &ties.coupling {
+        for &(v, _) in row {
+            body_tied[body_of(v)].push(v);
+        }
+    }
+    for (b, v) in body_tied.iter_mut().enumerate() {
+        v.sort_unstable();
+        v.dedup();
+        body_touches[b] |= !v.is_empty();
+    }
     let mut body_pairs: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
     if let Some(c) = &pairs {
         for i in 0..c.len() {
-            let (bs, bm) = (body_of(c.slave[i]), body_of(c.master[i]));
-            body_pairs[bs].push(i);
-            if bm != bs {
-                body_pairs[bm].push(i);
+            let mut bodies: Vec<usize> = c.row(i).iter().map(|&(v, _)| body_of(v)).collect();
+            bodies.sort_unstable();
+            bodies.dedup();
+            for b in bodies {
+                body_pairs[b].push(i);
             }
         }
     }
@@ -323,11 +348,12 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                 format!("body \"{}\" floats: it has no Dirichlet condition{}", body.name, if contact_active { " and no contact" } else { " (contact is off)" }),
             ));
         }
-        let dirichlet = body_constraints[b].iter().map(|&(v, c)| {
+        let axis = |c: usize| {
             let mut dir = [0.0; 3];
             dir[c] = 1.0;
-            (v, dir)
-        });
+            dir
+        };
+        let dirichlet = body_constraints[b].iter().map(|&(v, c)| (v, axis(c))).chain(body_tied[b].iter().flat_map(|&v| (0..3).map(move |c| (v, axis(c)))));
         let free = free_motions(&mesh, b, dirichlet.clone());
         if free.is_empty() {
             continue;
@@ -343,7 +369,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         for &i in &body_pairs[b] {
             let holds = tangential_hold(c, i);
             zero_bound |= holds != [true, true] && (c.bound[i] != SlipBound::None || c.coulomb[i] != Coefficient::Fixed);
-            for v in [c.slave[i], c.master[i]].into_iter().filter(|v| body.nodes.contains(v)) {
+            for v in c.row(i).iter().map(|&(v, _)| v).filter(|v| body.nodes.contains(v)) {
                 rows.push((v, c.normal[i]));
                 for (t, hold) in [(c.t1[i], holds[0]), (c.t2[i], holds[1])] {
                     if hold {
@@ -366,7 +392,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         floating.push(b);
     }
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len() };
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, path, floating })
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating })
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound

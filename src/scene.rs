@@ -34,6 +34,9 @@ pub struct Scene {
     pub load: LoadSettings,
     #[serde(default)]
     pub contact: ContactSettings,
+    /// Bonded interfaces between bodies (mesh tying by the mortar operator).
+    #[serde(default, rename = "tie", skip_serializing_if = "Vec::is_empty")]
+    pub ties: Vec<Tie>,
     /// Read by [`SolverSettings::from_table`] (each key checked against the method).
     #[serde(default, skip_deserializing)]
     pub solver: SolverSettings,
@@ -266,6 +269,41 @@ pub struct ContactPair {
     /// Matching tolerance of slave and master node coordinates (m); default 1e-8 × model size.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance: Option<f64>,
+    /// `"mortar"` or `"node-to-node"`; default: node-to-node where every slave node has a master
+    /// node at its place, mortar otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discretization: Option<Discretization>,
+    /// Mortar: how far (m) along its normal a slave facet looks for master facets; default
+    /// [`default_search_distance`] of the slave face.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_distance: Option<f64>,
+}
+
+/// How a contact or tied interface is discretized.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Discretization {
+    /// Dual mortar (biorthogonal multipliers on the slave face): any two meshes.
+    Mortar,
+    /// One pair per slave node and the master node at its place: matching meshes only.
+    NodeToNode,
+}
+
+/// The default mortar search distance: a tenth of the slave face's bounding-box diagonal.
+pub fn default_search_distance(diagonal: f64) -> f64 {
+    0.1 * diagonal
+}
+
+/// A bonded interface: the slave face's displacement equals the master face's, weakly (the
+/// mortar projection), in all three directions.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tie {
+    pub slave: String,
+    pub master: String,
+    /// As for contact pairs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_distance: Option<f64>,
 }
 
 /// Friction law of a contact pair.
@@ -775,6 +813,10 @@ fn set_path(root: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::
 impl Scene {
     /// Fills in what defaults to other values (box node counts from `mesh.n`).
     pub fn resolve(&mut self) {
+        // tied interfaces are equality rows of the TFETI dual
+        if !self.ties.is_empty() {
+            self.decomposition.tfeti = true;
+        }
         let n = self.mesh.n;
         for b in &mut self.bodies {
             if let Some(bx) = &mut b.boxed {
@@ -948,6 +990,16 @@ impl Scene {
             finite(format!("traction[{i}].p"), &t.p)?;
             carried(format!("traction[{i}].p"), "a nonzero traction", &t.p, " MPa")?;
         }
+        for (i, t) in self.ties.iter().enumerate() {
+            if t.slave == t.master {
+                return Err(Error::scene(format!("tie[{i}].master"), "slave and master must be different faces"));
+            }
+            if let Some(d) = t.search_distance {
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(Error::scene(format!("tie[{i}].search_distance"), format!("must be > 0, got {d}")));
+                }
+            }
+        }
         for (i, p) in self.contact.pair.iter().enumerate() {
             let k = |f: &str| format!("contact.pair[{i}].{f}");
             if p.slave == p.master {
@@ -956,6 +1008,11 @@ impl Scene {
             if let Some(t) = p.tolerance {
                 if !(t.is_finite() && t > 0.0) {
                     return Err(Error::scene(k("tolerance"), format!("must be > 0, got {t}")));
+                }
+            }
+            if let Some(t) = p.search_distance {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(Error::scene(k("search_distance"), format!("must be > 0, got {t}")));
                 }
             }
             match &p.friction {

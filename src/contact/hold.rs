@@ -70,7 +70,7 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     let per = if friction { 3 } else { 1 };
     // the pairs touching a free body, and their multipliers' columns
     let touches = |v: usize| free.iter().any(|fb| mesh.bodies[fb.body].nodes.contains(&v));
-    let pairs: Vec<usize> = (0..contact.len()).filter(|&i| touches(contact.slave[i]) || touches(contact.master[i])).collect();
+    let pairs: Vec<usize> = (0..contact.len()).filter(|&i| contact.row(i).iter().any(|&(v, _)| touches(v))).collect();
     let n = per * pairs.len();
     let mut rows = Rows { g: vec![], e: vec![], owner: vec![] };
     for fb in free {
@@ -90,13 +90,12 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
             for (c, &i) in pairs.iter().enumerate() {
                 let dirs = [contact.normal[i], contact.t1[i], contact.t2[i]];
                 for (k, &dir) in dirs.iter().take(per).enumerate() {
-                    // (B r)ᵢ = (r(slave) − r(master))·dir
+                    // (B r)ᵢ = Σ c·r(node)·dir over the row's nodes (node-to-node: slave − master)
                     let mut x = 0.0;
-                    if nodes.contains(&contact.slave[i]) {
-                        x += at(mesh.nodes[contact.slave[i]], dir);
-                    }
-                    if nodes.contains(&contact.master[i]) {
-                        x -= at(mesh.nodes[contact.master[i]], dir);
+                    for &(v, coef) in contact.row(i) {
+                        if nodes.contains(&v) {
+                            x += coef * at(mesh.nodes[v], dir);
+                        }
                     }
                     if x != 0.0 {
                         g.push((per * c + k, x));

@@ -29,7 +29,7 @@ use crate::mesh::{Face, Mesh};
 use crate::qp::coulomb::Coefficient;
 use crate::qp::sets::{Disc, Ellipse, TangentSet};
 use crate::qp::Lambda;
-use crate::scene::{ContactPair, Friction};
+use crate::scene::{default_search_distance, ContactPair, Discretization, Friction, Tie};
 
 /// Slip bound of one pair, as a nodal force.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +45,13 @@ pub enum SlipBound {
 /// All contact pairs of a scene, in the order of the scene's pair entries and slave nodes.
 #[derive(Clone, Debug, Default)]
 pub struct Contact {
+    /// The slave node that carries row i's multipliers (where its frame, area and result
+    /// fields live).
     pub slave: Vec<usize>,
-    pub master: Vec<usize>,
+    /// Row i's nodes and coefficients: (N u)ᵢ = Σ c·(u_node · nᵢ), the tangential rows alike.
+    /// Node-to-node [(slave, 1), (master, −1)]; mortar the slave's row of D⁻¹[D  −M]
+    /// ([`crate::contact::mortar`]).
+    pub coupling: Vec<Vec<(usize, f64)>>,
     pub normal: Vec<[f64; 3]>,
     pub t1: Vec<[f64; 3]>,
     pub t2: Vec<[f64; 3]>,
@@ -59,6 +64,8 @@ pub struct Contact {
     pub entry: Vec<usize>,
     /// The Coulomb coefficient of each pair ([`Coefficient::Fixed`]: its bound is `bound`).
     pub coulomb: Vec<Coefficient>,
+    /// How each `[[contact.pair]]` entry was discretized.
+    pub discretization: Vec<Discretization>,
 }
 
 impl Contact {
@@ -69,6 +76,11 @@ impl Contact {
 
     pub fn is_empty(&self) -> bool {
         self.slave.is_empty()
+    }
+
+    /// Row i's (node, coefficient) couples.
+    pub fn row(&self, i: usize) -> &[(usize, f64)] {
+        &self.coupling[i]
     }
 
     /// Whether any pair carries friction (i.e. tangential multipliers exist).
@@ -165,13 +177,155 @@ fn tangent(n: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
     (dot(p, p).sqrt() > 1e-6).then(|| unit(p))
 }
 
+/// One row's geometry before its frame and bound: the slave node, its coupling, normal, area
+/// and initial gap.
+struct RowGeom {
+    slave: usize,
+    coupling: Vec<(usize, f64)>,
+    normal: [f64; 3],
+    area: f64,
+    gap: f64,
+}
+
+/// Why node-to-node pairing did not apply.
+enum NodeToNode {
+    /// The faces do not match node for node (the message says where): mortar applies.
+    Mismatch(String),
+    /// Anything else (the error as is).
+    Fail(Error),
+}
+
+/// The bounding box diagonal of the nodes `v`.
+fn diagonal(mesh: &Mesh, v: &[usize]) -> f64 {
+    let (lo, hi) = v.iter().map(|&i| mesh.nodes[i]).fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
+        (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d])))
+    });
+    if v.is_empty() {
+        0.0
+    } else {
+        dot(sub(hi, lo), sub(hi, lo)).sqrt()
+    }
+}
+
+/// Node-to-node rows of one pair entry: every slave node with the master node at its place.
+fn node_to_node(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64) -> std::result::Result<Vec<RowGeom>, NodeToNode> {
+    let normals = node_normals(mesh, slave);
+    let mnormals = node_normals(mesh, master);
+    let areas = node_areas(mesh, slave);
+    let snodes = slave.nodes();
+    let mnodes = master.nodes();
+    if snodes.len() != mnodes.len() {
+        return Err(NodeToNode::Mismatch(format!(
+            "slave face {} has {} nodes but master face {} has {}",
+            slave.name,
+            snodes.len(),
+            master.name,
+            mnodes.len()
+        )));
+    }
+    // master nodes hashed by their position in the contact plane of the slave face's mean
+    // normal, in cells of size tol: a match lies in one of the 27 neighbouring cells
+    let mean = unit(normals.values().fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]));
+    let inplane = |x: [f64; 3]| sub(x, mean.map(|v| v * dot(x, mean)));
+    let cell = |x: [f64; 3]| inplane(x).map(|v| (v / tol).floor() as i64);
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for &v in &mnodes {
+        grid.entry(cell(mesh.nodes[v])).or_default().push(v);
+    }
+    let mut used = HashMap::new();
+    // off the line along `dir` through x, the distance of y
+    let off = |x: [f64; 3], y: [f64; 3], dir: [f64; 3]| {
+        let d = sub(y, x);
+        let t = sub(d, dir.map(|v| v * dot(d, dir)));
+        dot(t, t).sqrt()
+    };
+    let mut rows = Vec::with_capacity(snodes.len());
+    for &s in &snodes {
+        let xs = mesh.nodes[s];
+        let cs = cell(xs);
+        // the master node on the slave node's normal line; failing that, the master node
+        // whose normal line passes through the slave node (a curved slave face against a
+        // flatter master: the frame then follows the master face)
+        let mut best: [Option<(f64, usize)>; 2] = [None, None];
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &m in grid.get(&[cs[0] + dx, cs[1] + dy, cs[2] + dz]).into_iter().flatten() {
+                        for (b, dist) in best.iter_mut().zip([off(xs, mesh.nodes[m], normals[&s]), off(mesh.nodes[m], xs, mnormals[&m])]) {
+                            if dist <= tol && b.is_none_or(|b| dist < b.0) {
+                                *b = Some((dist, m));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let (n, best) = match best {
+            [Some(b), _] => (normals[&s], Some(b)),
+            [None, Some(b)] => (mnormals[&b.1].map(|v| -v), Some(b)),
+            _ => (normals[&s], None),
+        };
+        let Some((_, m)) = best else {
+            return Err(NodeToNode::Mismatch(format!(
+                "faces {} and {} do not match node to node: no master node within {tol:.1e} of the slave node at ({:.6}, {:.6}, {:.6})",
+                slave.name, master.name, xs[0], xs[1], xs[2]
+            )));
+        };
+        if let Some(prev) = used.insert(m, s) {
+            return Err(NodeToNode::Fail(Error::scene(key, format!("master node {m} of {} is matched by two slave nodes ({prev} and {s})", master.name))));
+        }
+        if dot(n, mnormals[&m]) > -0.5 {
+            return Err(NodeToNode::Fail(Error::scene(key, format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name))));
+        }
+        rows.push(RowGeom { slave: s, coupling: vec![(s, 1.0), (m, -1.0)], normal: n, area: areas[&s], gap: dot(sub(mesh.nodes[m], xs), n) });
+    }
+    Ok(rows)
+}
+
+/// Dual mortar rows of one interface ([`crate::contact::mortar`]); `search` the search distance.
+fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64) -> Result<Vec<RowGeom>> {
+    use crate::contact::mortar::{dual_mortar, MortarParams, SurfaceFacet};
+    fn facets(f: &Face) -> Vec<SurfaceFacet<'_>> {
+        f.facets.iter().map(|q| SurfaceFacet { nodes: q.nodes() }).collect()
+    }
+    if let Some(q) = slave.facets.iter().chain(&master.facets).find(|q| !matches!(q.kind, FacetKind::Tri3 | FacetKind::Quad4)) {
+        return Err(Error::scene(key, format!("mortar needs linear facets (tri3, quad4); faces {} / {} hold {}", slave.name, master.name, q.kind.plural())));
+    }
+    let params = MortarParams { search_distance: search, ..Default::default() };
+    let r = dual_mortar(&mesh.nodes, &facets(slave), &facets(master), &params)
+        .map_err(|e| Error::scene(key, format!("mortar of {} on {}: {e}", slave.name, master.name)))?;
+    if r.is_empty() {
+        return Err(Error::scene(key, format!("faces {} and {} do not overlap within the search distance {search:.3e}", slave.name, master.name)));
+    }
+    Ok((0..r.len())
+        .map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i] })
+        .collect())
+}
+
+/// The rows of interface `slave`–`master` under `discretization` (None: node-to-node where the
+/// faces match, mortar otherwise), and the discretization taken.
+fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>) -> Result<(Vec<RowGeom>, Discretization)> {
+    let search = || search.unwrap_or_else(|| default_search_distance(diagonal(mesh, &slave.nodes())));
+    let mortar = || Ok((mortar_rows(mesh, key, slave, master, search())?, Discretization::Mortar));
+    match discretization {
+        Some(Discretization::Mortar) => mortar(),
+        Some(Discretization::NodeToNode) => match node_to_node(mesh, key, slave, master, tol) {
+            Ok(rows) => Ok((rows, Discretization::NodeToNode)),
+            Err(NodeToNode::Mismatch(m)) => Err(Error::scene(key, format!("{m}: node-to-node needs matching meshes (discretization = \"mortar\" takes any)"))),
+            Err(NodeToNode::Fail(e)) => Err(e),
+        },
+        None => match node_to_node(mesh, key, slave, master, tol) {
+            Ok(rows) => Ok((rows, Discretization::NodeToNode)),
+            Err(NodeToNode::Mismatch(_)) => mortar(),
+            Err(NodeToNode::Fail(e)) => Err(e),
+        },
+    }
+}
+
 /// Pairs the faces of every contact entry of the scene. `faces[k]` = (slave, master) indices into
 /// `mesh.faces` for `pairs[k]`.
 pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Result<Contact> {
-    let (lo, hi) = mesh.nodes.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
-        (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d])))
-    });
-    let size = dot(sub(hi, lo), sub(hi, lo)).sqrt().max(f64::MIN_POSITIVE);
+    let size = diagonal(mesh, &(0..mesh.nodes.len()).collect::<Vec<_>>()).max(f64::MIN_POSITIVE);
     let mut c = Contact::default();
     // (slave, master) node couples, unordered, and the entry that made each
     let mut couples: HashMap<(usize, usize), usize> = HashMap::new();
@@ -179,99 +333,25 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         let key = format!("contact.pair[{k}]");
         let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
         let tol = p.tolerance.unwrap_or(1e-8 * size);
-        let normals = node_normals(mesh, slave);
-        let mnormals = node_normals(mesh, master);
-        let areas = node_areas(mesh, slave);
-        let snodes = slave.nodes();
-        let mnodes = master.nodes();
-        if snodes.len() != mnodes.len() {
-            return Err(Error::scene(
-                key,
-                format!(
-                    "slave face {} has {} nodes but master face {} has {}: only matching (node-to-node) meshes are supported",
-                    slave.name,
-                    snodes.len(),
-                    master.name,
-                    mnodes.len()
-                ),
-            ));
-        }
-        // master nodes hashed by their position in the contact plane of the slave face's mean
-        // normal, in cells of size tol: a match lies in one of the 27 neighbouring cells
-        let mean = unit(normals.values().fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]));
-        let inplane = |x: [f64; 3]| sub(x, mean.map(|v| v * dot(x, mean)));
-        let cell = |x: [f64; 3]| inplane(x).map(|v| (v / tol).floor() as i64);
-        let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-        for &v in &mnodes {
-            grid.entry(cell(mesh.nodes[v])).or_default().push(v);
-        }
-        let mut used = HashMap::new();
-        // off the line along `dir` through x, the distance of y
-        let off = |x: [f64; 3], y: [f64; 3], dir: [f64; 3]| {
-            let d = sub(y, x);
-            let t = sub(d, dir.map(|v| v * dot(d, dir)));
-            dot(t, t).sqrt()
-        };
-        for &s in &snodes {
-            let xs = mesh.nodes[s];
-            let cs = cell(xs);
-            // the master node on the slave node's normal line; failing that, the master node
-            // whose normal line passes through the slave node (a curved slave face against a
-            // flatter master: the frame then follows the master face)
-            let mut best: [Option<(f64, usize)>; 2] = [None, None];
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        for &m in grid.get(&[cs[0] + dx, cs[1] + dy, cs[2] + dz]).into_iter().flatten() {
-                            for (b, dist) in best.iter_mut().zip([off(xs, mesh.nodes[m], normals[&s]), off(mesh.nodes[m], xs, mnormals[&m])]) {
-                                if dist <= tol && b.is_none_or(|b| dist < b.0) {
-                                    *b = Some((dist, m));
-                                }
-                            }
-                        }
-                    }
+        let (rows, how) = interface_rows(mesh, &key, slave, master, tol, p.discretization, p.search_distance)?;
+        c.discretization.push(how);
+        for row in rows {
+            let (s, n, xs) = (row.slave, row.normal, mesh.nodes[row.slave]);
+            for &(m, _) in row.coupling.iter().skip(1) {
+                if let Some(prev) = couples.insert((s.min(m), s.max(m)), k).filter(|&prev| prev != k) {
+                    return Err(Error::scene(
+                        &key,
+                        format!(
+                            "the slave node at ({:.6}, {:.6}, {:.6}) of {} and its master node are already a pair of contact.pair[{prev}]: give each interface once",
+                            xs[0], xs[1], xs[2], slave.name
+                        ),
+                    ));
                 }
             }
-            let (n, best) = match best {
-                [Some(b), _] => (normals[&s], Some(b)),
-                [None, Some(b)] => (mnormals[&b.1].map(|v| -v), Some(b)),
-                _ => (normals[&s], None),
-            };
-            let Some((_, m)) = best else {
+            if row.gap < -tol {
                 return Err(Error::scene(
-                    key,
-                    format!(
-                        "faces {} and {} do not match node to node: no master node within {tol:.1e} of the slave node at ({:.6}, {:.6}, {:.6})",
-                        slave.name, master.name, xs[0], xs[1], xs[2]
-                    ),
-                ));
-            };
-            if let Some(prev) = used.insert(m, s) {
-                return Err(Error::scene(key, format!("master node {m} of {} is matched by two slave nodes ({prev} and {s})", master.name)));
-            }
-            if let Some(prev) = couples.insert((s.min(m), s.max(m)), k) {
-                return Err(Error::scene(
-                    key,
-                    format!(
-                        "the slave node at ({:.6}, {:.6}, {:.6}) of {} and its master node are already a pair of contact.pair[{prev}]: give each interface once",
-                        xs[0], xs[1], xs[2], slave.name
-                    ),
-                ));
-            }
-            if dot(n, mnormals[&m]) > -0.5 {
-                return Err(Error::scene(
-                    key,
-                    format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name),
-                ));
-            }
-            let gap = dot(sub(mesh.nodes[m], xs), n);
-            if gap < -tol {
-                return Err(Error::scene(
-                    key,
-                    format!(
-                        "bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}",
-                        xs[0], xs[1], xs[2], slave.name, -gap, master.name
-                    ),
+                    &key,
+                    format!("bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}", xs[0], xs[1], xs[2], slave.name, -row.gap, master.name),
                 ));
             }
             let dir = p.friction.direction().unwrap_or([1.0, 0.0, 0.0]);
@@ -282,14 +362,14 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                 }
                 (None, _) => tangent(n, [0.0, 1.0, 0.0]).expect("x and y cannot both be normal"),
             };
-            let w = areas[&s];
+            let w = row.area;
             c.slave.push(s);
-            c.master.push(m);
+            c.coupling.push(row.coupling);
             c.normal.push(n);
             c.t1.push(t1);
             c.t2.push(cross(t1, n));
             c.area.push(w);
-            c.gap.push(gap.max(0.0));
+            c.gap.push(row.gap.max(0.0));
             c.bound.push(match p.friction {
                 Friction::None => SlipBound::None,
                 Friction::Tresca { g } => SlipBound::Disc(g * w),
@@ -307,6 +387,43 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         }
     }
     Ok(c)
+}
+
+/// The equality rows of a tied interface: as contact rows, in all three directions.
+#[derive(Clone, Debug, Default)]
+pub struct Tied {
+    /// The slave node of each row.
+    pub slave: Vec<usize>,
+    /// (node, coefficient) of each row: Σ c·u_node,k = 0 for k = x, y, z.
+    pub coupling: Vec<Vec<(usize, f64)>>,
+    /// The `[[tie]]` entry of each row.
+    pub entry: Vec<usize>,
+}
+
+impl Tied {
+    pub fn len(&self) -> usize {
+        self.slave.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.slave.is_empty()
+    }
+}
+
+/// The rows of every `[[tie]]` (mortar on any meshes; node-to-node where the faces match).
+pub fn tie(mesh: &Mesh, ties: &[Tie], faces: &[(usize, usize)]) -> Result<Tied> {
+    let size = diagonal(mesh, &(0..mesh.nodes.len()).collect::<Vec<_>>()).max(f64::MIN_POSITIVE);
+    let mut t = Tied::default();
+    for (k, (p, &(sf, mf))) in ties.iter().zip(faces).enumerate() {
+        let key = format!("tie[{k}]");
+        let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
+        for row in interface_rows(mesh, &key, slave, master, 1e-8 * size, None, p.search_distance)?.0 {
+            t.slave.push(row.slave);
+            t.coupling.push(row.coupling);
+            t.entry.push(k);
+        }
+    }
+    Ok(t)
 }
 
 #[cfg(test)]
@@ -346,7 +463,7 @@ mod tests {
     }
 
     fn seed_pair(friction: Friction) -> ContactPair {
-        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None }
+        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None }
     }
 
     fn faces(m: &Mesh, s: &str, ma: &str) -> Vec<(usize, usize)> {
@@ -367,9 +484,10 @@ mod tests {
             assert_eq!(c.t1[i], [1.0, 0.0, 0.0]);
             assert_eq!(c.t2[i], [0.0, 1.0, 0.0]);
             assert_eq!(c.gap[i], 0.0);
-            let (xs, xm) = (m.nodes[c.slave[i]], m.nodes[c.master[i]]);
+            let master = c.row(i)[1].0;
+            let (xs, xm) = (m.nodes[c.slave[i]], m.nodes[master]);
             assert!(sub(xs, xm).iter().all(|v| v.abs() < 1e-14));
-            assert!(m.bodies[0].nodes.contains(&c.slave[i]) && m.bodies[1].nodes.contains(&c.master[i]));
+            assert!(m.bodies[0].nodes.contains(&c.slave[i]) && m.bodies[1].nodes.contains(&master));
             // lumped areas: quarter at corners, half on edges, full inside
             let on = |v: f64, a: f64| (v - a).abs() < 1e-12;
             let edges = [on(xs[0], 0.0) || on(xs[0], 2.0), on(xs[1], 0.0) || on(xs[1], 1.0)].iter().filter(|&&b| b).count();
@@ -419,9 +537,16 @@ mod tests {
 
     #[test]
     fn bad_pairs_are_named() {
+        // non-matching faces: refused by node-to-node, naming both faces; mortar (the default
+        // there) gives a row per slave node, covering the face
+        let n2n = |f| ContactPair { discretization: Some(Discretization::NodeToNode), ..seed_pair(f) };
         let m = blocks(5, 4, [0.0; 3], I);
-        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
-        assert!(e.contains("contact.pair[0]") && e.contains("upper.zmin") && e.contains("lower.zmax"), "{e}");
+        let e = pair(&m, &[n2n(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[0]") && e.contains("upper.zmin") && e.contains("lower.zmax") && e.contains("mortar"), "{e}");
+        let c = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        assert_eq!(c.len(), 25);
+        assert!((c.area.iter().sum::<f64>() - 2.0).abs() < 1e-12);
+        assert!(c.coupling.iter().all(|r| r.len() > 2 || r.len() == 2));
         let m = blocks(4, 4, [0.0; 3], I);
         let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmin")).unwrap_err().to_string();
         assert!(e.contains("do not face each other"), "{e}");
@@ -429,14 +554,18 @@ mod tests {
         let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
         assert!(e.contains("overlap"), "{e}");
         let m = blocks(4, 4, [0.05, 0.0, 0.0], I);
-        let e = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        let e = pair(&m, &[n2n(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
         assert!(e.contains("do not match node to node"), "{e}");
+        // far apart: no master facet within the search distance, the slave node named
+        let m = blocks(4, 4, [0.0, 0.0, 0.5], I);
+        let e = pair(&m, &[ContactPair { discretization: Some(Discretization::Mortar), ..seed_pair(Friction::None) }], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[0]") && e.contains("slave node") && e.contains("search distance"), "{e}");
         // one interface given twice, or from both sides
         let m = blocks(4, 4, [0.0; 3], I);
         let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
-        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None };
+        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None };
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");

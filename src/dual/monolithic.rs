@@ -60,12 +60,12 @@ pub fn body_rows(contact: &Contact, layout: Layout, dofs: &DofMap) -> (Vec<(usiz
         }
     };
     for i in 0..contact.len() {
-        let (s, m) = (contact.slave[i], contact.master[i]);
         let rows = std::iter::once((layout.normal(i), contact.normal[i]))
             .chain(layout.friction.then(|| [(layout.tangent(i, 0), contact.t1[i]), (layout.tangent(i, 1), contact.t2[i])]).into_iter().flatten());
         for (row, dir) in rows {
-            add(row, s, 1.0, dir);
-            add(row, m, -1.0, dir);
+            for &(v, coef) in contact.row(i) {
+                add(row, v, coef, dir);
+            }
         }
     }
     (entries, shift)
@@ -294,8 +294,7 @@ mod tests {
                 }
             }
             let rel = |i: usize, dir: [f64; 3]| {
-                let (us, um) = (full[contact.slave[i]], full[contact.master[i]]);
-                (0..3).map(|c| (us[c] - um[c]) * dir[c]).sum::<f64>()
+                contact.row(i).iter().map(|&(v, coef)| (0..3).map(|c| coef * full[v][c] * dir[c]).sum::<f64>()).sum::<f64>()
             };
             let scale = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             for i in 0..contact.len() {

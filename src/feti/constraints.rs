@@ -4,8 +4,9 @@
 //! is friction), then λ_E: for every mesh node in ascending order and every component, either
 //! its Dirichlet rows or its gluing rows.
 //!
-//! - **B_I** (contact): the rows N and T of each pair, acting on the *first* copy of the slave
-//!   and of the master node (the other copies follow by gluing); c = gap for the normal rows.
+//! - **B_I** (contact): the rows N and T of each pair, acting on the *first* copy of each node
+//!   of the pair's coupling (slave and master nodes; the other copies follow by gluing);
+//!   c = gap for the normal rows.
 //!   A prescribed DOF's part of a contact row moves to c (c −= coefficient·value, as on the
 //!   monolithic dual) and leaves a zero entry: otherwise a contact row on held DOFs repeats
 //!   Dirichlet rows (a tangent along a roller face: B loses rank, F turns singular there).
@@ -20,8 +21,10 @@
 //!   plain ±1 rows between consecutive copies (non-redundant, not orthogonal at cross points),
 //!   kept for comparison. Redundant gluing (all pairs of copies) is not offered: B_E would be
 //!   rank-deficient and F singular on Ker B_Eᵀ.
+//! - **Ties** (`[[tie]]`): per row of the mortar (or node-to-node) coupling and component,
+//!   Σ c·u_node,k = 0 on the first copy of each node, after the gluing and Dirichlet rows.
 
-use crate::contact::pairing::Contact;
+use crate::contact::pairing::{Contact, Tied};
 use crate::feti::decomposition::Decomposition;
 use crate::qp::Layout;
 use crate::scene::Gluing;
@@ -43,6 +46,8 @@ pub struct Constraints {
     pub rows: Vec<Vec<(usize, usize, f64)>>,
     pub gluing_rows: usize,
     pub dirichlet_rows: usize,
+    /// Rows of tied interfaces (`[[tie]]`), after the gluing and Dirichlet rows.
+    pub tie_rows: usize,
 }
 
 impl Constraints {
@@ -63,7 +68,7 @@ impl Constraints {
 /// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a
 /// later entry for the same DOF winning; `contact` the pairs (if contact is on); `eliminated`
 /// per subdomain the local DOFs held inside it (sorted; empty: all Dirichlet rows).
-pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, gluing: Gluing, eliminated: &[Vec<usize>]) -> Constraints {
+pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, ties: &Tied, gluing: Gluing, eliminated: &[Vec<usize>]) -> Constraints {
     let (m, friction) = contact.map_or((0, false), |c| (c.len(), c.has_friction()));
     let mut layout = Layout::contact(m, friction);
     let mut rows = vec![Vec::new(); d.subdomains.len()];
@@ -83,7 +88,7 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
             let pair_rows = std::iter::once((layout.normal(i), ct.normal[i]))
                 .chain(friction.then(|| [(layout.tangent(i, 0), ct.t1[i]), (layout.tangent(i, 1), ct.t2[i])]).into_iter().flatten());
             for (row, dir) in pair_rows {
-                for (node, sign) in [(ct.slave[i], 1.0), (ct.master[i], -1.0)] {
+                for &(node, sign) in ct.row(i) {
                     let (s, l) = first(node);
                     for k in 0..3 {
                         if dir[k] != 0.0 {
@@ -141,8 +146,33 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
             }
         }
     }
-    layout.free = gluing_rows + dirichlet_rows;
-    Constraints { layout, c, gap, c_moved, c_held, rows, gluing_rows, dirichlet_rows }
+    // tied interfaces: Σ c·u_node,k = 0 per row and component, on the first copy of each node
+    // (a prescribed DOF's part moves to c, as for contact rows); a row with no free DOF left
+    // holds nothing and is left out
+    let mut tie_rows = 0;
+    for coupling in &ties.coupling {
+        for k in 0..3 {
+            if coupling.iter().all(|&(v, _)| prescribed.contains_key(&(v, k))) {
+                continue;
+            }
+            let row = c.len();
+            c.push(0.0);
+            for &(node, coef) in coupling {
+                let (s, l) = d.copies[node][0];
+                match prescribed.get(&(node, k)) {
+                    Some(&(val, entry)) => {
+                        c[row] -= coef * val;
+                        c_moved.push((row, entry, coef));
+                        rows[s].push((row, 3 * l + k, 0.0));
+                    }
+                    None => rows[s].push((row, 3 * l + k, coef)),
+                }
+            }
+            tie_rows += 1;
+        }
+    }
+    layout.free = gluing_rows + dirichlet_rows + tie_rows;
+    Constraints { layout, c, gap, c_moved, c_held, rows, gluing_rows, dirichlet_rows, tie_rows }
 }
 
 /// c on this rank's rows at other prescribed values: [`Constraints`]' record of how c depends
@@ -194,7 +224,7 @@ mod tests {
         let d = decompose(&mesh, 4).unwrap();
         let dirichlet: Vec<_> = (0..5).map(|v| (v, 2, 0.5)).collect();
         for gluing in [Gluing::Orthonormal, Gluing::Chain] {
-            let c = build(&d, &dirichlet, None, gluing, &[]);
+            let c = build(&d, &dirichlet, None, &Tied::default(), gluing, &[]);
             assert_eq!(c.layout.dim(), c.c.len());
             let n = c.layout.dim();
             // B Bᵀ as a dense matrix
@@ -239,7 +269,7 @@ mod tests {
         assert!(!cons.c_moved.is_empty() && !cons.c_held.is_empty());
         let values: Vec<f64> = (0..model.constraints.len()).map(|i| 1e-3 * ((i * 7919 % 23) as f64 - 11.0)).collect();
         let moved: Vec<(usize, usize, f64)> = model.constraints.iter().zip(&values).map(|(&(v, k, _), &x)| (v, k, x)).collect();
-        let again = build(&d, &moved, model.pairs.as_ref(), Gluing::Orthonormal, &[]);
+        let again = build(&d, &moved, model.pairs.as_ref(), &model.ties, Gluing::Orthonormal, &[]);
         assert_ne!(again.c, cons.c, "the values move c");
         for rows in [(0..cons.c.len()).collect::<Vec<_>>(), (0..cons.c.len()).step_by(3).collect()] {
             let local = LocalRhs::new(&cons, &rows);

@@ -167,7 +167,7 @@ pub(crate) fn seed_fixture(n: usize, parts: usize) -> (crate::model::Model, deco
     let ls = crate::scene::load(&path, &[format!("mesh.n={n}")]).unwrap();
     let model = crate::model::build(&ls).unwrap();
     let d = decomposition::decompose(&model.mesh, parts).unwrap();
-    let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), crate::scene::Gluing::Orthonormal, &[]);
+    let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), &model.ties, crate::scene::Gluing::Orthonormal, &[]);
     (model, d, cons)
 }
 

@@ -612,7 +612,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             subdomains_per_body: (0..mesh.bodies.len()).map(|b| f.subdomains.iter().filter(|s| s.piece.body == b).count()).collect(),
             gluing: dec.gluing,
             dirichlet: dec.dirichlet,
-            multipliers: Multipliers { contact: f.contact_rows, gluing: f.gluing_rows, dirichlet: f.dirichlet_rows },
+            multipliers: Multipliers { contact: f.contact_rows, gluing: f.gluing_rows, dirichlet: f.dirichlet_rows, tie: f.tie_rows },
             eliminated_dofs: f.eliminated_dofs,
             clusters: f.clusters,
             corner_rows: f.corner_rows,
@@ -819,12 +819,16 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
         let _ = writeln!(
             s,
-            "contact: m = {} node-to-node pairs, Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential",
+            "contact: m = {} pairs ({}), Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential",
             c.len(),
+            c.discretization.iter().map(|d| format!("{d:?}").to_lowercase().replace("nodetonode", "node-to-node")).collect::<Vec<_>>().join(", "),
             c.area.iter().sum::<f64>(),
             c.len(),
             tangential
         );
+    }
+    if !model.ties.is_empty() {
+        let _ = writeln!(s, "ties: {} mortar rows × 3 directions (equality multipliers of the TFETI dual)", model.ties.len());
     }
     let dec = &ls.scene.decomposition;
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;

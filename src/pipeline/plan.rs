@@ -185,7 +185,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         let priced = (|| -> Result<Candidate> {
             let d = decompose_each(mesh, parts)?;
             let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
-            let cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
+            let cons = constraints::build(&d, &model.constraints, contact, &model.ties, dec.gluing, &elim);
             // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the
             // others scaled from it by their node count (nested dissection of 3-D pieces:
             // nnz(L) ~ n^4/3, work ~ n²)
@@ -326,7 +326,7 @@ mod tests {
         }
         let (_, d, _) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
         let elim = crate::feti::eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
-        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), dec.gluing, &elim);
+        let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), &model.ties, dec.gluing, &elim);
         assert_eq!((tfeti[0].gluing_rows, tfeti[0].dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
         assert_eq!(d.subdomains.len(), 2 * tfeti[0].parts[0]);
     }

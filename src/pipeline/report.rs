@@ -134,6 +134,9 @@ pub struct Multipliers {
     pub contact: usize,
     pub gluing: usize,
     pub dirichlet: usize,
+    /// Rows of tied interfaces (`[[tie]]`).
+    #[serde(default)]
+    pub tie: usize,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

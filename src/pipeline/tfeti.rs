@@ -39,6 +39,7 @@ pub struct TfetiInfo {
     pub contact_rows: usize,
     pub gluing_rows: usize,
     pub dirichlet_rows: usize,
+    pub tie_rows: usize,
     /// DOFs held inside their subdomains (hybrid Dirichlet), over all copies.
     pub eliminated_dofs: usize,
     /// H-TFETI: clusters and the gluing rows of their corner nodes (held inside the clusters,
@@ -158,7 +159,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = decompose_each(mesh, &parts)?;
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
-        let sub_cons = constraints::build(&d, &model.constraints, contact, dec.gluing, &elim);
+        let sub_cons = constraints::build(&d, &model.constraints, contact, &model.ties, dec.gluing, &elim);
         let clusters = Clustering::new(mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
         let cons = clusters.outer(sub_cons);
         let dofs: Vec<usize> = clusters.members.iter().map(|m| m.iter().map(|&s| 3 * d.subdomains[s].nodes.len()).sum()).collect();
@@ -358,7 +359,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
     let TfetiProblem { clusters, constraints: cons, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } = setup(comm, ls, model, t)?;
     let model = &*model;
     // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
-    let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows];
+    let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows, cons.tie_rows];
     drop((cons, owner));
     let contact = model.pairs.as_ref();
     let params = &s.params;
@@ -447,7 +448,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
         let mut solution = finish_subdomains(comm, model, &share, &dual, &rec.u, &rec.rhs, t)?;
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
-        [f.contact_rows, f.gluing_rows, f.dirichlet_rows] = rows;
+        [f.contact_rows, f.gluing_rows, f.dirichlet_rows, f.tie_rows] = rows;
         f.eliminated_dofs = share.eliminated_dofs;
         f.clusters = clusters.len();
         f.corner_rows = clusters.corner_rows();

@@ -53,7 +53,7 @@ pub fn run(args: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
         let parts: Vec<usize> = model.mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = decompose_each(&model.mesh, &parts)?;
         let elim = eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
-        let sub_cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), dec.gluing, &elim);
+        let sub_cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), &model.ties, dec.gluing, &elim);
         let clusters = Clustering::new(&model.mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
         let cons = clusters.outer(sub_cons);
         let loads = subdomain_loads(&d, &model.loads, &(0..d.subdomains.len()).collect::<Vec<_>>());
