@@ -1,0 +1,176 @@
+//! Contact and tying between non-matching meshes by dual mortar, through the whole program:
+//! the contact patch test (non-matching hexahedra, tetrahedra on hexahedra), tied blocks
+//! (uniform stress across a non-matching interface), mortar against node-to-node on matching
+//! meshes, and non-matching TFETI on 1, 2 and 3 ranks bitwise.
+
+mod common;
+
+use common::{fields, mpirun, root, solve, tmpdir};
+use tresca_feti::output::{OutputData, Values};
+
+fn f64_field<'a>(data: &'a OutputData, name: &str) -> &'a [f64] {
+    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
+    match &f.values {
+        Values::F64(v) => v,
+        Values::I32(_) => panic!("field {name} is not floating point"),
+    }
+}
+
+fn i32_field<'a>(data: &'a OutputData, name: &str) -> &'a [i32] {
+    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
+    match &f.values {
+        Values::I32(v) => v,
+        Values::F64(_) => panic!("field {name} is not integer"),
+    }
+}
+
+/// Two blocks of one material stacked at z = 1 with different meshes (upper `up` nodes per
+/// direction and cells `cells`, lower 7 × 5 × 6 hexahedra), on rollers (each body's xmin, ymin
+/// and the lower zmin held normally), pressed by p = 1 on top, joined by `interface` (a contact
+/// pair or a tie, TOML). The exact solution is uniaxial: σ_zz = −1 everywhere.
+fn stack(up: [usize; 3], cells: &str, interface: &str) -> String {
+    format!(
+        r#"
+[[material]]
+name = "m"
+E = 1000.0
+nu = 0.3
+[[body]]
+name = "upper"
+material = "m"
+box = {{ min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = {up:?}, cells = "{cells}" }}
+[[body]]
+name = "lower"
+material = "m"
+box = {{ min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [7, 5, 6] }}
+[[dirichlet]]
+face = "lower.zmin"
+components = ["z"]
+[[dirichlet]]
+face = "lower.xmin"
+components = ["x"]
+[[dirichlet]]
+face = "lower.ymin"
+components = ["y"]
+[[dirichlet]]
+face = "upper.xmin"
+components = ["x"]
+[[dirichlet]]
+face = "upper.ymin"
+components = ["y"]
+[[traction]]
+face = "upper.zmax"
+p = [0.0, 0.0, -1.0]
+{interface}
+[solver]
+eps = 1e-10
+"#
+    )
+}
+
+const CONTACT: &str = "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n";
+
+fn write(dir: &std::path::Path, scene: &str) -> std::path::PathBuf {
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, scene).unwrap();
+    p
+}
+
+/// Every cell's von Mises stress is 1 (uniaxial σ_zz = −1) to `tol`, and every slave node of
+/// the contact carries the pressure 1 to `tol`.
+fn assert_uniform(name: &str, data: &OutputData, contact: bool, tol: f64) {
+    let vm = f64_field(data, "von_mises");
+    let worst = vm.iter().map(|v| (v - 1.0).abs()).fold(0.0f64, f64::max);
+    assert!(worst <= tol, "{name}: von Mises off 1 by {worst:.2e}");
+    if contact {
+        let status = i32_field(data, "contact_status");
+        let p = f64_field(data, "contact_pressure");
+        let on: Vec<f64> = status.iter().zip(p).filter(|(s, _)| **s != 0).map(|(_, p)| *p).collect();
+        assert!(!on.is_empty(), "{name}: no contact rows");
+        let worst = on.iter().map(|v| (v - 1.0).abs()).fold(0.0f64, f64::max);
+        assert!(worst <= tol, "{name}: contact pressure off 1 by {worst:.2e} over {} slave nodes", on.len());
+    }
+}
+
+/// The contact patch test: non-matching hexahedra (5×4×4 on 7×5×6 nodes) and linear tetrahedra
+/// on hexahedra, frictionless and with Tresca friction that never slips: the contact pressure is
+/// uniform and the stress constant to 1e-8 — the dual mortar rows transmit a uniform pressure
+/// exactly (node-to-node cannot pair these meshes at all).
+#[test]
+fn contact_patch_test_on_non_matching_meshes() {
+    let dir = tmpdir("patch");
+    for (name, up, cells, friction) in [
+        ("hex-on-hex", [5, 4, 4], "hex8", ""),
+        ("tet-on-hex", [4, 3, 4], "tet4", ""),
+        ("hex-on-hex-tresca", [5, 4, 4], "hex8", "friction = { type = \"tresca\", g = 10.0 }\n"),
+    ] {
+        let scene = write(&dir, &stack(up, cells, &format!("{CONTACT}{friction}")));
+        let out = dir.join(format!("{name}.h5"));
+        solve(&scene, &[], &out);
+        assert_uniform(name, &fields(&out), true, 1e-8);
+    }
+}
+
+/// A tied interface between non-matching meshes carries the uniform stress exactly, on one and
+/// on several subdomains per body.
+#[test]
+fn tied_non_matching_blocks_carry_a_uniform_stress() {
+    let dir = tmpdir("tie");
+    let tie = "[[tie]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n";
+    for (name, cells, sets) in [("tie-hex", "hex8", vec![]), ("tie-tet", "tet4", vec!["decomposition.subdomains=3"])] {
+        let scene = write(&dir, &stack([5, 4, 4], cells, tie));
+        let out = dir.join(format!("{name}.h5"));
+        solve(&scene, &sets, &out);
+        let data = fields(&out);
+        assert_uniform(name, &data, false, 1e-8);
+        // u_z at the top: −σ/E · 2 = −2e-3 (uniaxial strain of the whole stack)
+        let u = &data.fields.iter().find(|f| f.name == "displacement").unwrap().values;
+        let Values::F64(u) = u else { panic!() };
+        let uz = u.iter().skip(2).step_by(3).fold(0.0f64, |m, v| m.min(*v));
+        assert!((uz + 2e-3).abs() < 1e-10, "{name}: top u_z {uz}");
+    }
+}
+
+/// On matching meshes (the seed, flat faces, hexahedra) mortar gives node-to-node's rows, so
+/// the two discretizations agree to the solver tolerance.
+#[test]
+fn mortar_equals_node_to_node_on_matching_meshes() {
+    let dir = tmpdir("match");
+    let scene = root().join("run/seed.toml");
+    let mut u = Vec::new();
+    for d in ["node-to-node", "mortar"] {
+        let out = dir.join(format!("{d}.h5"));
+        let set = format!("contact.pair.0.discretization=\"{d}\"");
+        solve(&scene, &["mesh.n=6", "solver.eps=1e-10", &set], &out);
+        u.push(f64_field(&fields(&out), "displacement").to_vec());
+    }
+    let scale = u[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = u[0].iter().zip(&u[1]).map(|(a, b)| (a - b).abs()).fold(0.0f64, f64::max);
+    assert!(diff <= 1e-8 * scale, "mortar vs node-to-node: max|Δu| = {diff:.2e} of {scale:.2e}");
+}
+
+/// Non-matching TFETI (mortar rows crossing subdomain and rank boundaries): 1, 2 and 3 ranks
+/// give bitwise the same displacement and contact pressure.
+#[test]
+fn non_matching_tfeti_is_bitwise_identical_on_1_2_3_ranks() {
+    let dir = tmpdir("ranks");
+    let scene = std::fs::read_to_string(root().join("run/seed.toml"))
+        .unwrap()
+        .replace("max = [2.0, 1.0, 2.0] }", "max = [2.0, 1.0, 2.0], nodes = [7, 5, 5] }")
+        .replace("max = [2.0, 1.0, 1.0] }", "max = [2.0, 1.0, 1.0], nodes = [9, 6, 6] }");
+    let path = write(&dir, &scene);
+    let mut runs = Vec::new();
+    for ranks in [1, 2, 3] {
+        let out = dir.join(format!("r{ranks}.h5"));
+        let o = mpirun(ranks, &["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap(), "--set", "decomposition.subdomains=3"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", String::from_utf8_lossy(&o.stderr));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("(TFETI dual)") && stdout.contains(&format!("{ranks} rank(s)")), "{stdout}");
+        let data = fields(&out);
+        runs.push((f64_field(&data, "displacement").to_vec(), f64_field(&data, "contact_pressure").to_vec()));
+    }
+    for r in &runs[1..] {
+        assert!(r.0.iter().zip(&runs[0].0).all(|(a, b)| a.to_bits() == b.to_bits()), "displacement differs");
+        assert!(r.1.iter().zip(&runs[0].1).all(|(a, b)| a.to_bits() == b.to_bits()), "contact pressure differs");
+    }
+}
