@@ -523,7 +523,7 @@ fn print_summary(s: &pipeline::Summary) {
     println!("tresca-feti {} — {} ({}), {} rank(s)", env!("CARGO_PKG_VERSION"), r.title, r.scene, r.ranks);
     println!("problem: {}", r.problem);
     let m = &r.mesh;
-    println!("mesh: {} nodes, {} hexahedra, n = {} DOFs ({} free)", m.nodes, m.elements, m.dofs, m.free_dofs);
+    println!("mesh: {} nodes, {}, n = {} DOFs ({} free)", m.nodes, m.cells, m.dofs, m.free_dofs);
     if let Some(tf) = &r.tfeti {
         let nnz_l: f64 = tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum();
         let mul = &tf.multipliers;

@@ -44,6 +44,21 @@ pub struct Model {
 pub struct MeshSize {
     pub nodes: usize,
     pub elements: usize,
+    /// Cells of each type, in [`crate::mesh::CellKind::ALL`] order.
+    pub by_kind: [usize; 4],
+}
+
+impl MeshSize {
+    /// "1000 hexahedra", "24 4-node tetrahedra and 8 wedges".
+    pub fn describe(&self) -> String {
+        let parts: Vec<String> =
+            crate::mesh::CellKind::ALL.iter().zip(self.by_kind).filter(|(_, n)| *n > 0).map(|(k, n)| format!("{n} {}", k.plural())).collect();
+        if parts.is_empty() {
+            "no cells".into()
+        } else {
+            parts.join(" and ")
+        }
+    }
 }
 
 /// The quasi-static load path: at step k (1…K) every Dirichlet value and traction is its
@@ -391,7 +406,11 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         floating.push(b);
     }
-    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len() };
+    let mut by_kind = [0; 4];
+    for (k, n) in mesh.cell_counts() {
+        by_kind[k.code()] = n;
+    }
+    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating })
 }
 

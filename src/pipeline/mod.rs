@@ -628,7 +628,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             subdomains: f.subdomains.clone(),
         }),
         ordering: format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
-        mesh: MeshReport { nodes: model.size.nodes, elements: model.size.elements, dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
+        mesh: MeshReport { nodes: model.size.nodes, elements: model.size.elements, cells: model.size.describe(), dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
         bodies: sol.bodies.clone(),
         results: Results {
             max_displacement: umax,

@@ -48,6 +48,9 @@ pub struct Report {
 pub struct MeshReport {
     pub nodes: usize,
     pub elements: usize,
+    /// The cells by type, in words ("1000 hexahedra").
+    #[serde(default)]
+    pub cells: String,
     pub dofs: usize,
     pub free_dofs: usize,
 }
