@@ -10,13 +10,28 @@
 //! contact rows; Dirichlet) or K_s's block there (lumped). BΔBᵀ is block-diagonal over groups
 //! of rows that share DOFs ([`Scaling`]); with orthonormal gluing and unit Dirichlet rows most
 //! groups are diagonal, so only the groups around contact nodes (and chain gluing) need a
-//! gather. The solver applies it as P M⁻¹ P with the orthogonal projector of its coarse
-//! space ([`crate::qp::Coarse`]).
+//! gather. Mortar contact rows share master nodes, so all rows of a non-matching interface form
+//! one group: a group of more than [`DENSE_MAX`] rows is held as a sparse Cholesky factor of its
+//! block instead of a dense inverse. The solver applies it as P M⁻¹ P with the orthogonal
+//! projector of its coarse space ([`crate::qp::Coarse`]).
 
 use super::constraints::Constraints;
 use super::distribution::Distribution;
 use crate::comm::Comm;
 use crate::error::{Error, Result};
+use crate::linalg::cholesky::{Cholesky, Ordering};
+use crate::linalg::sparse::SymCsc;
+
+/// The largest group of rows whose block of BΔBᵀ is inverted densely.
+pub const DENSE_MAX: usize = 256;
+
+/// The inverse of one group's block of BΔBᵀ.
+enum GroupInverse {
+    /// Row-major k × k.
+    Dense(Vec<f64>),
+    /// The block's sparse LLᵀ.
+    Sparse(Cholesky),
+}
 
 /// (BΔBᵀ)⁻¹ over the groups of rows that share DOFs, Δ = diag(Δ_s) the subdomains' weights:
 /// a group whose block is diagonal (one row, or orthonormal rows) is a scale per row, applied
@@ -31,8 +46,8 @@ pub struct Scaling {
     rows: Vec<usize>,
     /// The owned rows among them: (owned index, position in `rows`).
     mine: Vec<(usize, usize)>,
-    /// Per such group: positions in `rows` and the dense inverse (row-major).
-    groups: Vec<(Vec<usize>, Vec<f64>)>,
+    /// Per such group: positions in `rows` and the inverse of its block.
+    groups: Vec<(Vec<usize>, GroupInverse)>,
 }
 
 impl Scaling {
@@ -75,9 +90,15 @@ impl Scaling {
             *block.entry((a, b)).or_insert(0.0) += v;
         }
         let mut diag = vec![0.0; n];
-        let mut dense: Vec<(Vec<usize>, Vec<f64>)> = Vec::new();
+        let mut dense: Vec<(Vec<usize>, GroupInverse)> = Vec::new();
+        let singular = |rows: &[usize]| Error::numerical("the FETI preconditioner's scaling", format!("BBᵀ is singular on the rows {rows:?}: B lacks full row rank"));
         for rows in members.into_values() {
             let k = rows.len();
+            if k > DENSE_MAX {
+                let chol = sparse_block(&rows, &block).ok_or_else(|| singular(&rows))?;
+                dense.push((rows, GroupInverse::Sparse(chol)));
+                continue;
+            }
             let m: Vec<f64> = (0..k * k).map(|p| block.get(&(rows[p / k], rows[p % k])).copied().unwrap_or(0.0)).collect();
             let scale = m.iter().map(|v| v.abs()).fold(0.0, f64::max);
             if (0..k * k).all(|p| p / k == p % k || m[p].abs() <= 1e-14 * scale) {
@@ -87,8 +108,8 @@ impl Scaling {
                 }
                 continue;
             }
-            let inv = inverse(&m, k).ok_or_else(|| Error::numerical("the FETI preconditioner's scaling", format!("BBᵀ is singular on the rows {rows:?}: B lacks full row rank")))?;
-            dense.push((rows, inv));
+            let inv = inverse(&m, k).ok_or_else(|| singular(&rows))?;
+            dense.push((rows, GroupInverse::Dense(inv)));
         }
         let mut all: Vec<usize> = dense.iter().flat_map(|g| g.0.iter().copied()).collect();
         all.sort_unstable();
@@ -115,14 +136,48 @@ impl Scaling {
         let mut out = vec![0.0; buf.len()];
         for (pos, inv) in &self.groups {
             let k = pos.len();
-            for (a, &pa) in pos.iter().enumerate() {
-                out[pa] = pos.iter().enumerate().map(|(b, &pb)| inv[a * k + b] * buf[pb]).sum();
+            match inv {
+                GroupInverse::Dense(inv) => {
+                    for (a, &pa) in pos.iter().enumerate() {
+                        out[pa] = pos.iter().enumerate().map(|(b, &pb)| inv[a * k + b] * buf[pb]).sum();
+                    }
+                }
+                GroupInverse::Sparse(chol) => {
+                    let mut y: Vec<f64> = pos.iter().map(|&p| buf[p]).collect();
+                    chol.solve_in_place(&mut y);
+                    for (&p, v) in pos.iter().zip(y) {
+                        out[p] = v;
+                    }
+                }
             }
         }
         for &(i, p) in &self.mine {
             x[i] = out[p];
         }
     }
+}
+
+/// The sparse LLᵀ (AMD ordering) of the block of BΔBᵀ on `rows` (ascending), from its entries;
+/// `None` when it is not positive definite.
+fn sparse_block(rows: &[usize], block: &std::collections::HashMap<(usize, usize), f64>) -> Option<Cholesky> {
+    let k = rows.len();
+    let pos = |r: usize| rows.binary_search(&r).ok();
+    let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); k];
+    for (&(a, b), &v) in block {
+        if let (Some(i), Some(j)) = (pos(a), pos(b)) {
+            if i >= j && v != 0.0 {
+                cols[j].push((i, v));
+            }
+        }
+    }
+    let mut a = SymCsc { n: k, col_ptr: vec![0], row_idx: Vec::new(), values: Vec::new() };
+    for mut c in cols {
+        c.sort_unstable_by_key(|e| e.0);
+        a.row_idx.extend(c.iter().map(|e| e.0));
+        a.values.extend(c.iter().map(|e| e.1));
+        a.col_ptr.push(a.row_idx.len());
+    }
+    Cholesky::factorize(&a, Ordering::Amd).ok()
 }
 
 /// The inverse of a small symmetric positive definite matrix (row-major k × k); `None` when it
