@@ -34,6 +34,13 @@
 //!   `M_ij += w J ψᵢ(ξ_s) φ_j(ξ_m)`, `D_ii += w J ψᵢ(ξ_s)`. D is lumped over the covered segments
 //!   only, so Σ_j M_ij = D_ii exactly and a rigid translation of the master leaves the weighted
 //!   gap unchanged (the patch test); on fully covered slave facets D_ii = ∫ φᵢ dA.
+//! - Partly covered slave facets (at the edge of the master face): the dual basis is rebuilt on
+//!   the covered part, A = D̂ M̂⁻¹ with D̂, M̂ integrated over the facet's segments (Cichosz &
+//!   Bischoff 2011, "Consistent treatment of boundaries with mortar contact formulations using
+//!   dual Lagrange multipliers", CMAME 200; Popp, Wohlmuth, Gee, Wall 2012/2013), so that
+//!   biorthogonality, D_ii = ∫_covered φᵢ dA > 0 and the reproduction of linear gaps hold there
+//!   too; the coefficients −M_ij/D_ii then extrapolate from the covered part to the node and grow
+//!   as the covered part shrinks (see [`MortarParams::min_coverage`]).
 //! - Normals: the unit average of the slave facet normals around the node, weighted by the
 //!   facet areas.
 //!
@@ -44,9 +51,8 @@
 //! *uncovered*: by default that is [`MortarError::NoMaster`] naming the node (so a slave face
 //! that extends beyond the master face by a whole facet is an error: choose the smaller face as
 //! slave, or set [`MortarParams::allow_uncovered`] to drop those nodes and count them in
-//! [`MortarInfo::nodes_uncovered`]). A covered node whose covered part carries
-//! D_ii ≤ 10⁻⁸ ∫ φᵢ dA (a sliver, or the part where ψᵢ < 0) gets no row and is counted in
-//! [`MortarInfo::rows_dropped`]. Slave and master facets are linear: tri3, or quad4 (bilinear,
+//! [`MortarInfo::nodes_uncovered`]). A covered node with D_ii ≤ `min_coverage` · ∫ φᵢ dA (a
+//! sliver) gets no row and is counted in [`MortarInfo::rows_dropped`]. Slave and master facets are linear: tri3, or quad4 (bilinear,
 //! may be warped) with convex projection.
 
 use std::collections::BTreeMap;
@@ -58,13 +64,14 @@ use thiserror::Error;
 
 type V2 = [f64; 2];
 type V3 = [f64; 3];
+type Mat = [[f64; MAX_NODES]; MAX_NODES];
 
 /// Largest number of nodes of a facet.
 const MAX_NODES: usize = 8;
-/// A node whose covered D_ii is at most this fraction of ∫ φᵢ dA gets no row.
-const DROP_FRACTION: f64 = 1e-8;
 /// Master entries with |M_ij| at most this fraction of D_ii are round-off and left out.
 const PRUNE_FRACTION: f64 = 1e-14;
+/// A slave facet whose overlaps miss at most this fraction of its area counts as fully covered.
+const FULL_COVER: f64 = 1e-9;
 /// Clip polygons with at most this fraction of the slave facet's projected area are slivers.
 const SLIVER_FRACTION: f64 = 1e-12;
 
@@ -85,6 +92,11 @@ pub struct MortarParams {
     pub min_opposition: f64,
     /// Drop uncovered slave nodes (counted) instead of failing with [`MortarError::NoMaster`].
     pub allow_uncovered: bool,
+    /// A covered node gets a row only when D_ii > min_coverage · ∫ φᵢ dA. A node beyond the
+    /// master's edge whose facets are covered over a fraction c (on the far side) has
+    /// D_ii/∫ φᵢ dA ≈ c² and master coefficients growing like 1/c, so this bounds the rows
+    /// there; the default 10⁻⁸ keeps every row but true slivers.
+    pub min_coverage: f64,
 }
 
 impl Default for MortarParams {
@@ -93,6 +105,7 @@ impl Default for MortarParams {
             search_distance: 1e-2,
             min_opposition: 0.0,
             allow_uncovered: false,
+            min_coverage: 1e-8,
         }
     }
 }
@@ -106,7 +119,7 @@ pub struct MortarInfo {
     pub candidate_pairs: usize,
     /// Pairs with an overlap of positive area that were integrated.
     pub segments: usize,
-    /// Covered slave nodes without a row (D_ii ≤ 10⁻⁸ ∫ φᵢ dA).
+    /// Covered slave nodes without a row (D_ii ≤ `min_coverage` · ∫ φᵢ dA).
     pub rows_dropped: usize,
     /// Slave nodes with no overlap at all, dropped under [`MortarParams::allow_uncovered`].
     pub nodes_uncovered: usize,
@@ -514,8 +527,8 @@ impl Plane {
 struct SlaveFacet {
     f: Facet,
     plane: Plane,
-    /// Dual coefficients: ψᵢ = Σ_j a[i][j] φ_j.
-    a: [[f64; MAX_NODES]; MAX_NODES],
+    /// Dual coefficients of the whole facet: ψᵢ = Σ_j a[i][j] φ_j.
+    a: Mat,
     /// ∫_e φ_j dA.
     d: [f64; MAX_NODES],
     /// Unit normal at the centre, times the facet area.
@@ -548,14 +561,47 @@ impl SlaveFacet {
         })
     }
 
-    /// ψᵢ at a point, from the shape functions there.
-    fn psi(&self, s: &Shape) -> [f64; MAX_NODES] {
+    /// ψᵢ = Σ_j a_ij φ_j at a point, from the shape functions there.
+    fn psi(&self, a: &Mat, s: &Shape) -> [f64; MAX_NODES] {
         let mut psi = [0.0; MAX_NODES];
         let n = self.f.n();
         for (i, p) in psi.iter_mut().enumerate().take(n) {
-            *p = (0..n).map(|j| self.a[i][j] * s.phi[j]).sum();
+            *p = (0..n).map(|j| a[i][j] * s.phi[j]).sum();
         }
         psi
+    }
+
+    /// Slave area per plane area at a point: |x_ξ × x_η| / |(x_ξ × x_η)·n₀|.
+    fn jacobian_ratio(&self, s: &Shape) -> f64 {
+        let (_, t) = self.f.map(s);
+        let j = cross(t[0], t[1]);
+        norm(j) / dot(j, self.plane.n).abs()
+    }
+
+    /// The dual coefficients for the covered part `segs` of a partly covered facet:
+    /// A = D̂ M̂⁻¹ with D̂, M̂ integrated over the segments only, or None when M̂ is singular.
+    fn partial_dual(
+        &self,
+        segs: &[(usize, Vec<V2>)],
+        id: usize,
+    ) -> Result<Option<Mat>, MortarError> {
+        let n = self.f.n();
+        let (mut m, mut d) = ([[0.0; MAX_NODES]; MAX_NODES], [0.0; MAX_NODES]);
+        for (master, poly) in segs {
+            for (p, w) in fan_points(poly) {
+                let fail = MortarError::Projection {
+                    slave: id,
+                    master: *master,
+                    side: "slave",
+                };
+                let xi = self.plane.invert(&self.f, p).ok_or(fail)?;
+                let sh = self.f.kind.shape(xi);
+                let wj = w * self.jacobian_ratio(&sh);
+                add_scaled(&mut d, wj, &sh.phi[..n]);
+                add_outer(&mut m, wj, &sh.phi[..n], &sh.phi[..n]);
+            }
+        }
+        Ok(invert(m, n).map(|minv| scale_rows(&minv, &d, n)))
     }
 }
 
@@ -567,21 +613,37 @@ fn dual_coefficients(f: &Facet) -> Option<([[f64; MAX_NODES]; MAX_NODES], [f64; 
     for (xi, w) in f.kind.rule() {
         let s = f.kind.shape(xi);
         let wj = w * norm(f.jacobian(xi));
-        for i in 0..n {
-            d[i] += wj * s.phi[i];
-            for j in 0..n {
-                m[i][j] += wj * s.phi[i] * s.phi[j];
-            }
+        add_scaled(&mut d, wj, &s.phi[..n]);
+        add_outer(&mut m, wj, &s.phi[..n], &s.phi[..n]);
+    }
+    Some((scale_rows(&invert(m, n)?, &d, n), d))
+}
+
+/// d_i += w a_i.
+fn add_scaled(d: &mut [f64], w: f64, a: &[f64]) {
+    for (di, ai) in d.iter_mut().zip(a) {
+        *di += w * ai;
+    }
+}
+
+/// m_ij += w a_i b_j.
+fn add_outer(m: &mut Mat, w: f64, a: &[f64], b: &[f64]) {
+    for (row, ai) in m.iter_mut().zip(a) {
+        for (mij, bj) in row.iter_mut().zip(b) {
+            *mij += w * ai * bj;
         }
     }
-    let minv = invert(m, n)?;
+}
+
+/// diag(d) · m on the leading n×n block.
+fn scale_rows(m: &Mat, d: &[f64; MAX_NODES], n: usize) -> Mat {
     let mut a = [[0.0; MAX_NODES]; MAX_NODES];
     for i in 0..n {
         for j in 0..n {
-            a[i][j] = d[i] * minv[i][j];
+            a[i][j] = d[i] * m[i][j];
         }
     }
-    Some((a, d))
+    a
 }
 
 /// Inverse of the leading n×n block (Gauss–Jordan, partial pivoting).
@@ -593,7 +655,8 @@ fn invert(mut m: [[f64; MAX_NODES]; MAX_NODES], n: usize) -> Option<[[f64; MAX_N
     let size = (0..n).map(|i| m[i][i].abs()).fold(0.0, f64::max);
     for c in 0..n {
         let p = (c..n).max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))?;
-        if !(m[p][c].abs() > 1e-12 * size) {
+        let pivot_ok = m[p][c].abs() > 1e-12 * size;
+        if !pivot_ok {
             return None;
         }
         m.swap(c, p);
@@ -735,14 +798,19 @@ pub fn dual_mortar(
         ..Default::default()
     };
     for (si, s) in slaves.iter().enumerate() {
+        let mut segs = Vec::new();
         for hit in tree.locate_in_envelope_intersecting(s.f.aabb(0.0)) {
             info.candidate_pairs += 1;
             let (m, nm) = &masters[hit.data];
-            let Some(seg) = segment(s, m, *nm, params, (si, hit.data))? else {
-                continue;
-            };
-            info.segments += 1;
-            add_segment(&mut acc, s, m, &seg);
+            if let Some(poly) = overlap(s, m, *nm, params, (si, hit.data))? {
+                segs.push((hit.data, poly));
+            }
+        }
+        info.segments += segs.len();
+        let a = facet_dual(s, &segs, si)?;
+        for (mi, poly) in &segs {
+            let seg = integrate(s, &a, &masters[*mi].0, poly, (si, *mi))?;
+            add_segment(&mut acc, s, &masters[*mi].0, &seg);
         }
     }
     let mut rows = finish(coords, acc, params, &mut info)?;
@@ -785,15 +853,26 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
     acc
 }
 
-/// The integrated segment of a slave and a master facet, or None when they do not face each
-/// other, do not overlap, or are farther apart than the search distance.
-fn segment(
+/// The dual coefficients of a slave facet: its own when fully covered by `segs`, else those of
+/// the covered part (Cichosz & Bischoff 2011; Popp et al. 2013), falling back to its own when
+/// the covered part is too thin for M̂ to be inverted.
+fn facet_dual(s: &SlaveFacet, segs: &[(usize, Vec<V2>)], id: usize) -> Result<Mat, MortarError> {
+    let covered: f64 = segs.iter().map(|(_, p)| polygon_area(p).abs()).sum();
+    if segs.is_empty() || covered >= (1.0 - FULL_COVER) * s.plane_area {
+        return Ok(s.a);
+    }
+    Ok(s.partial_dual(segs, id)?.unwrap_or(s.a))
+}
+
+/// The clip polygon of a slave and a master facet on the slave's plane, or None when they do
+/// not face each other, do not overlap, or are farther apart than the search distance.
+fn overlap(
     s: &SlaveFacet,
     m: &Facet,
     nm: V3,
     params: &MortarParams,
     ids: (usize, usize),
-) -> Result<Option<Segment>, MortarError> {
+) -> Result<Option<Vec<V2>>, MortarError> {
     if -dot(nm, s.plane.n) <= params.min_opposition {
         return Ok(None);
     }
@@ -806,7 +885,7 @@ fn segment(
     if min_gap(s, m, &poly, ids)? > params.search_distance {
         return Ok(None);
     }
-    integrate(s, m, &poly, ids).map(Some)
+    Ok(Some(poly))
 }
 
 /// Slave and master parametric coordinates of the plane point p.
@@ -838,9 +917,33 @@ fn min_gap(
     Ok(g)
 }
 
-/// D_ii and M_ij of a clip polygon: fan triangles from the centroid, 7-point rule on each.
+/// Gauss points (plane point, plane weight) of a clip polygon: fan triangles from the
+/// vertex centroid, the 7-point rule on each.
+fn fan_points(poly: &[V2]) -> Vec<(V2, f64)> {
+    let k = poly.len() as f64;
+    let c = [
+        poly.iter().map(|p| p[0]).sum::<f64>() / k,
+        poly.iter().map(|p| p[1]).sum::<f64>() / k,
+    ];
+    let mut out = Vec::with_capacity(7 * poly.len());
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let area = 0.5 * cross2(sub2(a, c), sub2(b, c)).abs();
+        for (l, w) in dunavant7() {
+            let p = [
+                l[0] * c[0] + l[1] * a[0] + l[2] * b[0],
+                l[0] * c[1] + l[1] * a[1] + l[2] * b[1],
+            ];
+            out.push((p, w * area));
+        }
+    }
+    out
+}
+
+/// D_ii = ∫ ψᵢ and M_ij = ∫ ψᵢ φ_j over a clip polygon, with ψ from the coefficients `a`.
 fn integrate(
     s: &SlaveFacet,
+    a: &Mat,
     m: &Facet,
     poly: &[V2],
     ids: (usize, usize),
@@ -849,52 +952,17 @@ fn integrate(
         d: [0.0; MAX_NODES],
         m: [[0.0; MAX_NODES]; MAX_NODES],
     };
-    let k = poly.len() as f64;
-    let c = [
-        poly.iter().map(|p| p[0]).sum::<f64>() / k,
-        poly.iter().map(|p| p[1]).sum::<f64>() / k,
-    ];
-    let rule = dunavant7();
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let area = 0.5 * cross2(sub2(a, c), sub2(b, c)).abs();
-        for &(l, w) in &rule {
-            let p = [
-                l[0] * c[0] + l[1] * a[0] + l[2] * b[0],
-                l[0] * c[1] + l[1] * a[1] + l[2] * b[1],
-            ];
-            gauss_point(s, m, p, w * area, ids, &mut seg)?;
-        }
+    for (p, w) in fan_points(poly) {
+        let (xs, xm) = project(s, m, p, ids)?;
+        let ss = s.f.kind.shape(xs);
+        let psi = s.psi(a, &ss);
+        let sm = m.kind.shape(xm);
+        let wj = w * s.jacobian_ratio(&ss);
+        let psi = &psi[..s.f.n()];
+        add_scaled(&mut seg.d, wj, psi);
+        add_outer(&mut seg.m, wj, psi, &sm.phi[..m.n()]);
     }
     Ok(seg)
-}
-
-/// Adds one Gauss point (plane point p, plane weight w) to the segment integrals.
-fn gauss_point(
-    s: &SlaveFacet,
-    m: &Facet,
-    p: V2,
-    w: f64,
-    ids: (usize, usize),
-    seg: &mut Segment,
-) -> Result<(), MortarError> {
-    let (xs, xm) = project(s, m, p, ids)?;
-    let ss = s.f.kind.shape(xs);
-    let jn = {
-        let (_, t) = s.f.map(&ss);
-        let j = cross(t[0], t[1]);
-        norm(j) / dot(j, s.plane.n).abs()
-    };
-    let psi = s.psi(&ss);
-    let sm = m.kind.shape(xm);
-    for i in 0..s.f.n() {
-        let wi = w * jn * psi[i];
-        seg.d[i] += wi;
-        for j in 0..m.n() {
-            seg.m[i][j] += wi * sm.phi[j];
-        }
-    }
-    Ok(())
 }
 
 fn add_segment(acc: &mut BTreeMap<usize, NodeAcc>, s: &SlaveFacet, m: &Facet, seg: &Segment) {
@@ -933,7 +1001,7 @@ fn finish(
     info.nodes_uncovered = uncovered.len();
     let mut rows = MortarRows::default();
     for (node, a) in acc.into_iter().filter(|(_, a)| a.covered) {
-        if a.d <= DROP_FRACTION * a.nominal {
+        if a.d <= params.min_coverage * a.nominal {
             info.rows_dropped += 1;
             continue;
         }
@@ -1076,11 +1144,11 @@ mod tests {
         let f = Facet::new(&SurfaceFacet { nodes: &[0, 1, 2] }, &coords, "slave", 0).unwrap();
         let (a, d) = dual_coefficients(&f).unwrap();
         let area = f.area();
-        for i in 0..3 {
+        for (i, row) in a.iter().enumerate().take(3) {
             assert!((d[i] - area / 3.0).abs() < 1e-14 * area);
-            for j in 0..3 {
+            for (j, aij) in row.iter().enumerate().take(3) {
                 let want = if i == j { 3.0 } else { -1.0 };
-                assert!((a[i][j] - want).abs() < 1e-12, "a[{i}][{j}] = {}", a[i][j]);
+                assert!((aij - want).abs() < 1e-12, "a[{i}][{j}] = {aij}");
             }
         }
     }
@@ -1103,23 +1171,18 @@ mod tests {
         )
         .unwrap();
         let s = SlaveFacet::new(f, 0).unwrap();
-        let mut g = [[0.0; 4]; 4];
+        let mut g = [[0.0; MAX_NODES]; MAX_NODES];
         for (xi, w) in s.f.kind.rule() {
             let sh = s.f.kind.shape(xi);
-            let (psi, wj) = (s.psi(&sh), w * norm(s.f.jacobian(xi)));
-            for i in 0..4 {
-                for k in 0..4 {
-                    g[i][k] += wj * psi[i] * sh.phi[k];
-                }
-            }
+            let (psi, wj) = (s.psi(&s.a, &sh), w * norm(s.f.jacobian(xi)));
+            add_outer(&mut g, wj, &psi[..4], &sh.phi[..4]);
         }
-        for i in 0..4 {
-            for k in 0..4 {
+        for (i, row) in g.iter().enumerate().take(4) {
+            for (k, gik) in row.iter().enumerate().take(4) {
                 let want = if i == k { s.d[k] } else { 0.0 };
                 assert!(
-                    (g[i][k] - want).abs() < 1e-14,
-                    "∫ψ{i}φ{k} = {} (want {want})",
-                    g[i][k]
+                    (gik - want).abs() < 1e-14,
+                    "∫ψ{i}φ{k} = {gik} (want {want})"
                 );
             }
         }
@@ -1310,5 +1373,202 @@ mod tests {
                 assert!(q[r] < 2.0, "interior row {r}: {}", q[r]);
             }
         }
+    }
+
+    /// Slave on the cylinder r = 1 (θ ∈ [−0.3, 0.3], y ∈ [0, 0.6], n × n cells), master on
+    /// r = 1 + δ over a larger patch with a finer, non-nested grid: the largest |dᵢ − δ|.
+    fn cylinder_gap_error(n: usize, tri: bool, delta: f64) -> f64 {
+        let cyl = |r: f64, t0: f64, t1: f64, y0: f64, y1: f64| {
+            move |u: f64, v: f64| {
+                let t = t0 + u * (t1 - t0);
+                [r * t.sin(), y0 + v * (y1 - y0), r * t.cos()]
+            }
+        };
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, n, n, tri, true, &cyl(1.0, -0.3, 0.3, 0.0, 0.6));
+        let nm = (2.3 * n as f64) as usize;
+        let m = patch(
+            &mut coords,
+            nm,
+            nm,
+            !tri,
+            false,
+            &cyl(1.0 + delta, -0.35, 0.35, -0.05, 0.65),
+        );
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!(rows.len(), s.ids.len());
+        rows.gap
+            .iter()
+            .map(|g| (g - delta).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// |dᵢ − δ| ≤ 0.1 h² (R = 1), and halving h divides it by about 4 (quad4 slave on a tri3
+    /// master and tri3 on quad4).
+    #[test]
+    fn curved_cylinder_gap_is_delta_to_second_order() {
+        for tri in [false, true] {
+            let e: Vec<f64> = [4, 8, 16]
+                .iter()
+                .map(|&n| cylinder_gap_error(n, tri, 0.01))
+                .collect();
+            for (k, n) in [4.0, 8.0, 16.0].into_iter().enumerate() {
+                let h = 0.6 / n;
+                assert!(e[k] < 0.1 * h * h, "tri {tri}, h = {h}: |d − δ| = {}", e[k]);
+            }
+            for k in 0..2 {
+                let ratio = e[k] / e[k + 1];
+                assert!(
+                    ratio > 3.0 && ratio < 5.5,
+                    "tri {tri}: halving h divides the error by {ratio}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn master_beyond_the_search_distance_is_an_error_naming_a_slave_node() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 3, 3, false, true, &flat(0.0));
+        let m = patch(&mut coords, 5, 5, false, false, &flat(0.2));
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "slave node 0 at (0, 0, 0) finds no master facet within the search distance 1.0e-1 \
+             (16 of 16 slave nodes uncovered)"
+        );
+        assert!(run(&coords, &s, &m, &params(0.25)).is_ok());
+        // Within reach of the boxes but beside the slave face (no overlap): the same error.
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 3, 3, false, true, &flat(0.0));
+        let m = patch(&mut coords, 3, 3, false, false, &|u, v| [u + 1.05, v, 0.01]);
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                MortarError::NoMaster {
+                    node: 0,
+                    uncovered: 16,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn master_facing_the_same_way_is_not_found() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 2, 2, false, true, &flat(0.0));
+        let m = patch(&mut coords, 3, 3, false, true, &flat(0.01));
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert!(
+            matches!(err, MortarError::NoMaster { uncovered: 9, .. }),
+            "{err}"
+        );
+    }
+
+    /// Slave [0, 1.5] × [0, 1] (6 × 4 quads, h = 0.25) on master [0, 1]²: the nodes at
+    /// x ≥ 1.25 overlap no master facet. Default: an error naming the first of them;
+    /// `allow_uncovered`: those 10 nodes are dropped and counted, the rest keep exact rows.
+    #[test]
+    fn slave_face_larger_than_the_master() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 6, 4, false, true, &|u, v| [1.5 * u, v, 0.0]);
+        let m = patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin));
+        let err = run(&coords, &s, &m, &params(0.05)).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("slave node 5 at (1.25, 0, 0) finds no master facet"),
+            "{err}"
+        );
+        assert!(matches!(
+            err,
+            MortarError::NoMaster {
+                node: 5,
+                uncovered: 10,
+                nodes: 35,
+                ..
+            }
+        ));
+        let p = MortarParams {
+            allow_uncovered: true,
+            ..params(0.05)
+        };
+        let rows = run(&coords, &s, &m, &p).unwrap();
+        assert_eq!(
+            (
+                rows.info.nodes_uncovered,
+                rows.info.rows_dropped,
+                rows.len()
+            ),
+            (10, 0, 25)
+        );
+        let areas = nodal_areas(&coords, &s);
+        for r in 0..rows.len() {
+            let x = coords[rows.node[r]];
+            assert!(x[0] < 1.0 + 1e-12);
+            let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
+            assert!(
+                (masters - 1.0).abs() < 1e-12,
+                "row {r}: Σ M_ij/D_ii = {masters}"
+            );
+            // Nodes on x = 1 have only their left facets covered: D_ii = half the nodal area.
+            let want = if x[0] > 1.0 - 1e-12 {
+                0.5 * areas[&rows.node[r]]
+            } else {
+                areas[&rows.node[r]]
+            };
+            assert!(
+                (rows.area[r] - want).abs() < 1e-14,
+                "row {r}: D_ii = {} vs {want}",
+                rows.area[r]
+            );
+            if x[0] < 0.75 + 1e-12 {
+                assert!((rows.gap[r] - f_lin(x[0], x[1])).abs() < 1e-12);
+            }
+        }
+    }
+
+    /// Slave [0, 1.25] × [0, 1] (5 × 4 quads, h = 0.25) on master [0, 1.1] × [0, 1] at
+    /// z = f_lin: the facets at x ≥ 1 are 40 % covered, on the side away from the nodes at
+    /// x = 1.25. With the dual basis of the covered part every node keeps a row that
+    /// reproduces the linear gap exactly, with D_ii = ∫_covered φᵢ dA (0.16 of the nodal area
+    /// at x = 1.25); min_coverage = 0.2 drops those 5 rows.
+    #[test]
+    fn partly_covered_facets_use_the_dual_basis_of_the_covered_part() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 5, 4, false, true, &|u, v| [1.25 * u, v, 0.0]);
+        let m = patch(&mut coords, 9, 7, false, false, &|u, v| {
+            [1.1 * u, v, f_lin(1.1 * u, v)]
+        });
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!((rows.len(), rows.info.rows_dropped), (30, 0));
+        let areas = nodal_areas(&coords, &s);
+        let total: f64 = rows.area.iter().sum();
+        assert!((total - 1.1).abs() < 1e-13, "Σ D_ii = {total}");
+        let q = rows.row_norms_squared();
+        for r in 0..rows.len() {
+            let x = coords[rows.node[r]];
+            let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
+            assert!(
+                (masters - 1.0).abs() < 1e-12,
+                "row {r}: Σ M_ij/D_ii = {masters}"
+            );
+            let err = rows.gap[r] - f_lin(x[0], x[1]);
+            assert!(err.abs() < 1e-12, "row {r} at {x:?}: gap error {err}");
+            if x[0] > 1.2 {
+                let ratio = rows.area[r] / areas[&rows.node[r]];
+                assert!((ratio - 0.16).abs() < 1e-12, "row {r}: D_ii/∫φᵢ = {ratio}");
+                assert!(q[r] > 2.0, "row {r}: ‖row‖² = {}", q[r]);
+            }
+        }
+        let p = MortarParams {
+            min_coverage: 0.2,
+            ..params(0.05)
+        };
+        let rows = run(&coords, &s, &m, &p).unwrap();
+        assert_eq!((rows.len(), rows.info.rows_dropped), (25, 5));
+        assert!(rows.node.iter().all(|&n| coords[n][0] < 1.2));
     }
 }
