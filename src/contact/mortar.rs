@@ -52,8 +52,17 @@
 //! that extends beyond the master face by a whole facet is an error: choose the smaller face as
 //! slave, or set [`MortarParams::allow_uncovered`] to drop those nodes and count them in
 //! [`MortarInfo::nodes_uncovered`]). A covered node with D_ii ≤ `min_coverage` · ∫ φᵢ dA (a
-//! sliver) gets no row and is counted in [`MortarInfo::rows_dropped`]. Slave and master facets are linear: tri3, or quad4 (bilinear,
-//! may be warped) with convex projection.
+//! sliver) gets no row and is counted in [`MortarInfo::rows_dropped`].
+//!
+//! **Facets.** tri3, quad4 (bilinear, may be warped), tri6 and quad8 (serendipity), each with a
+//! convex projected corner polygon; the clipping uses the corner polygons (exact for
+//! straight-edged facets), the integration the true facet maps. Quadratic slave facets use the
+//! modified basis φ̃ = T φ of Popp, Wohlmuth, Gee, Wall 2012 ("Dual quadratic mortar finite
+//! element methods for 3D finite deformation contact", SIAM J. Sci. Comput. 34): per edge node
+//! e between corners a, b, φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e, α = 1/5 (for quad8
+//! too, where it makes ∫ φ̃_corner > 0), and the dual basis is built on φ̃. The slave part of
+//! row i is then (T⁻¹)_ki: +1 at a corner, and 1/(1 − 2α), −α/(1 − 2α), −α/(1 − 2α) at an edge
+//! node and its two corners.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -68,6 +77,8 @@ type Mat = [[f64; MAX_NODES]; MAX_NODES];
 
 /// Largest number of nodes of a facet.
 const MAX_NODES: usize = 8;
+/// α of the modified quadratic slave basis (tri6 and quad8).
+const ALPHA: f64 = 0.2;
 /// Master entries with |M_ij| at most this fraction of D_ii are round-off and left out.
 const PRUNE_FRACTION: f64 = 1e-14;
 /// A slave facet whose overlaps miss at most this fraction of its area counts as fully covered.
@@ -77,7 +88,8 @@ const SLIVER_FRACTION: f64 = 1e-12;
 
 /// A facet of a surface mesh: node ids into the global coordinate array, ordered so the
 /// right-hand rule gives the body's outward normal. tri3: 3 nodes; quad4: 4 (bilinear, may be
-/// warped).
+/// warped); tri6: corners 0–2, then edge nodes (0,1), (1,2), (2,0); quad8: corners 0–3, then
+/// edges (0,1), (1,2), (2,3), (3,0).
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceFacet<'a> {
     pub nodes: &'a [usize],
@@ -134,9 +146,11 @@ pub struct MortarRows {
     pub node: Vec<usize>,
     /// Averaged unit outward normal of the slave face at the node.
     pub normal: Vec<[f64; 3]>,
-    /// D_ii = ∫ ψᵢ dA over the covered part (= ∫ φᵢ dA for a fully covered node).
+    /// D_ii = ∫ ψᵢ dA over the covered part (= ∫ φ̃ᵢ dA for a fully covered node; φ̃ = φ on
+    /// linear facets).
     pub area: Vec<f64>,
-    /// (node, c_ik): the slave node with +1 first, then master nodes by id with −M_ij / D_ii.
+    /// (node, c_ik): the slave node first (+1; at a quadratic edge node 1/(1 − 2α), then its two
+    /// corners with −α/(1 − 2α)), then master nodes by id with −M_ij / D_ii.
     pub coupling: Vec<Vec<(usize, f64)>>,
     /// Normalized weighted gap dᵢ = −Σ_k c_ik (x_k · nᵢ), positive when apart.
     pub gap: Vec<f64>,
@@ -165,7 +179,9 @@ impl MortarRows {
 /// Why the mortar rows could not be built.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum MortarError {
-    #[error("{side} facet {facet} has {nodes} nodes; expected 3 (tri3) or 4 (quad4)")]
+    #[error(
+        "{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6) or 8 (quad8)"
+    )]
     FacetNodes {
         side: &'static str,
         facet: usize,
@@ -265,6 +281,8 @@ fn sub2(a: V2, b: V2) -> V2 {
 enum Kind {
     Tri3,
     Quad4,
+    Tri6,
+    Quad8,
 }
 
 /// Shape function values φ_a and reference derivatives [∂φ_a/∂ξ, ∂φ_a/∂η] at one point.
@@ -273,11 +291,16 @@ struct Shape {
     dphi: [V2; MAX_NODES],
 }
 
+/// quad4/quad8 corners, counter-clockwise from (−1, −1).
+const QUAD: [V2; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+
 impl Kind {
     fn of(nodes: usize) -> Option<Kind> {
         match nodes {
             3 => Some(Kind::Tri3),
             4 => Some(Kind::Quad4),
+            6 => Some(Kind::Tri6),
+            8 => Some(Kind::Quad8),
             _ => None,
         }
     }
@@ -286,61 +309,141 @@ impl Kind {
         match self {
             Kind::Tri3 => 3,
             Kind::Quad4 => 4,
+            Kind::Tri6 => 6,
+            Kind::Quad8 => 8,
         }
+    }
+
+    fn is_tri(self) -> bool {
+        matches!(self, Kind::Tri3 | Kind::Tri6)
     }
 
     /// The number of corner nodes (the polygon of the facet).
     fn corners(self) -> usize {
-        self.len()
-    }
-
-    fn centre(self) -> V2 {
-        match self {
-            Kind::Tri3 => [1.0 / 3.0, 1.0 / 3.0],
-            Kind::Quad4 => [0.0, 0.0],
+        if self.is_tri() {
+            3
+        } else {
+            4
         }
     }
 
-    /// tri3 on (0,0),(1,0),(0,1); quad4 on [−1, 1]², corners counter-clockwise from (−1, −1).
+    /// (edge node, its two corners) of a quadratic facet; empty for linear ones.
+    fn edges(self) -> &'static [(usize, usize, usize)] {
+        match self {
+            Kind::Tri3 | Kind::Quad4 => &[],
+            Kind::Tri6 => &[(3, 0, 1), (4, 1, 2), (5, 2, 0)],
+            Kind::Quad8 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
+        }
+    }
+
+    fn centre(self) -> V2 {
+        if self.is_tri() {
+            [1.0 / 3.0, 1.0 / 3.0]
+        } else {
+            [0.0, 0.0]
+        }
+    }
+
+    /// Triangles on (0,0),(1,0),(0,1); quads on [−1, 1]² (corners as [`QUAD`], then the edge
+    /// midpoints in the order of [`Kind::edges`]).
     fn shape(self, xi: V2) -> Shape {
         let mut s = Shape {
             phi: [0.0; MAX_NODES],
             dphi: [[0.0; 2]; MAX_NODES],
         };
-        let [r, t] = xi;
         match self {
-            Kind::Tri3 => {
-                s.phi[..3].copy_from_slice(&[1.0 - r - t, r, t]);
-                s.dphi[..3].copy_from_slice(&[[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]);
-            }
-            Kind::Quad4 => {
-                const C: [V2; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-                for (a, [ra, ta]) in C.into_iter().enumerate() {
-                    s.phi[a] = 0.25 * (1.0 + ra * r) * (1.0 + ta * t);
-                    s.dphi[a] = [0.25 * ra * (1.0 + ta * t), 0.25 * ta * (1.0 + ra * r)];
-                }
-            }
+            Kind::Tri3 | Kind::Tri6 => tri_shape(self, xi, &mut s),
+            Kind::Quad4 => quad4_shape(xi, &mut s),
+            Kind::Quad8 => quad8_shape(xi, &mut s),
         }
         s
     }
 
-    /// Quadrature on the reference element: tri 7-point degree 5, quad 4×4 Gauss (degree 7).
+    /// Quadrature on the reference element: triangles 7-point degree 5, quads 4×4 Gauss
+    /// (degree 7).
     fn rule(self) -> Vec<(V2, f64)> {
-        match self {
-            Kind::Tri3 => dunavant7()
+        if self.is_tri() {
+            return dunavant7()
                 .iter()
                 .map(|&(l, w)| ([l[1], l[2]], 0.5 * w))
-                .collect(),
-            Kind::Quad4 => {
-                let g = gauss4();
-                let mut q = Vec::with_capacity(16);
-                for &(a, wa) in &g {
-                    for &(b, wb) in &g {
-                        q.push(([a, b], wa * wb));
-                    }
-                }
-                q
+                .collect();
+        }
+        let g = gauss4();
+        let mut q = Vec::with_capacity(16);
+        for &(a, wa) in &g {
+            for &(b, wb) in &g {
+                q.push(([a, b], wa * wb));
             }
+        }
+        q
+    }
+
+    /// The modified slave basis φ̃ = T φ of Popp et al. (2012): per edge node e between corners
+    /// a, b: φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e; identity for linear facets.
+    fn transformation(self) -> Mat {
+        let mut t = [[0.0; MAX_NODES]; MAX_NODES];
+        for (i, row) in t.iter_mut().enumerate().take(self.len()) {
+            row[i] = 1.0;
+        }
+        for &(e, a, b) in self.edges() {
+            t[a][e] += ALPHA;
+            t[b][e] += ALPHA;
+            t[e][e] = 1.0 - 2.0 * ALPHA;
+        }
+        t
+    }
+}
+
+/// tri3 (λ) and tri6 (corners λ(2λ − 1), edges 4λ_aλ_b) with λ = (1 − ξ − η, ξ, η).
+fn tri_shape(kind: Kind, [r, t]: V2, s: &mut Shape) {
+    let l = [1.0 - r - t, r, t];
+    let dl: [V2; 3] = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+    if kind == Kind::Tri3 {
+        s.phi[..3].copy_from_slice(&l);
+        s.dphi[..3].copy_from_slice(&dl);
+        return;
+    }
+    for a in 0..3 {
+        s.phi[a] = l[a] * (2.0 * l[a] - 1.0);
+        s.dphi[a] = [(4.0 * l[a] - 1.0) * dl[a][0], (4.0 * l[a] - 1.0) * dl[a][1]];
+    }
+    for &(e, a, b) in kind.edges() {
+        s.phi[e] = 4.0 * l[a] * l[b];
+        s.dphi[e] = [
+            4.0 * (l[a] * dl[b][0] + l[b] * dl[a][0]),
+            4.0 * (l[a] * dl[b][1] + l[b] * dl[a][1]),
+        ];
+    }
+}
+
+fn quad4_shape([r, t]: V2, s: &mut Shape) {
+    for (a, [ra, ta]) in QUAD.into_iter().enumerate() {
+        s.phi[a] = 0.25 * (1.0 + ra * r) * (1.0 + ta * t);
+        s.dphi[a] = [0.25 * ra * (1.0 + ta * t), 0.25 * ta * (1.0 + ra * r)];
+    }
+}
+
+/// The 8-node serendipity quad.
+fn quad8_shape([r, t]: V2, s: &mut Shape) {
+    for (a, [ra, ta]) in QUAD.into_iter().enumerate() {
+        let (p, q) = (1.0 + ra * r, 1.0 + ta * t);
+        s.phi[a] = 0.25 * p * q * (ra * r + ta * t - 1.0);
+        s.dphi[a] = [
+            0.25 * ra * q * (2.0 * ra * r + ta * t),
+            0.25 * ta * p * (ra * r + 2.0 * ta * t),
+        ];
+    }
+    for &(e, a, b) in Kind::Quad8.edges() {
+        let [re, te] = [
+            0.5 * (QUAD[a][0] + QUAD[b][0]),
+            0.5 * (QUAD[a][1] + QUAD[b][1]),
+        ];
+        if re == 0.0 {
+            s.phi[e] = 0.5 * (1.0 - r * r) * (1.0 + te * t);
+            s.dphi[e] = [-r * (1.0 + te * t), 0.5 * (1.0 - r * r) * te];
+        } else {
+            s.phi[e] = 0.5 * (1.0 + re * r) * (1.0 - t * t);
+            s.dphi[e] = [0.5 * re * (1.0 - t * t), -t * (1.0 + re * r)];
         }
     }
 }
@@ -529,7 +632,7 @@ struct SlaveFacet {
     plane: Plane,
     /// Dual coefficients of the whole facet: ψᵢ = Σ_j a[i][j] φ_j.
     a: Mat,
-    /// ∫_e φ_j dA.
+    /// ∫_e φ̃_j dA (φ̃ = φ for linear facets).
     d: [f64; MAX_NODES],
     /// Unit normal at the centre, times the facet area.
     weighted_normal: V3,
@@ -585,8 +688,7 @@ impl SlaveFacet {
         segs: &[(usize, Vec<V2>)],
         id: usize,
     ) -> Result<Option<Mat>, MortarError> {
-        let n = self.f.n();
-        let (mut m, mut d) = ([[0.0; MAX_NODES]; MAX_NODES], [0.0; MAX_NODES]);
+        let mut samples = Vec::new();
         for (master, poly) in segs {
             for (p, w) in fan_points(poly) {
                 let fail = MortarError::Projection {
@@ -594,29 +696,62 @@ impl SlaveFacet {
                     master: *master,
                     side: "slave",
                 };
-                let xi = self.plane.invert(&self.f, p).ok_or(fail)?;
-                let sh = self.f.kind.shape(xi);
+                let sh = self
+                    .f
+                    .kind
+                    .shape(self.plane.invert(&self.f, p).ok_or(fail)?);
                 let wj = w * self.jacobian_ratio(&sh);
-                add_scaled(&mut d, wj, &sh.phi[..n]);
-                add_outer(&mut m, wj, &sh.phi[..n], &sh.phi[..n]);
+                samples.push((sh, wj));
             }
         }
-        Ok(invert(m, n).map(|minv| scale_rows(&minv, &d, n)))
+        let t = self.f.kind.transformation();
+        Ok(dual_from(&samples, &t, self.f.n()).map(|(a, _)| a))
     }
 }
 
-/// A = D_e M_e⁻¹ and D_e (the diagonal) of a facet, or None when M_e is singular.
-fn dual_coefficients(f: &Facet) -> Option<([[f64; MAX_NODES]; MAX_NODES], [f64; MAX_NODES])> {
-    let n = f.n();
-    let mut m = [[0.0; MAX_NODES]; MAX_NODES];
-    let mut d = [0.0; MAX_NODES];
-    for (xi, w) in f.kind.rule() {
-        let s = f.kind.shape(xi);
-        let wj = w * norm(f.jacobian(xi));
-        add_scaled(&mut d, wj, &s.phi[..n]);
-        add_outer(&mut m, wj, &s.phi[..n], &s.phi[..n]);
+/// The dual coefficients of a whole facet (in the standard basis, see [`dual_from`]) and
+/// D_e = (∫_e φ̃_j dA), or None when M_e is singular.
+fn dual_coefficients(f: &Facet) -> Option<(Mat, [f64; MAX_NODES])> {
+    let samples: Vec<(Shape, f64)> = f
+        .kind
+        .rule()
+        .into_iter()
+        .map(|(xi, w)| (f.kind.shape(xi), w * norm(f.jacobian(xi))))
+        .collect();
+    dual_from(&samples, &f.kind.transformation(), f.n())
+}
+
+/// From (shape functions, weight) samples of a region: D = diag(∫ φ̃), M = (∫ φ̃ᵢ φ̃_j) with
+/// φ̃ = T φ, A = D M⁻¹, so ψᵢ = Σ_j (A T)_ij φ_j; returns A T and the diagonal of D.
+fn dual_from(samples: &[(Shape, f64)], t: &Mat, n: usize) -> Option<(Mat, [f64; MAX_NODES])> {
+    let (mut m, mut d) = ([[0.0; MAX_NODES]; MAX_NODES], [0.0; MAX_NODES]);
+    for (s, w) in samples {
+        let b = mat_vec(t, &s.phi, n);
+        add_scaled(&mut d, *w, &b[..n]);
+        add_outer(&mut m, *w, &b[..n], &b[..n]);
     }
-    Some((scale_rows(&invert(m, n)?, &d, n), d))
+    let a = scale_rows(&invert(m, n)?, &d, n);
+    Some((mat_mul(&a, t, n), d))
+}
+
+/// T v on the leading n entries.
+fn mat_vec(t: &Mat, v: &[f64; MAX_NODES], n: usize) -> [f64; MAX_NODES] {
+    let mut out = [0.0; MAX_NODES];
+    for (o, row) in out.iter_mut().zip(t).take(n) {
+        *o = row[..n].iter().zip(&v[..n]).map(|(a, b)| a * b).sum();
+    }
+    out
+}
+
+/// A B on the leading n×n blocks.
+fn mat_mul(a: &Mat, b: &Mat, n: usize) -> Mat {
+    let mut out = [[0.0; MAX_NODES]; MAX_NODES];
+    for (o, arow) in out.iter_mut().zip(a).take(n) {
+        for (k, &aik) in arow[..n].iter().enumerate() {
+            add_scaled(&mut o[..n], aik, &b[k][..n]);
+        }
+    }
+    out
 }
 
 /// d_i += w a_i.
@@ -755,8 +890,10 @@ fn dedup(p: Vec<V2>, tol: f64) -> Vec<V2> {
 struct NodeAcc {
     /// D_ii over the covered segments.
     d: f64,
-    /// ∫ φᵢ dA over the whole slave face.
+    /// ∫ φ̃ᵢ dA over the whole slave face.
     nominal: f64,
+    /// The two corners of a quadratic facet's edge node.
+    edge: Option<(usize, usize)>,
     /// Σ facet area × facet unit normal.
     normal: V3,
     /// M_ij by master node j.
@@ -849,8 +986,29 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
             node.nominal += s.d[a];
             axpy(&mut node.normal, 1.0, s.weighted_normal);
         }
+        for &(e, a, b) in s.f.kind.edges() {
+            let edge = Some((
+                s.f.nodes[a].min(s.f.nodes[b]),
+                s.f.nodes[a].max(s.f.nodes[b]),
+            ));
+            acc.get_mut(&s.f.nodes[e])
+                .expect("slave node accumulator")
+                .edge = edge;
+        }
     }
     acc
+}
+
+/// The slave part of row i, (T⁻¹)_ki: +1 at a corner (or a linear facet's node); at the edge
+/// node of corners a, b: 1/(1 − 2α) there and −α/(1 − 2α) at a and b.
+fn slave_part(node: usize, edge: Option<(usize, usize)>) -> Vec<(usize, f64)> {
+    match edge {
+        None => vec![(node, 1.0)],
+        Some((a, b)) => {
+            let s = 1.0 / (1.0 - 2.0 * ALPHA);
+            vec![(node, s), (a, -ALPHA * s), (b, -ALPHA * s)]
+        }
+    }
 }
 
 /// The dual coefficients of a slave facet: its own when fully covered by `segs`, else those of
@@ -1006,7 +1164,7 @@ fn finish(
             continue;
         }
         let n = scale(a.normal, 1.0 / norm(a.normal));
-        let mut row = vec![(node, 1.0)];
+        let mut row = slave_part(node, a.edge);
         row.extend(
             a.m.iter()
                 .filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d)
@@ -1570,5 +1728,150 @@ mod tests {
         let rows = run(&coords, &s, &m, &p).unwrap();
         assert_eq!((rows.len(), rows.info.rows_dropped), (25, 5));
         assert!(rows.node.iter().all(|&n| coords[n][0] < 1.2));
+    }
+
+    /// A quadratic structured patch (tri6 or quad8) on the (2nx + 1) × (2ny + 1) lattice of
+    /// (u, v) ∈ [0, 1]² mapped by `map` (quad8 leaves the cell centres unused).
+    fn patch2(
+        coords: &mut Vec<V3>,
+        nx: usize,
+        ny: usize,
+        tri: bool,
+        up: bool,
+        map: &dyn Fn(f64, f64) -> V3,
+    ) -> Patch {
+        let base = coords.len();
+        for j in 0..=2 * ny {
+            for i in 0..=2 * nx {
+                coords.push(map(i as f64 / (2 * nx) as f64, j as f64 / (2 * ny) as f64));
+            }
+        }
+        let l = |i: usize, j: usize| base + j * (2 * nx + 1) + i;
+        let mut facets = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b) = (2 * i, 2 * j);
+                let q = [l(a, b), l(a + 2, b), l(a + 2, b + 2), l(a, b + 2)];
+                let mid = l(a + 1, b + 1);
+                let e = [l(a + 1, b), l(a + 2, b + 1), l(a + 1, b + 2), l(a, b + 1)];
+                let mut fs = if tri {
+                    vec![
+                        vec![q[0], q[1], q[2], e[0], e[1], mid],
+                        vec![q[0], q[2], q[3], mid, e[2], e[3]],
+                    ]
+                } else {
+                    vec![vec![q[0], q[1], q[2], q[3], e[0], e[1], e[2], e[3]]]
+                };
+                if !up {
+                    for f in &mut fs {
+                        let c = f.len() / 2;
+                        f[1..c].reverse();
+                        f[c..].reverse();
+                    }
+                }
+                facets.extend(fs);
+            }
+        }
+        let ids = facets
+            .iter()
+            .flatten()
+            .copied()
+            .collect::<std::collections::BTreeSet<_>>();
+        Patch {
+            ids: ids.into_iter().collect(),
+            facets,
+        }
+    }
+
+    /// The modified quadratic dual basis is biorthogonal to φ̃ and has positive D̃: corners
+    /// 2/15 (tri6) or 1/20 (quad8) of the area, edge nodes 1/5.
+    #[test]
+    fn quadratic_modified_dual_basis() {
+        let mut coords = Vec::new();
+        for (tri, corner) in [(true, 2.0 / 15.0), (false, 1.0 / 20.0)] {
+            let p = patch2(&mut coords, 1, 1, tri, true, &|u, v| {
+                [2.0 * u, 1.5 * v, 0.0]
+            });
+            let f = Facet::new(
+                &SurfaceFacet {
+                    nodes: &p.facets[0],
+                },
+                &coords,
+                "slave",
+                0,
+            )
+            .unwrap();
+            let s = SlaveFacet::new(f, 0).unwrap();
+            let (n, c, area) = (s.f.n(), s.f.kind.corners(), s.f.area());
+            for k in 0..n {
+                let want = if k < c { corner } else { 0.2 };
+                assert!(
+                    (s.d[k] / area - want).abs() < 1e-14,
+                    "tri {tri}: D̃_{k}/A = {}",
+                    s.d[k] / area
+                );
+            }
+            let t = s.f.kind.transformation();
+            let mut g = [[0.0; MAX_NODES]; MAX_NODES];
+            for (xi, w) in s.f.kind.rule() {
+                let sh = s.f.kind.shape(xi);
+                let (psi, wj) = (s.psi(&s.a, &sh), w * norm(s.f.jacobian(xi)));
+                add_outer(&mut g, wj, &psi[..n], &mat_vec(&t, &sh.phi, n)[..n]);
+            }
+            for (i, row) in g.iter().enumerate().take(n) {
+                for (k, gik) in row.iter().enumerate().take(n) {
+                    let want = if i == k { s.d[k] } else { 0.0 };
+                    assert!((gik - want).abs() < 1e-13, "tri {tri}: ∫ψ{i}φ̃{k} = {gik}");
+                }
+            }
+        }
+    }
+
+    /// Quadratic slaves (tri6, quad8; 3 × 3 cells) on a wobbly quad4 master (7 × 7) and on a
+    /// quad8 master (5 × 5) at z = f_lin: the slave and master parts of every row each sum to
+    /// ±1, Σ D̃_ii = 1, and the gap equals f_lin at the node (linear fields reproduced).
+    #[test]
+    fn quadratic_slaves_reproduce_linear_gap() {
+        for (stri, mquad8) in [(true, false), (false, false), (true, true), (false, true)] {
+            let mut coords = Vec::new();
+            let s = patch2(&mut coords, 3, 3, stri, true, &flat(0.0));
+            let m = if mquad8 {
+                patch2(&mut coords, 5, 5, false, false, &|u, v| [u, v, f_lin(u, v)])
+            } else {
+                patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin))
+            };
+            let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+            let case = format!("slave tri {stri}, master quad8 {mquad8}");
+            assert_eq!(rows.len(), s.ids.len(), "{case}");
+            let total: f64 = rows.area.iter().sum();
+            assert!((total - 1.0).abs() < 1e-13, "{case}: Σ D_ii = {total}");
+            assert!(rows.area.iter().all(|&d| d > 0.0));
+            for r in 0..rows.len() {
+                let (mut cs, mut cm) = (0.0, 0.0);
+                for &(k, c) in &rows.coupling[r] {
+                    if s.ids.contains(&k) {
+                        cs += c
+                    } else {
+                        cm += c
+                    }
+                }
+                assert!(
+                    (cs - 1.0).abs() < 1e-13 && (cm + 1.0).abs() < 1e-12,
+                    "{case}, row {r}: {cs} {cm}"
+                );
+                let x = coords[rows.node[r]];
+                let err = rows.gap[r] - f_lin(x[0], x[1]);
+                assert!(
+                    err.abs() < 1e-12,
+                    "{case}, row {r} at {x:?}: gap error {err}"
+                );
+            }
+            let edge_rows = rows
+                .coupling
+                .iter()
+                .filter(|row| (row[0].1 - 5.0 / 3.0).abs() < 1e-15)
+                .count();
+            assert_eq!(edge_rows, if stri { 33 } else { 24 }, "{case}");
+        }
     }
 }
