@@ -34,6 +34,13 @@
 //!   `M_ij += w J ψᵢ(ξ_s) φ_j(ξ_m)`, `D_ii += w J ψᵢ(ξ_s)`. D is lumped over the covered segments
 //!   only, so Σ_j M_ij = D_ii exactly and a rigid translation of the master leaves the weighted
 //!   gap unchanged (the patch test); on fully covered slave facets D_ii = ∫ φᵢ dA.
+//! - Partly covered slave facets (at the edge of the master face): the dual basis is rebuilt on
+//!   the covered part, A = D̂ M̂⁻¹ with D̂, M̂ integrated over the facet's segments (Cichosz &
+//!   Bischoff 2011, "Consistent treatment of boundaries with mortar contact formulations using
+//!   dual Lagrange multipliers", CMAME 200; Popp, Wohlmuth, Gee, Wall 2012/2013), so that
+//!   biorthogonality, D_ii = ∫_covered φᵢ dA > 0 and the reproduction of linear gaps hold there
+//!   too; the coefficients −M_ij/D_ii then extrapolate from the covered part to the node and grow
+//!   as the covered part shrinks (see [`MortarParams::min_coverage`]).
 //! - Normals: the unit average of the slave facet normals around the node, weighted by the
 //!   facet areas.
 //!
@@ -44,10 +51,18 @@
 //! *uncovered*: by default that is [`MortarError::NoMaster`] naming the node (so a slave face
 //! that extends beyond the master face by a whole facet is an error: choose the smaller face as
 //! slave, or set [`MortarParams::allow_uncovered`] to drop those nodes and count them in
-//! [`MortarInfo::nodes_uncovered`]). A covered node whose covered part carries
-//! D_ii ≤ 10⁻⁸ ∫ φᵢ dA (a sliver, or the part where ψᵢ < 0) gets no row and is counted in
-//! [`MortarInfo::rows_dropped`]. Slave and master facets are linear: tri3, or quad4 (bilinear,
-//! may be warped) with convex projection.
+//! [`MortarInfo::nodes_uncovered`]). A covered node with D_ii ≤ `min_coverage` · ∫ φᵢ dA (a
+//! sliver) gets no row and is counted in [`MortarInfo::rows_dropped`].
+//!
+//! **Facets.** tri3, quad4 (bilinear, may be warped), tri6 and quad8 (serendipity), each with a
+//! convex projected corner polygon; the clipping uses the corner polygons (exact for
+//! straight-edged facets), the integration the true facet maps. Quadratic slave facets use the
+//! modified basis φ̃ = T φ of Popp, Wohlmuth, Gee, Wall 2012 ("Dual quadratic mortar finite
+//! element methods for 3D finite deformation contact", SIAM J. Sci. Comput. 34): per edge node
+//! e between corners a, b, φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e, α = 1/5 (for quad8
+//! too, where it makes ∫ φ̃_corner > 0), and the dual basis is built on φ̃. The slave part of
+//! row i is then (T⁻¹)_ki: +1 at a corner, and 1/(1 − 2α), −α/(1 − 2α), −α/(1 − 2α) at an edge
+//! node and its two corners.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -58,19 +73,23 @@ use thiserror::Error;
 
 type V2 = [f64; 2];
 type V3 = [f64; 3];
+type Mat = [[f64; MAX_NODES]; MAX_NODES];
 
 /// Largest number of nodes of a facet.
 const MAX_NODES: usize = 8;
-/// A node whose covered D_ii is at most this fraction of ∫ φᵢ dA gets no row.
-const DROP_FRACTION: f64 = 1e-8;
+/// α of the modified quadratic slave basis (tri6 and quad8).
+const ALPHA: f64 = 0.2;
 /// Master entries with |M_ij| at most this fraction of D_ii are round-off and left out.
 const PRUNE_FRACTION: f64 = 1e-14;
+/// A slave facet whose overlaps miss at most this fraction of its area counts as fully covered.
+const FULL_COVER: f64 = 1e-9;
 /// Clip polygons with at most this fraction of the slave facet's projected area are slivers.
 const SLIVER_FRACTION: f64 = 1e-12;
 
 /// A facet of a surface mesh: node ids into the global coordinate array, ordered so the
 /// right-hand rule gives the body's outward normal. tri3: 3 nodes; quad4: 4 (bilinear, may be
-/// warped).
+/// warped); tri6: corners 0–2, then edge nodes (0,1), (1,2), (2,0); quad8: corners 0–3, then
+/// edges (0,1), (1,2), (2,3), (3,0).
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceFacet<'a> {
     pub nodes: &'a [usize],
@@ -85,6 +104,11 @@ pub struct MortarParams {
     pub min_opposition: f64,
     /// Drop uncovered slave nodes (counted) instead of failing with [`MortarError::NoMaster`].
     pub allow_uncovered: bool,
+    /// A covered node gets a row only when D_ii > min_coverage · ∫ φᵢ dA. A node beyond the
+    /// master's edge whose facets are covered over a fraction c (on the far side) has
+    /// D_ii/∫ φᵢ dA ≈ c² and master coefficients growing like 1/c, so this bounds the rows
+    /// there; the default 10⁻⁸ keeps every row but true slivers.
+    pub min_coverage: f64,
 }
 
 impl Default for MortarParams {
@@ -93,6 +117,7 @@ impl Default for MortarParams {
             search_distance: 1e-2,
             min_opposition: 0.0,
             allow_uncovered: false,
+            min_coverage: 1e-8,
         }
     }
 }
@@ -106,7 +131,7 @@ pub struct MortarInfo {
     pub candidate_pairs: usize,
     /// Pairs with an overlap of positive area that were integrated.
     pub segments: usize,
-    /// Covered slave nodes without a row (D_ii ≤ 10⁻⁸ ∫ φᵢ dA).
+    /// Covered slave nodes without a row (D_ii ≤ `min_coverage` · ∫ φᵢ dA).
     pub rows_dropped: usize,
     /// Slave nodes with no overlap at all, dropped under [`MortarParams::allow_uncovered`].
     pub nodes_uncovered: usize,
@@ -121,9 +146,11 @@ pub struct MortarRows {
     pub node: Vec<usize>,
     /// Averaged unit outward normal of the slave face at the node.
     pub normal: Vec<[f64; 3]>,
-    /// D_ii = ∫ ψᵢ dA over the covered part (= ∫ φᵢ dA for a fully covered node).
+    /// D_ii = ∫ ψᵢ dA over the covered part (= ∫ φ̃ᵢ dA for a fully covered node; φ̃ = φ on
+    /// linear facets).
     pub area: Vec<f64>,
-    /// (node, c_ik): the slave node with +1 first, then master nodes by id with −M_ij / D_ii.
+    /// (node, c_ik): the slave node first (+1; at a quadratic edge node 1/(1 − 2α), then its two
+    /// corners with −α/(1 − 2α)), then master nodes by id with −M_ij / D_ii.
     pub coupling: Vec<Vec<(usize, f64)>>,
     /// Normalized weighted gap dᵢ = −Σ_k c_ik (x_k · nᵢ), positive when apart.
     pub gap: Vec<f64>,
@@ -152,7 +179,9 @@ impl MortarRows {
 /// Why the mortar rows could not be built.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum MortarError {
-    #[error("{side} facet {facet} has {nodes} nodes; expected 3 (tri3) or 4 (quad4)")]
+    #[error(
+        "{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6) or 8 (quad8)"
+    )]
     FacetNodes {
         side: &'static str,
         facet: usize,
@@ -252,6 +281,8 @@ fn sub2(a: V2, b: V2) -> V2 {
 enum Kind {
     Tri3,
     Quad4,
+    Tri6,
+    Quad8,
 }
 
 /// Shape function values φ_a and reference derivatives [∂φ_a/∂ξ, ∂φ_a/∂η] at one point.
@@ -260,11 +291,16 @@ struct Shape {
     dphi: [V2; MAX_NODES],
 }
 
+/// quad4/quad8 corners, counter-clockwise from (−1, −1).
+const QUAD: [V2; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+
 impl Kind {
     fn of(nodes: usize) -> Option<Kind> {
         match nodes {
             3 => Some(Kind::Tri3),
             4 => Some(Kind::Quad4),
+            6 => Some(Kind::Tri6),
+            8 => Some(Kind::Quad8),
             _ => None,
         }
     }
@@ -273,61 +309,141 @@ impl Kind {
         match self {
             Kind::Tri3 => 3,
             Kind::Quad4 => 4,
+            Kind::Tri6 => 6,
+            Kind::Quad8 => 8,
         }
+    }
+
+    fn is_tri(self) -> bool {
+        matches!(self, Kind::Tri3 | Kind::Tri6)
     }
 
     /// The number of corner nodes (the polygon of the facet).
     fn corners(self) -> usize {
-        self.len()
-    }
-
-    fn centre(self) -> V2 {
-        match self {
-            Kind::Tri3 => [1.0 / 3.0, 1.0 / 3.0],
-            Kind::Quad4 => [0.0, 0.0],
+        if self.is_tri() {
+            3
+        } else {
+            4
         }
     }
 
-    /// tri3 on (0,0),(1,0),(0,1); quad4 on [−1, 1]², corners counter-clockwise from (−1, −1).
+    /// (edge node, its two corners) of a quadratic facet; empty for linear ones.
+    fn edges(self) -> &'static [(usize, usize, usize)] {
+        match self {
+            Kind::Tri3 | Kind::Quad4 => &[],
+            Kind::Tri6 => &[(3, 0, 1), (4, 1, 2), (5, 2, 0)],
+            Kind::Quad8 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
+        }
+    }
+
+    fn centre(self) -> V2 {
+        if self.is_tri() {
+            [1.0 / 3.0, 1.0 / 3.0]
+        } else {
+            [0.0, 0.0]
+        }
+    }
+
+    /// Triangles on (0,0),(1,0),(0,1); quads on [−1, 1]² (corners as [`QUAD`], then the edge
+    /// midpoints in the order of [`Kind::edges`]).
     fn shape(self, xi: V2) -> Shape {
         let mut s = Shape {
             phi: [0.0; MAX_NODES],
             dphi: [[0.0; 2]; MAX_NODES],
         };
-        let [r, t] = xi;
         match self {
-            Kind::Tri3 => {
-                s.phi[..3].copy_from_slice(&[1.0 - r - t, r, t]);
-                s.dphi[..3].copy_from_slice(&[[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]);
-            }
-            Kind::Quad4 => {
-                const C: [V2; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-                for (a, [ra, ta]) in C.into_iter().enumerate() {
-                    s.phi[a] = 0.25 * (1.0 + ra * r) * (1.0 + ta * t);
-                    s.dphi[a] = [0.25 * ra * (1.0 + ta * t), 0.25 * ta * (1.0 + ra * r)];
-                }
-            }
+            Kind::Tri3 | Kind::Tri6 => tri_shape(self, xi, &mut s),
+            Kind::Quad4 => quad4_shape(xi, &mut s),
+            Kind::Quad8 => quad8_shape(xi, &mut s),
         }
         s
     }
 
-    /// Quadrature on the reference element: tri 7-point degree 5, quad 4×4 Gauss (degree 7).
+    /// Quadrature on the reference element: triangles 7-point degree 5, quads 4×4 Gauss
+    /// (degree 7).
     fn rule(self) -> Vec<(V2, f64)> {
-        match self {
-            Kind::Tri3 => dunavant7()
+        if self.is_tri() {
+            return dunavant7()
                 .iter()
                 .map(|&(l, w)| ([l[1], l[2]], 0.5 * w))
-                .collect(),
-            Kind::Quad4 => {
-                let g = gauss4();
-                let mut q = Vec::with_capacity(16);
-                for &(a, wa) in &g {
-                    for &(b, wb) in &g {
-                        q.push(([a, b], wa * wb));
-                    }
-                }
-                q
+                .collect();
+        }
+        let g = gauss4();
+        let mut q = Vec::with_capacity(16);
+        for &(a, wa) in &g {
+            for &(b, wb) in &g {
+                q.push(([a, b], wa * wb));
             }
+        }
+        q
+    }
+
+    /// The modified slave basis φ̃ = T φ of Popp et al. (2012): per edge node e between corners
+    /// a, b: φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e; identity for linear facets.
+    fn transformation(self) -> Mat {
+        let mut t = [[0.0; MAX_NODES]; MAX_NODES];
+        for (i, row) in t.iter_mut().enumerate().take(self.len()) {
+            row[i] = 1.0;
+        }
+        for &(e, a, b) in self.edges() {
+            t[a][e] += ALPHA;
+            t[b][e] += ALPHA;
+            t[e][e] = 1.0 - 2.0 * ALPHA;
+        }
+        t
+    }
+}
+
+/// tri3 (λ) and tri6 (corners λ(2λ − 1), edges 4λ_aλ_b) with λ = (1 − ξ − η, ξ, η).
+fn tri_shape(kind: Kind, [r, t]: V2, s: &mut Shape) {
+    let l = [1.0 - r - t, r, t];
+    let dl: [V2; 3] = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+    if kind == Kind::Tri3 {
+        s.phi[..3].copy_from_slice(&l);
+        s.dphi[..3].copy_from_slice(&dl);
+        return;
+    }
+    for a in 0..3 {
+        s.phi[a] = l[a] * (2.0 * l[a] - 1.0);
+        s.dphi[a] = [(4.0 * l[a] - 1.0) * dl[a][0], (4.0 * l[a] - 1.0) * dl[a][1]];
+    }
+    for &(e, a, b) in kind.edges() {
+        s.phi[e] = 4.0 * l[a] * l[b];
+        s.dphi[e] = [
+            4.0 * (l[a] * dl[b][0] + l[b] * dl[a][0]),
+            4.0 * (l[a] * dl[b][1] + l[b] * dl[a][1]),
+        ];
+    }
+}
+
+fn quad4_shape([r, t]: V2, s: &mut Shape) {
+    for (a, [ra, ta]) in QUAD.into_iter().enumerate() {
+        s.phi[a] = 0.25 * (1.0 + ra * r) * (1.0 + ta * t);
+        s.dphi[a] = [0.25 * ra * (1.0 + ta * t), 0.25 * ta * (1.0 + ra * r)];
+    }
+}
+
+/// The 8-node serendipity quad.
+fn quad8_shape([r, t]: V2, s: &mut Shape) {
+    for (a, [ra, ta]) in QUAD.into_iter().enumerate() {
+        let (p, q) = (1.0 + ra * r, 1.0 + ta * t);
+        s.phi[a] = 0.25 * p * q * (ra * r + ta * t - 1.0);
+        s.dphi[a] = [
+            0.25 * ra * q * (2.0 * ra * r + ta * t),
+            0.25 * ta * p * (ra * r + 2.0 * ta * t),
+        ];
+    }
+    for &(e, a, b) in Kind::Quad8.edges() {
+        let [re, te] = [
+            0.5 * (QUAD[a][0] + QUAD[b][0]),
+            0.5 * (QUAD[a][1] + QUAD[b][1]),
+        ];
+        if re == 0.0 {
+            s.phi[e] = 0.5 * (1.0 - r * r) * (1.0 + te * t);
+            s.dphi[e] = [-r * (1.0 + te * t), 0.5 * (1.0 - r * r) * te];
+        } else {
+            s.phi[e] = 0.5 * (1.0 + re * r) * (1.0 - t * t);
+            s.dphi[e] = [0.5 * re * (1.0 - t * t), -t * (1.0 + re * r)];
         }
     }
 }
@@ -514,9 +630,9 @@ impl Plane {
 struct SlaveFacet {
     f: Facet,
     plane: Plane,
-    /// Dual coefficients: ψᵢ = Σ_j a[i][j] φ_j.
-    a: [[f64; MAX_NODES]; MAX_NODES],
-    /// ∫_e φ_j dA.
+    /// Dual coefficients of the whole facet: ψᵢ = Σ_j a[i][j] φ_j.
+    a: Mat,
+    /// ∫_e φ̃_j dA (φ̃ = φ for linear facets).
     d: [f64; MAX_NODES],
     /// Unit normal at the centre, times the facet area.
     weighted_normal: V3,
@@ -548,40 +664,121 @@ impl SlaveFacet {
         })
     }
 
-    /// ψᵢ at a point, from the shape functions there.
-    fn psi(&self, s: &Shape) -> [f64; MAX_NODES] {
+    /// ψᵢ = Σ_j a_ij φ_j at a point, from the shape functions there.
+    fn psi(&self, a: &Mat, s: &Shape) -> [f64; MAX_NODES] {
         let mut psi = [0.0; MAX_NODES];
         let n = self.f.n();
         for (i, p) in psi.iter_mut().enumerate().take(n) {
-            *p = (0..n).map(|j| self.a[i][j] * s.phi[j]).sum();
+            *p = (0..n).map(|j| a[i][j] * s.phi[j]).sum();
         }
         psi
     }
-}
 
-/// A = D_e M_e⁻¹ and D_e (the diagonal) of a facet, or None when M_e is singular.
-fn dual_coefficients(f: &Facet) -> Option<([[f64; MAX_NODES]; MAX_NODES], [f64; MAX_NODES])> {
-    let n = f.n();
-    let mut m = [[0.0; MAX_NODES]; MAX_NODES];
-    let mut d = [0.0; MAX_NODES];
-    for (xi, w) in f.kind.rule() {
-        let s = f.kind.shape(xi);
-        let wj = w * norm(f.jacobian(xi));
-        for i in 0..n {
-            d[i] += wj * s.phi[i];
-            for j in 0..n {
-                m[i][j] += wj * s.phi[i] * s.phi[j];
+    /// Slave area per plane area at a point: |x_ξ × x_η| / |(x_ξ × x_η)·n₀|.
+    fn jacobian_ratio(&self, s: &Shape) -> f64 {
+        let (_, t) = self.f.map(s);
+        let j = cross(t[0], t[1]);
+        norm(j) / dot(j, self.plane.n).abs()
+    }
+
+    /// The dual coefficients for the covered part `segs` of a partly covered facet:
+    /// A = D̂ M̂⁻¹ with D̂, M̂ integrated over the segments only, or None when M̂ is singular.
+    fn partial_dual(
+        &self,
+        segs: &[(usize, Vec<V2>)],
+        id: usize,
+    ) -> Result<Option<Mat>, MortarError> {
+        let mut samples = Vec::new();
+        for (master, poly) in segs {
+            for (p, w) in fan_points(poly) {
+                let fail = MortarError::Projection {
+                    slave: id,
+                    master: *master,
+                    side: "slave",
+                };
+                let sh = self
+                    .f
+                    .kind
+                    .shape(self.plane.invert(&self.f, p).ok_or(fail)?);
+                let wj = w * self.jacobian_ratio(&sh);
+                samples.push((sh, wj));
             }
         }
+        let t = self.f.kind.transformation();
+        Ok(dual_from(&samples, &t, self.f.n()).map(|(a, _)| a))
     }
-    let minv = invert(m, n)?;
+}
+
+/// The dual coefficients of a whole facet (in the standard basis, see [`dual_from`]) and
+/// D_e = (∫_e φ̃_j dA), or None when M_e is singular.
+fn dual_coefficients(f: &Facet) -> Option<(Mat, [f64; MAX_NODES])> {
+    let samples: Vec<(Shape, f64)> = f
+        .kind
+        .rule()
+        .into_iter()
+        .map(|(xi, w)| (f.kind.shape(xi), w * norm(f.jacobian(xi))))
+        .collect();
+    dual_from(&samples, &f.kind.transformation(), f.n())
+}
+
+/// From (shape functions, weight) samples of a region: D = diag(∫ φ̃), M = (∫ φ̃ᵢ φ̃_j) with
+/// φ̃ = T φ, A = D M⁻¹, so ψᵢ = Σ_j (A T)_ij φ_j; returns A T and the diagonal of D.
+fn dual_from(samples: &[(Shape, f64)], t: &Mat, n: usize) -> Option<(Mat, [f64; MAX_NODES])> {
+    let (mut m, mut d) = ([[0.0; MAX_NODES]; MAX_NODES], [0.0; MAX_NODES]);
+    for (s, w) in samples {
+        let b = mat_vec(t, &s.phi, n);
+        add_scaled(&mut d, *w, &b[..n]);
+        add_outer(&mut m, *w, &b[..n], &b[..n]);
+    }
+    let a = scale_rows(&invert(m, n)?, &d, n);
+    Some((mat_mul(&a, t, n), d))
+}
+
+/// T v on the leading n entries.
+fn mat_vec(t: &Mat, v: &[f64; MAX_NODES], n: usize) -> [f64; MAX_NODES] {
+    let mut out = [0.0; MAX_NODES];
+    for (o, row) in out.iter_mut().zip(t).take(n) {
+        *o = row[..n].iter().zip(&v[..n]).map(|(a, b)| a * b).sum();
+    }
+    out
+}
+
+/// A B on the leading n×n blocks.
+fn mat_mul(a: &Mat, b: &Mat, n: usize) -> Mat {
+    let mut out = [[0.0; MAX_NODES]; MAX_NODES];
+    for (o, arow) in out.iter_mut().zip(a).take(n) {
+        for (k, &aik) in arow[..n].iter().enumerate() {
+            add_scaled(&mut o[..n], aik, &b[k][..n]);
+        }
+    }
+    out
+}
+
+/// d_i += w a_i.
+fn add_scaled(d: &mut [f64], w: f64, a: &[f64]) {
+    for (di, ai) in d.iter_mut().zip(a) {
+        *di += w * ai;
+    }
+}
+
+/// m_ij += w a_i b_j.
+fn add_outer(m: &mut Mat, w: f64, a: &[f64], b: &[f64]) {
+    for (row, ai) in m.iter_mut().zip(a) {
+        for (mij, bj) in row.iter_mut().zip(b) {
+            *mij += w * ai * bj;
+        }
+    }
+}
+
+/// diag(d) · m on the leading n×n block.
+fn scale_rows(m: &Mat, d: &[f64; MAX_NODES], n: usize) -> Mat {
     let mut a = [[0.0; MAX_NODES]; MAX_NODES];
     for i in 0..n {
         for j in 0..n {
-            a[i][j] = d[i] * minv[i][j];
+            a[i][j] = d[i] * m[i][j];
         }
     }
-    Some((a, d))
+    a
 }
 
 /// Inverse of the leading n×n block (Gauss–Jordan, partial pivoting).
@@ -593,7 +790,8 @@ fn invert(mut m: [[f64; MAX_NODES]; MAX_NODES], n: usize) -> Option<[[f64; MAX_N
     let size = (0..n).map(|i| m[i][i].abs()).fold(0.0, f64::max);
     for c in 0..n {
         let p = (c..n).max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))?;
-        if !(m[p][c].abs() > 1e-12 * size) {
+        let pivot_ok = m[p][c].abs() > 1e-12 * size;
+        if !pivot_ok {
             return None;
         }
         m.swap(c, p);
@@ -692,8 +890,10 @@ fn dedup(p: Vec<V2>, tol: f64) -> Vec<V2> {
 struct NodeAcc {
     /// D_ii over the covered segments.
     d: f64,
-    /// ∫ φᵢ dA over the whole slave face.
+    /// ∫ φ̃ᵢ dA over the whole slave face.
     nominal: f64,
+    /// The two corners of a quadratic facet's edge node.
+    edge: Option<(usize, usize)>,
     /// Σ facet area × facet unit normal.
     normal: V3,
     /// M_ij by master node j.
@@ -735,14 +935,19 @@ pub fn dual_mortar(
         ..Default::default()
     };
     for (si, s) in slaves.iter().enumerate() {
+        let mut segs = Vec::new();
         for hit in tree.locate_in_envelope_intersecting(s.f.aabb(0.0)) {
             info.candidate_pairs += 1;
             let (m, nm) = &masters[hit.data];
-            let Some(seg) = segment(s, m, *nm, params, (si, hit.data))? else {
-                continue;
-            };
-            info.segments += 1;
-            add_segment(&mut acc, s, m, &seg);
+            if let Some(poly) = overlap(s, m, *nm, params, (si, hit.data))? {
+                segs.push((hit.data, poly));
+            }
+        }
+        info.segments += segs.len();
+        let a = facet_dual(s, &segs, si)?;
+        for (mi, poly) in &segs {
+            let seg = integrate(s, &a, &masters[*mi].0, poly, (si, *mi))?;
+            add_segment(&mut acc, s, &masters[*mi].0, &seg);
         }
     }
     let mut rows = finish(coords, acc, params, &mut info)?;
@@ -781,19 +986,51 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
             node.nominal += s.d[a];
             axpy(&mut node.normal, 1.0, s.weighted_normal);
         }
+        for &(e, a, b) in s.f.kind.edges() {
+            let edge = Some((
+                s.f.nodes[a].min(s.f.nodes[b]),
+                s.f.nodes[a].max(s.f.nodes[b]),
+            ));
+            acc.get_mut(&s.f.nodes[e])
+                .expect("slave node accumulator")
+                .edge = edge;
+        }
     }
     acc
 }
 
-/// The integrated segment of a slave and a master facet, or None when they do not face each
-/// other, do not overlap, or are farther apart than the search distance.
-fn segment(
+/// The slave part of row i, (T⁻¹)_ki: +1 at a corner (or a linear facet's node); at the edge
+/// node of corners a, b: 1/(1 − 2α) there and −α/(1 − 2α) at a and b.
+fn slave_part(node: usize, edge: Option<(usize, usize)>) -> Vec<(usize, f64)> {
+    match edge {
+        None => vec![(node, 1.0)],
+        Some((a, b)) => {
+            let s = 1.0 / (1.0 - 2.0 * ALPHA);
+            vec![(node, s), (a, -ALPHA * s), (b, -ALPHA * s)]
+        }
+    }
+}
+
+/// The dual coefficients of a slave facet: its own when fully covered by `segs`, else those of
+/// the covered part (Cichosz & Bischoff 2011; Popp et al. 2013), falling back to its own when
+/// the covered part is too thin for M̂ to be inverted.
+fn facet_dual(s: &SlaveFacet, segs: &[(usize, Vec<V2>)], id: usize) -> Result<Mat, MortarError> {
+    let covered: f64 = segs.iter().map(|(_, p)| polygon_area(p).abs()).sum();
+    if segs.is_empty() || covered >= (1.0 - FULL_COVER) * s.plane_area {
+        return Ok(s.a);
+    }
+    Ok(s.partial_dual(segs, id)?.unwrap_or(s.a))
+}
+
+/// The clip polygon of a slave and a master facet on the slave's plane, or None when they do
+/// not face each other, do not overlap, or are farther apart than the search distance.
+fn overlap(
     s: &SlaveFacet,
     m: &Facet,
     nm: V3,
     params: &MortarParams,
     ids: (usize, usize),
-) -> Result<Option<Segment>, MortarError> {
+) -> Result<Option<Vec<V2>>, MortarError> {
     if -dot(nm, s.plane.n) <= params.min_opposition {
         return Ok(None);
     }
@@ -806,7 +1043,7 @@ fn segment(
     if min_gap(s, m, &poly, ids)? > params.search_distance {
         return Ok(None);
     }
-    integrate(s, m, &poly, ids).map(Some)
+    Ok(Some(poly))
 }
 
 /// Slave and master parametric coordinates of the plane point p.
@@ -838,9 +1075,33 @@ fn min_gap(
     Ok(g)
 }
 
-/// D_ii and M_ij of a clip polygon: fan triangles from the centroid, 7-point rule on each.
+/// Gauss points (plane point, plane weight) of a clip polygon: fan triangles from the
+/// vertex centroid, the 7-point rule on each.
+fn fan_points(poly: &[V2]) -> Vec<(V2, f64)> {
+    let k = poly.len() as f64;
+    let c = [
+        poly.iter().map(|p| p[0]).sum::<f64>() / k,
+        poly.iter().map(|p| p[1]).sum::<f64>() / k,
+    ];
+    let mut out = Vec::with_capacity(7 * poly.len());
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let area = 0.5 * cross2(sub2(a, c), sub2(b, c)).abs();
+        for (l, w) in dunavant7() {
+            let p = [
+                l[0] * c[0] + l[1] * a[0] + l[2] * b[0],
+                l[0] * c[1] + l[1] * a[1] + l[2] * b[1],
+            ];
+            out.push((p, w * area));
+        }
+    }
+    out
+}
+
+/// D_ii = ∫ ψᵢ and M_ij = ∫ ψᵢ φ_j over a clip polygon, with ψ from the coefficients `a`.
 fn integrate(
     s: &SlaveFacet,
+    a: &Mat,
     m: &Facet,
     poly: &[V2],
     ids: (usize, usize),
@@ -849,52 +1110,17 @@ fn integrate(
         d: [0.0; MAX_NODES],
         m: [[0.0; MAX_NODES]; MAX_NODES],
     };
-    let k = poly.len() as f64;
-    let c = [
-        poly.iter().map(|p| p[0]).sum::<f64>() / k,
-        poly.iter().map(|p| p[1]).sum::<f64>() / k,
-    ];
-    let rule = dunavant7();
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let area = 0.5 * cross2(sub2(a, c), sub2(b, c)).abs();
-        for &(l, w) in &rule {
-            let p = [
-                l[0] * c[0] + l[1] * a[0] + l[2] * b[0],
-                l[0] * c[1] + l[1] * a[1] + l[2] * b[1],
-            ];
-            gauss_point(s, m, p, w * area, ids, &mut seg)?;
-        }
+    for (p, w) in fan_points(poly) {
+        let (xs, xm) = project(s, m, p, ids)?;
+        let ss = s.f.kind.shape(xs);
+        let psi = s.psi(a, &ss);
+        let sm = m.kind.shape(xm);
+        let wj = w * s.jacobian_ratio(&ss);
+        let psi = &psi[..s.f.n()];
+        add_scaled(&mut seg.d, wj, psi);
+        add_outer(&mut seg.m, wj, psi, &sm.phi[..m.n()]);
     }
     Ok(seg)
-}
-
-/// Adds one Gauss point (plane point p, plane weight w) to the segment integrals.
-fn gauss_point(
-    s: &SlaveFacet,
-    m: &Facet,
-    p: V2,
-    w: f64,
-    ids: (usize, usize),
-    seg: &mut Segment,
-) -> Result<(), MortarError> {
-    let (xs, xm) = project(s, m, p, ids)?;
-    let ss = s.f.kind.shape(xs);
-    let jn = {
-        let (_, t) = s.f.map(&ss);
-        let j = cross(t[0], t[1]);
-        norm(j) / dot(j, s.plane.n).abs()
-    };
-    let psi = s.psi(&ss);
-    let sm = m.kind.shape(xm);
-    for i in 0..s.f.n() {
-        let wi = w * jn * psi[i];
-        seg.d[i] += wi;
-        for j in 0..m.n() {
-            seg.m[i][j] += wi * sm.phi[j];
-        }
-    }
-    Ok(())
 }
 
 fn add_segment(acc: &mut BTreeMap<usize, NodeAcc>, s: &SlaveFacet, m: &Facet, seg: &Segment) {
@@ -933,12 +1159,12 @@ fn finish(
     info.nodes_uncovered = uncovered.len();
     let mut rows = MortarRows::default();
     for (node, a) in acc.into_iter().filter(|(_, a)| a.covered) {
-        if a.d <= DROP_FRACTION * a.nominal {
+        if a.d <= params.min_coverage * a.nominal {
             info.rows_dropped += 1;
             continue;
         }
         let n = scale(a.normal, 1.0 / norm(a.normal));
-        let mut row = vec![(node, 1.0)];
+        let mut row = slave_part(node, a.edge);
         row.extend(
             a.m.iter()
                 .filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d)
@@ -1076,11 +1302,11 @@ mod tests {
         let f = Facet::new(&SurfaceFacet { nodes: &[0, 1, 2] }, &coords, "slave", 0).unwrap();
         let (a, d) = dual_coefficients(&f).unwrap();
         let area = f.area();
-        for i in 0..3 {
+        for (i, row) in a.iter().enumerate().take(3) {
             assert!((d[i] - area / 3.0).abs() < 1e-14 * area);
-            for j in 0..3 {
+            for (j, aij) in row.iter().enumerate().take(3) {
                 let want = if i == j { 3.0 } else { -1.0 };
-                assert!((a[i][j] - want).abs() < 1e-12, "a[{i}][{j}] = {}", a[i][j]);
+                assert!((aij - want).abs() < 1e-12, "a[{i}][{j}] = {aij}");
             }
         }
     }
@@ -1103,23 +1329,18 @@ mod tests {
         )
         .unwrap();
         let s = SlaveFacet::new(f, 0).unwrap();
-        let mut g = [[0.0; 4]; 4];
+        let mut g = [[0.0; MAX_NODES]; MAX_NODES];
         for (xi, w) in s.f.kind.rule() {
             let sh = s.f.kind.shape(xi);
-            let (psi, wj) = (s.psi(&sh), w * norm(s.f.jacobian(xi)));
-            for i in 0..4 {
-                for k in 0..4 {
-                    g[i][k] += wj * psi[i] * sh.phi[k];
-                }
-            }
+            let (psi, wj) = (s.psi(&s.a, &sh), w * norm(s.f.jacobian(xi)));
+            add_outer(&mut g, wj, &psi[..4], &sh.phi[..4]);
         }
-        for i in 0..4 {
-            for k in 0..4 {
+        for (i, row) in g.iter().enumerate().take(4) {
+            for (k, gik) in row.iter().enumerate().take(4) {
                 let want = if i == k { s.d[k] } else { 0.0 };
                 assert!(
-                    (g[i][k] - want).abs() < 1e-14,
-                    "∫ψ{i}φ{k} = {} (want {want})",
-                    g[i][k]
+                    (gik - want).abs() < 1e-14,
+                    "∫ψ{i}φ{k} = {gik} (want {want})"
                 );
             }
         }
@@ -1309,6 +1530,348 @@ mod tests {
             if (1..5).contains(&i) && (1..5).contains(&j) {
                 assert!(q[r] < 2.0, "interior row {r}: {}", q[r]);
             }
+        }
+    }
+
+    /// Slave on the cylinder r = 1 (θ ∈ [−0.3, 0.3], y ∈ [0, 0.6], n × n cells), master on
+    /// r = 1 + δ over a larger patch with a finer, non-nested grid: the largest |dᵢ − δ|.
+    fn cylinder_gap_error(n: usize, tri: bool, delta: f64) -> f64 {
+        let cyl = |r: f64, t0: f64, t1: f64, y0: f64, y1: f64| {
+            move |u: f64, v: f64| {
+                let t = t0 + u * (t1 - t0);
+                [r * t.sin(), y0 + v * (y1 - y0), r * t.cos()]
+            }
+        };
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, n, n, tri, true, &cyl(1.0, -0.3, 0.3, 0.0, 0.6));
+        let nm = (2.3 * n as f64) as usize;
+        let m = patch(
+            &mut coords,
+            nm,
+            nm,
+            !tri,
+            false,
+            &cyl(1.0 + delta, -0.35, 0.35, -0.05, 0.65),
+        );
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!(rows.len(), s.ids.len());
+        rows.gap
+            .iter()
+            .map(|g| (g - delta).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// |dᵢ − δ| ≤ 0.1 h² (R = 1), and halving h divides it by about 4 (quad4 slave on a tri3
+    /// master and tri3 on quad4).
+    #[test]
+    fn curved_cylinder_gap_is_delta_to_second_order() {
+        for tri in [false, true] {
+            let e: Vec<f64> = [4, 8, 16]
+                .iter()
+                .map(|&n| cylinder_gap_error(n, tri, 0.01))
+                .collect();
+            for (k, n) in [4.0, 8.0, 16.0].into_iter().enumerate() {
+                let h = 0.6 / n;
+                assert!(e[k] < 0.1 * h * h, "tri {tri}, h = {h}: |d − δ| = {}", e[k]);
+            }
+            for k in 0..2 {
+                let ratio = e[k] / e[k + 1];
+                assert!(
+                    ratio > 3.0 && ratio < 5.5,
+                    "tri {tri}: halving h divides the error by {ratio}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn master_beyond_the_search_distance_is_an_error_naming_a_slave_node() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 3, 3, false, true, &flat(0.0));
+        let m = patch(&mut coords, 5, 5, false, false, &flat(0.2));
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "slave node 0 at (0, 0, 0) finds no master facet within the search distance 1.0e-1 \
+             (16 of 16 slave nodes uncovered)"
+        );
+        assert!(run(&coords, &s, &m, &params(0.25)).is_ok());
+        // Within reach of the boxes but beside the slave face (no overlap): the same error.
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 3, 3, false, true, &flat(0.0));
+        let m = patch(&mut coords, 3, 3, false, false, &|u, v| [u + 1.05, v, 0.01]);
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                MortarError::NoMaster {
+                    node: 0,
+                    uncovered: 16,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn master_facing_the_same_way_is_not_found() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 2, 2, false, true, &flat(0.0));
+        let m = patch(&mut coords, 3, 3, false, true, &flat(0.01));
+        let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
+        assert!(
+            matches!(err, MortarError::NoMaster { uncovered: 9, .. }),
+            "{err}"
+        );
+    }
+
+    /// Slave [0, 1.5] × [0, 1] (6 × 4 quads, h = 0.25) on master [0, 1]²: the nodes at
+    /// x ≥ 1.25 overlap no master facet. Default: an error naming the first of them;
+    /// `allow_uncovered`: those 10 nodes are dropped and counted, the rest keep exact rows.
+    #[test]
+    fn slave_face_larger_than_the_master() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 6, 4, false, true, &|u, v| [1.5 * u, v, 0.0]);
+        let m = patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin));
+        let err = run(&coords, &s, &m, &params(0.05)).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("slave node 5 at (1.25, 0, 0) finds no master facet"),
+            "{err}"
+        );
+        assert!(matches!(
+            err,
+            MortarError::NoMaster {
+                node: 5,
+                uncovered: 10,
+                nodes: 35,
+                ..
+            }
+        ));
+        let p = MortarParams {
+            allow_uncovered: true,
+            ..params(0.05)
+        };
+        let rows = run(&coords, &s, &m, &p).unwrap();
+        assert_eq!(
+            (
+                rows.info.nodes_uncovered,
+                rows.info.rows_dropped,
+                rows.len()
+            ),
+            (10, 0, 25)
+        );
+        let areas = nodal_areas(&coords, &s);
+        for r in 0..rows.len() {
+            let x = coords[rows.node[r]];
+            assert!(x[0] < 1.0 + 1e-12);
+            let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
+            assert!(
+                (masters - 1.0).abs() < 1e-12,
+                "row {r}: Σ M_ij/D_ii = {masters}"
+            );
+            // Nodes on x = 1 have only their left facets covered: D_ii = half the nodal area.
+            let want = if x[0] > 1.0 - 1e-12 {
+                0.5 * areas[&rows.node[r]]
+            } else {
+                areas[&rows.node[r]]
+            };
+            assert!(
+                (rows.area[r] - want).abs() < 1e-14,
+                "row {r}: D_ii = {} vs {want}",
+                rows.area[r]
+            );
+            if x[0] < 0.75 + 1e-12 {
+                assert!((rows.gap[r] - f_lin(x[0], x[1])).abs() < 1e-12);
+            }
+        }
+    }
+
+    /// Slave [0, 1.25] × [0, 1] (5 × 4 quads, h = 0.25) on master [0, 1.1] × [0, 1] at
+    /// z = f_lin: the facets at x ≥ 1 are 40 % covered, on the side away from the nodes at
+    /// x = 1.25. With the dual basis of the covered part every node keeps a row that
+    /// reproduces the linear gap exactly, with D_ii = ∫_covered φᵢ dA (0.16 of the nodal area
+    /// at x = 1.25); min_coverage = 0.2 drops those 5 rows.
+    #[test]
+    fn partly_covered_facets_use_the_dual_basis_of_the_covered_part() {
+        let mut coords = Vec::new();
+        let s = patch(&mut coords, 5, 4, false, true, &|u, v| [1.25 * u, v, 0.0]);
+        let m = patch(&mut coords, 9, 7, false, false, &|u, v| {
+            [1.1 * u, v, f_lin(1.1 * u, v)]
+        });
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!((rows.len(), rows.info.rows_dropped), (30, 0));
+        let areas = nodal_areas(&coords, &s);
+        let total: f64 = rows.area.iter().sum();
+        assert!((total - 1.1).abs() < 1e-13, "Σ D_ii = {total}");
+        let q = rows.row_norms_squared();
+        for r in 0..rows.len() {
+            let x = coords[rows.node[r]];
+            let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
+            assert!(
+                (masters - 1.0).abs() < 1e-12,
+                "row {r}: Σ M_ij/D_ii = {masters}"
+            );
+            let err = rows.gap[r] - f_lin(x[0], x[1]);
+            assert!(err.abs() < 1e-12, "row {r} at {x:?}: gap error {err}");
+            if x[0] > 1.2 {
+                let ratio = rows.area[r] / areas[&rows.node[r]];
+                assert!((ratio - 0.16).abs() < 1e-12, "row {r}: D_ii/∫φᵢ = {ratio}");
+                assert!(q[r] > 2.0, "row {r}: ‖row‖² = {}", q[r]);
+            }
+        }
+        let p = MortarParams {
+            min_coverage: 0.2,
+            ..params(0.05)
+        };
+        let rows = run(&coords, &s, &m, &p).unwrap();
+        assert_eq!((rows.len(), rows.info.rows_dropped), (25, 5));
+        assert!(rows.node.iter().all(|&n| coords[n][0] < 1.2));
+    }
+
+    /// A quadratic structured patch (tri6 or quad8) on the (2nx + 1) × (2ny + 1) lattice of
+    /// (u, v) ∈ [0, 1]² mapped by `map` (quad8 leaves the cell centres unused).
+    fn patch2(
+        coords: &mut Vec<V3>,
+        nx: usize,
+        ny: usize,
+        tri: bool,
+        up: bool,
+        map: &dyn Fn(f64, f64) -> V3,
+    ) -> Patch {
+        let base = coords.len();
+        for j in 0..=2 * ny {
+            for i in 0..=2 * nx {
+                coords.push(map(i as f64 / (2 * nx) as f64, j as f64 / (2 * ny) as f64));
+            }
+        }
+        let l = |i: usize, j: usize| base + j * (2 * nx + 1) + i;
+        let mut facets = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b) = (2 * i, 2 * j);
+                let q = [l(a, b), l(a + 2, b), l(a + 2, b + 2), l(a, b + 2)];
+                let mid = l(a + 1, b + 1);
+                let e = [l(a + 1, b), l(a + 2, b + 1), l(a + 1, b + 2), l(a, b + 1)];
+                let mut fs = if tri {
+                    vec![
+                        vec![q[0], q[1], q[2], e[0], e[1], mid],
+                        vec![q[0], q[2], q[3], mid, e[2], e[3]],
+                    ]
+                } else {
+                    vec![vec![q[0], q[1], q[2], q[3], e[0], e[1], e[2], e[3]]]
+                };
+                if !up {
+                    for f in &mut fs {
+                        let c = f.len() / 2;
+                        f[1..c].reverse();
+                        f[c..].reverse();
+                    }
+                }
+                facets.extend(fs);
+            }
+        }
+        let ids = facets
+            .iter()
+            .flatten()
+            .copied()
+            .collect::<std::collections::BTreeSet<_>>();
+        Patch {
+            ids: ids.into_iter().collect(),
+            facets,
+        }
+    }
+
+    /// The modified quadratic dual basis is biorthogonal to φ̃ and has positive D̃: corners
+    /// 2/15 (tri6) or 1/20 (quad8) of the area, edge nodes 1/5.
+    #[test]
+    fn quadratic_modified_dual_basis() {
+        let mut coords = Vec::new();
+        for (tri, corner) in [(true, 2.0 / 15.0), (false, 1.0 / 20.0)] {
+            let p = patch2(&mut coords, 1, 1, tri, true, &|u, v| {
+                [2.0 * u, 1.5 * v, 0.0]
+            });
+            let f = Facet::new(
+                &SurfaceFacet {
+                    nodes: &p.facets[0],
+                },
+                &coords,
+                "slave",
+                0,
+            )
+            .unwrap();
+            let s = SlaveFacet::new(f, 0).unwrap();
+            let (n, c, area) = (s.f.n(), s.f.kind.corners(), s.f.area());
+            for k in 0..n {
+                let want = if k < c { corner } else { 0.2 };
+                assert!(
+                    (s.d[k] / area - want).abs() < 1e-14,
+                    "tri {tri}: D̃_{k}/A = {}",
+                    s.d[k] / area
+                );
+            }
+            let t = s.f.kind.transformation();
+            let mut g = [[0.0; MAX_NODES]; MAX_NODES];
+            for (xi, w) in s.f.kind.rule() {
+                let sh = s.f.kind.shape(xi);
+                let (psi, wj) = (s.psi(&s.a, &sh), w * norm(s.f.jacobian(xi)));
+                add_outer(&mut g, wj, &psi[..n], &mat_vec(&t, &sh.phi, n)[..n]);
+            }
+            for (i, row) in g.iter().enumerate().take(n) {
+                for (k, gik) in row.iter().enumerate().take(n) {
+                    let want = if i == k { s.d[k] } else { 0.0 };
+                    assert!((gik - want).abs() < 1e-13, "tri {tri}: ∫ψ{i}φ̃{k} = {gik}");
+                }
+            }
+        }
+    }
+
+    /// Quadratic slaves (tri6, quad8; 3 × 3 cells) on a wobbly quad4 master (7 × 7) and on a
+    /// quad8 master (5 × 5) at z = f_lin: the slave and master parts of every row each sum to
+    /// ±1, Σ D̃_ii = 1, and the gap equals f_lin at the node (linear fields reproduced).
+    #[test]
+    fn quadratic_slaves_reproduce_linear_gap() {
+        for (stri, mquad8) in [(true, false), (false, false), (true, true), (false, true)] {
+            let mut coords = Vec::new();
+            let s = patch2(&mut coords, 3, 3, stri, true, &flat(0.0));
+            let m = if mquad8 {
+                patch2(&mut coords, 5, 5, false, false, &|u, v| [u, v, f_lin(u, v)])
+            } else {
+                patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin))
+            };
+            let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+            let case = format!("slave tri {stri}, master quad8 {mquad8}");
+            assert_eq!(rows.len(), s.ids.len(), "{case}");
+            let total: f64 = rows.area.iter().sum();
+            assert!((total - 1.0).abs() < 1e-13, "{case}: Σ D_ii = {total}");
+            assert!(rows.area.iter().all(|&d| d > 0.0));
+            for r in 0..rows.len() {
+                let (mut cs, mut cm) = (0.0, 0.0);
+                for &(k, c) in &rows.coupling[r] {
+                    if s.ids.contains(&k) {
+                        cs += c
+                    } else {
+                        cm += c
+                    }
+                }
+                assert!(
+                    (cs - 1.0).abs() < 1e-13 && (cm + 1.0).abs() < 1e-12,
+                    "{case}, row {r}: {cs} {cm}"
+                );
+                let x = coords[rows.node[r]];
+                let err = rows.gap[r] - f_lin(x[0], x[1]);
+                assert!(
+                    err.abs() < 1e-12,
+                    "{case}, row {r} at {x:?}: gap error {err}"
+                );
+            }
+            let edge_rows = rows
+                .coupling
+                .iter()
+                .filter(|row| (row[0].1 - 5.0 / 3.0).abs() < 1e-15)
+                .count();
+            assert_eq!(edge_rows, if stri { 33 } else { 24 }, "{case}");
         }
     }
 }
