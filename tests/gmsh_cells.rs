@@ -3,9 +3,14 @@
 //! binary. Each body must come back as Gmsh wrote it (cell counts per type), every cell with a
 //! positive Jacobian, every 10-node tetrahedron with its edge nodes midway between the corners
 //! they name, and every face made of outward facets of its own cells that cover exactly the
-//! geometric area of the face.
+//! geometric area of the face. End to end, results on tetrahedral and mixed meshes are written
+//! (HDF5 + XDMF) and read back, on one rank and under mpirun.
+
+mod common;
 
 use std::path::PathBuf;
+
+use common::{fields, mpirun, root, run, tmpdir};
 
 use tresca_feti::fem::cell::{cell_min_jacobian, facet_normal_area};
 use tresca_feti::mesh::{gmsh, BodyGeometry, CellKind, FacetKind};
@@ -167,4 +172,85 @@ fn small_tetrahedral_cube_reads() {
     check_cells(&g, "tet.msh");
     let (_, top) = &g.faces[0];
     check_face(&g, "top", top.len(), &[FacetKind::Tri3], 1.0, Z);
+}
+
+/// The seed scene on tetrahedral box meshes (`mesh.cells`): the result file holds the cells as
+/// generated (`/mesh/tetrahedra`, `/mesh/tetrahedra10`), checked against memory by the run
+/// itself (`output.verify`), and the XDMF sidecar names their topology.
+#[test]
+fn seed_on_tetrahedra_writes_results_that_read_back() {
+    let dir = tmpdir("seed-tet");
+    for (cells, n, kind, count, topology, dataset) in [("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"), ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10")] {
+        let out = dir.join(format!("{cells}.h5"));
+        let c = format!("mesh.cells=\"{cells}\"");
+        let m = format!("mesh.n={n}");
+        let seed = root().join("run/seed.toml");
+        let o = run(&["solve", seed.to_str().unwrap(), "--set", &c, "--set", &m, "--set", "output.verify=true", "--out", out.to_str().unwrap()]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{cells}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(stdout.contains("match the fields in memory"), "{stdout}");
+        let data = fields(&out);
+        assert_eq!(data.cells.len(), count, "{cells}");
+        assert!(data.cells.iter().all(|c| c.kind == kind), "{cells}");
+        let xdmf = std::fs::read_to_string(out.with_extension("xdmf")).unwrap();
+        assert!(xdmf.contains(&format!("<Topology TopologyType=\"{topology}\" NumberOfElements=\"{count}\">")), "{xdmf}");
+        assert!(xdmf.contains(&format!("Dimensions=\"{count} {}\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">{cells}.h5:/mesh/{dataset}<", kind.len())), "{xdmf}");
+    }
+}
+
+/// The wedge layer under tetrahedra as one body, clamped at the bottom and pressed on top,
+/// TFETI with 4 subdomains on 1 and on 2 ranks: both files hold the same `Mixed` cells (each
+/// rank writing its cells at their offset), the XDMF sidecar a `Mixed` topology of
+/// 83 × (1 + 4) + 28 × (1 + 6) = 611 values, and the same displacements.
+#[test]
+fn mixed_mesh_results_on_one_and_two_ranks() {
+    let dir = tmpdir("mixed");
+    let scene = dir.join("wedge.toml");
+    let mesh = mesh_file("wedge_layer.msh");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"title = "wedges under tetrahedra"
+[[material]]
+name = "m"
+E = 50000.0
+nu = 0.3
+[[body]]
+name = "cube"
+material = "m"
+gmsh = {{ file = "{}", volume = "body" }}
+[[dirichlet]]
+face = "cube.bottom"
+[[traction]]
+face = "cube.top"
+p = [0.1, 0.0, -1.0]
+"#,
+            mesh.display()
+        ),
+    )
+    .unwrap();
+    let mut runs = Vec::new();
+    for n in [1, 2] {
+        let out = dir.join(format!("r{n}.h5"));
+        let args = ["solve", scene.to_str().unwrap(), "--set", "decomposition.subdomains=4", "--set", "output.verify=true", "--out", out.to_str().unwrap()];
+        let o = if n == 1 { run(&args) } else { mpirun(n, &args) };
+        assert!(o.status.success(), "{n} ranks: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("match the fields in memory"));
+        let xdmf = std::fs::read_to_string(out.with_extension("xdmf")).unwrap();
+        assert!(xdmf.contains(r#"<Topology TopologyType="Mixed" NumberOfElements="111">"#), "{xdmf}");
+        assert!(xdmf.contains(&format!(r#"Dimensions="611" NumberType="Int" Precision="8" Format="HDF">r{n}.h5:/mesh/mixed<"#)), "{xdmf}");
+        runs.push(fields(&out));
+    }
+    let body = gmsh::read(&mesh, Some("body")).unwrap();
+    assert_eq!(tresca_feti::mesh::cell_counts(&runs[0].cells), [(CellKind::Tet4, 83), (CellKind::Wedge6, 28)]);
+    assert_eq!(runs[0].cells, body.cells);
+    assert_eq!(runs[1].cells, runs[0].cells);
+    assert_eq!(runs[1].coordinates, runs[0].coordinates);
+    let u = |d: &tresca_feti::output::OutputData| match &d.fields.iter().find(|f| f.name == "displacement").expect("displacement").values {
+        tresca_feti::output::Values::F64(v) => v.clone(),
+        _ => panic!("displacement is not f64"),
+    };
+    let (a, b) = (u(&runs[0]), u(&runs[1]));
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(scale > 0.0 && a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-9 * scale), "displacements differ between 1 and 2 ranks");
 }
