@@ -1232,7 +1232,10 @@ mod tests {
     /// A file with nodes 1… at `x`, the volume blocks `cells` (Gmsh type, then per element its
     /// tag and node tags) in volume entity 1 (physical volume 7 "solid"), and the surface
     /// blocks `surfaces` in surface entity 1 (physical surface 5 "side").
-    fn msh_text(x: &[[f64; 3]], cells: &[(i32, Vec<(u64, Vec<u64>)>)], surfaces: &[(i32, Vec<(u64, Vec<u64>)>)]) -> String {
+    /// One element block: the Gmsh type, then per element its tag and node tags.
+    type Block = (i32, Vec<(u64, Vec<u64>)>);
+
+    fn msh_text(x: &[[f64; 3]], cells: &[Block], surfaces: &[Block]) -> String {
         let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
         s += "$PhysicalNames\n2\n2 5 \"side\"\n3 7 \"solid\"\n$EndPhysicalNames\n";
         s += "$Entities\n0 0 1 1\n1 0 0 0 1 1 1 1 5 0\n1 0 0 0 1 1 1 1 7 1 1\n$EndEntities\n";
@@ -1244,7 +1247,7 @@ mod tests {
         for p in x {
             s += &format!("{} {} {}\n", p[0], p[1], p[2]);
         }
-        let blocks: Vec<(i32, &(i32, Vec<(u64, Vec<u64>)>))> = surfaces.iter().map(|b| (2, b)).chain(cells.iter().map(|b| (3, b))).collect();
+        let blocks: Vec<(i32, &Block)> = surfaces.iter().map(|b| (2, b)).chain(cells.iter().map(|b| (3, b))).collect();
         let count: usize = blocks.iter().map(|(_, b)| b.1.len()).sum();
         let max = blocks.iter().flat_map(|(_, b)| b.1.iter().map(|e| e.0)).max().unwrap_or(0);
         s += &format!("$EndNodes\n$Elements\n{} {count} 1 {max}\n", blocks.len());

@@ -1560,7 +1560,9 @@ mod tests {
     /// the same file from the mesh given as rows (reversed), verified row by row.
     #[test]
     fn every_cell_layout_round_trips() {
-        let cases: Vec<(Vec<Cell>, &str, Vec<usize>, Vec<i64>)> = vec![
+        // cells, their dataset, its shape, its values
+        type Case = (Vec<Cell>, &'static str, Vec<usize>, Vec<i64>);
+        let cases: Vec<Case> = vec![
             (vec![cell(CellKind::Tet4, 0), cell(CellKind::Tet4, 4), cell(CellKind::Tet4, 8)], "tetrahedra", vec![3, 4], (0..12).collect()),
             (vec![cell(CellKind::Tet10, 0), cell(CellKind::Tet10, 2)], "tetrahedra10", vec![2, 10], vec![0, 1, 2, 3, 4, 5, 6, 7, 9, 8, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10]),
             (vec![cell(CellKind::Wedge6, 6), cell(CellKind::Wedge6, 0)], "wedges", vec![2, 6], vec![6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]),
