@@ -1,4 +1,4 @@
-// A unit cube meshed with tetrahedra only: test input for the "no hexahedra" error.
+// A unit cube meshed with 24 tetrahedra (4-node): the smallest tetrahedral test mesh.
 //
 // Regenerate: gmsh -3 -format msh41 tet.geo   (writes tet.msh)
 

@@ -57,7 +57,8 @@ fn bad_input_gives_one_line_and_no_file() {
         seed_with("box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }", &format!("gmsh = {{ file = \"{file}\" }}"))
     };
     assert_clean_failure("missing-mesh", &gmsh_body("/nonexistent/blocks.msh"), &off, &["/nonexistent/blocks.msh"]);
-    assert_clean_failure("tet-mesh", &gmsh_body(&abs_mesh("tet.msh")), &off, &["tet.msh", "hexahedra"]);
+    // a tetrahedral mesh is read: what fails is the scene's face on it (tet.msh names `top` only)
+    assert_clean_failure("tet-mesh", &gmsh_body(&abs_mesh("tet.msh")), &off, &["dirichlet[1].face", "unknown face \"lower.xmin\"", "lower.top"]);
     let dir = tmpdir("truncated-mesh");
     let full = std::fs::read_to_string(root().join("mesh/two_blocks.msh")).unwrap();
     let cut = dir.join("cut.msh");
@@ -298,8 +299,29 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     std::fs::write(&ok, &full).unwrap();
     bad.add("no-volume", &gmsh_scene(&ok).replacen("volume = \"upper\"", "volume = \"nope\"", 1), &[], &["ok.msh", "no physical volume named \"nope\"", "\"upper\", \"lower\""]);
     let tet = gmsh_scene(&root().join("mesh/tet.msh")).replacen("volume = \"upper\"", "volume = \"body\"", 1);
-    bad.add("tet-volume", &tet, &[], &["tet.msh", "physical volume \"body\"", "no 8-node hexahedra", "Tet4"]);
+    // the upper body, physical volume "body" of tetrahedra, is read; the lower one is not there
+    bad.add("tet-volume", &tet, &[], &["tet.msh", "no physical volume named \"lower\"", "(known: \"body\")"]);
     bad.check();
+}
+
+/// Tetrahedral Gmsh meshes are read and solved: the Gmsh scene on the two blocks meshed with
+/// 4-node and with 10-node tetrahedra (mesh/make_fixtures.py), contact included; the result
+/// file holds the cells as read, and the XDMF sidecar their topology.
+#[test]
+fn tetrahedral_gmsh_meshes_are_read_and_solved() {
+    let dir = tmpdir("tet-gmsh");
+    for (file, kind, cells, topology) in [("two_tet_blocks.msh", tresca_feti::mesh::CellKind::Tet4, 532, "Tetrahedron"), ("two_tet10_blocks.msh", tresca_feti::mesh::CellKind::Tet10, 289, "Tetrahedron_10")] {
+        let scene = dir.join(format!("{file}.toml"));
+        std::fs::write(&scene, gmsh_scene(&root().join("mesh").join(file))).unwrap();
+        let out = dir.join(format!("{file}.h5"));
+        let o = run(&["solve", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+        assert!(o.status.success(), "{file}: {}", String::from_utf8_lossy(&o.stderr));
+        let data = fields(&out);
+        assert_eq!(data.cells.len(), cells, "{file}");
+        assert!(data.cells.iter().all(|c| c.kind == kind), "{file}");
+        let xdmf = std::fs::read_to_string(out.with_extension("xdmf")).unwrap();
+        assert!(xdmf.contains(&format!("<Topology TopologyType=\"{topology}\" NumberOfElements=\"{cells}\">")), "{xdmf}");
+    }
 }
 
 /// Degenerate friction data that is allowed: an orthotropic bound of zero along one axis (the

@@ -1,10 +1,26 @@
-//! Gmsh 4.1 importer: reads one body (a physical volume, or every hexahedron) of an ASCII or
-//! binary `.msh` file into a [`BodyGeometry`], with one named face per named physical surface.
+//! Gmsh 4.1 importer: reads one body (a physical volume, or every volume element of the file)
+//! of an ASCII or binary `.msh` file into a [`BodyGeometry`], with one named face per named
+//! physical surface.
+//!
+//! Volume elements read: 8-node hexahedra (Gmsh type 5), 4- and 10-node tetrahedra (types 4
+//! and 11) and 6-node prisms (type 6, our wedges), mixed in any combination; the node orders
+//! are Gmsh's, which are ours ([`super::cell`]). Any other volume element in the body (Hex20,
+//! Hex27, pyramids, Pri15/18, tetrahedra of order 3, …) is an error naming its type and count.
+//! Every cell is checked corner by corner: consistently inverted ones (mirrored) are
+//! reordered, degenerate or twisted ones are an error naming the element tag; a 10-node
+//! tetrahedron must also have a positive Jacobian throughout. A cell listed twice (the same
+//! node set under two tags) is an error, and so are edges or coordinates outside the length
+//! scale double precision carries.
+//!
+//! Faces: the triangles and quadrangles (3, 4, 6 and 8 nodes: Gmsh types 2, 3, 9, 16) of each
+//! physical surface are looked up, by their corners, among the boundary facets of the kept
+//! cells; the cell's own outward facet is stored (so a face's facets are always outward and of
+//! the cell's kind: a 3-node triangle on a 10-node tetrahedron gives its 6-node facet).
+//! Surface elements that bound no kept cell are skipped, surfaces left with none dropped.
 //!
 //! `mshio` parses the `$Entities`, `$Nodes` and `$Elements` sections. Two small pieces are read
 //! here directly, because `mshio` drops them: the `$PhysicalNames` section, and the node tags
 //! (which `mshio` discards whenever they are contiguous, although their order still matters).
-//! Hexahedra are checked corner by corner and consistently inverted ones are reordered.
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
@@ -12,18 +28,19 @@ use std::path::Path;
 use mshio::{ElementType, MshFile, MshParserError};
 
 use super::topology::{boundary_faces, find_boundary_facet};
-use super::{BodyGeometry, Cell, Facet};
+use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
 /// Prefix of every message about a file that cannot be parsed at all.
 const UNREADABLE: &str = "not a readable Gmsh 4.1 mesh";
 
-/// Reads the hexahedra of physical volume `volume` (all hexahedra when `None`) from the Gmsh 4.1
-/// file `path`, in a compact local numbering that keeps the file's node order.
+/// Reads the cells (hex8, tet4, tet10, wedge6) of physical volume `volume` (every volume element
+/// of the file when `None`) from the Gmsh 4.1 file `path`, in a compact local numbering that
+/// keeps the file's node order.
 ///
-/// Every named physical surface (named by its number when it has no name) becomes a face made of
-/// the file's 4-node quadrangles that lie on the boundary of the kept hexahedra, each oriented
-/// outward of its element; surfaces with no such quadrangle are left out.
+/// Every physical surface (named by its number when it has no name) becomes a face made of the
+/// outward boundary facets of the kept cells that its triangles and quadrangles name; surfaces
+/// with no such facet are left out.
 pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
     let file = path.display().to_string();
     let bytes = read_bytes(path).map_err(|e| match e {
@@ -517,53 +534,41 @@ fn build(
     };
     let in_body = |entity: i32| selected.as_ref().is_none_or(|s| s.contains(&entity));
 
-    // Elements: hexahedra of the body, other 3D types for the diagnostics, and quadrangles.
+    // Elements: the cells of the body (other 3D types for the diagnostics) and the surface
+    // elements of every surface entity.
     let mut all_counts: HashMap<ElementType, usize> = HashMap::new();
     let mut body_3d: HashMap<ElementType, usize> = HashMap::new();
-    let mut hex_tags: Vec<(u64, &[u64])> = Vec::new();
-    let mut quads: HashMap<i32, Vec<&[u64]>> = HashMap::new();
+    let mut unsupported: HashMap<ElementType, usize> = HashMap::new();
+    let mut file_cells: Vec<(u64, CellKind, &[u64])> = Vec::new();
+    let mut surface_elems: HashMap<i32, Vec<&[u64]>> = HashMap::new();
     for block in msh.data.elements.iter().flat_map(|e| &e.element_blocks) {
         *all_counts.entry(block.element_type).or_default() += block.elements.len();
         if block.entity_dim == 3 && in_body(block.entity_tag) {
             *body_3d.entry(block.element_type).or_default() += block.elements.len();
-            if block.element_type == ElementType::Hex8 {
-                hex_tags.extend(
-                    block
-                        .elements
-                        .iter()
-                        .map(|e| (e.element_tag, e.nodes.as_slice())),
-                );
+            match cell_kind(block.element_type) {
+                Some(kind) => file_cells.extend(block.elements.iter().map(|e| (e.element_tag, kind, e.nodes.as_slice()))),
+                None => *unsupported.entry(block.element_type).or_default() += block.elements.len(),
             }
-        } else if block.entity_dim == 2 && block.element_type == ElementType::Qua4 {
-            quads
-                .entry(block.entity_tag)
-                .or_default()
-                .extend(block.elements.iter().map(|e| e.nodes.as_slice()));
+        } else if block.entity_dim == 2 && surface_kind(block.element_type).is_some() {
+            surface_elems.entry(block.entity_tag).or_default().extend(block.elements.iter().map(|e| e.nodes.as_slice()));
         }
     }
     let body = match volume {
         Some(name) => format!("physical volume \"{name}\""),
         None => "the file".to_string(),
     };
-    if hex_tags.is_empty() {
-        let found = if volume.is_some() {
-            type_counts(&body_3d)
-        } else {
-            type_counts(&all_counts)
-        };
-        let what = if volume.is_some() {
-            format!("{body} contains")
-        } else {
-            "contains".to_string()
-        };
-        return Err(format!("{what} no 8-node hexahedra (found: {found})"));
-    }
-    body_3d.remove(&ElementType::Hex8);
-    if !body_3d.is_empty() {
+    if !unsupported.is_empty() {
         return Err(format!(
-            "{body} mixes 8-node hexahedra with other 3D elements ({}); only hex8 meshes are supported",
-            type_counts(&body_3d)
+            "{body} contains volume elements of a type not supported ({}); supported: {SUPPORTED}",
+            type_counts(&unsupported)
         ));
+    }
+    if file_cells.is_empty() {
+        let (what, found) = match volume {
+            Some(_) => (format!("{body} contains"), type_counts(&body_3d)),
+            None => ("contains".to_string(), type_counts(&all_counts)),
+        };
+        return Err(format!("{what} no volume elements (found: {found}); supported: {SUPPORTED}"));
     }
 
     // Nodes: file index of every tag, then a compact numbering of the used ones in file order.
@@ -589,69 +594,64 @@ fn build(
             ));
         }
     }
-    // Quadrangles must not name nodes the file does not define (those of other volumes are
-    // fine: such quads are skipped below).
+    // Surface elements must not name nodes the file does not define (those of other volumes
+    // are fine: such facets are skipped below).
     let blocks = msh.data.elements.iter().flat_map(|e| &e.element_blocks);
-    for block in blocks.filter(|b| b.entity_dim == 2 && b.element_type == ElementType::Qua4) {
+    for block in blocks.filter(|b| b.entity_dim == 2) {
+        let Some((_, name)) = surface_kind(block.element_type) else { continue };
         for e in &block.elements {
             if let Some(t) = e.nodes.iter().find(|t| !index.contains_key(t)) {
-                return Err(format!(
-                    "quadrangle {} refers to node {t}, which is not in $Nodes",
-                    e.element_tag
-                ));
+                return Err(format!("{name} {} refers to node {t}, which is not in $Nodes", e.element_tag));
             }
         }
     }
-    let mut file_hexes = Vec::with_capacity(hex_tags.len());
+    // Cells in file indices.
+    let mut file_nodes: Vec<Vec<usize>> = Vec::with_capacity(file_cells.len());
     let mut used = vec![false; coords.len()];
-    for &(etag, nodes) in &hex_tags {
-        let mut h = [0usize; 8];
-        for (slot, t) in h.iter_mut().zip(nodes) {
-            *slot = *index.get(t).ok_or_else(|| {
-                format!("hexahedron {etag} refers to node {t}, which is not in $Nodes")
-            })?;
-            used[*slot] = true;
+    for &(etag, kind, nodes) in &file_cells {
+        if nodes.len() != kind.len() {
+            return Err(format!("{} {etag} has {} nodes, expected {}", singular(kind), nodes.len(), kind.len()));
         }
-        file_hexes.push(h);
+        let mut h = Vec::with_capacity(nodes.len());
+        for t in nodes {
+            let i = *index
+                .get(t)
+                .ok_or_else(|| format!("{} {etag} refers to node {t}, which is not in $Nodes", singular(kind)))?;
+            used[i] = true;
+            h.push(i);
+        }
+        file_nodes.push(h);
     }
-    // A hexahedron listed twice (the same 8 nodes, in any order, under another tag) would be
-    // counted twice: its faces would stop being boundary faces (a clamped face loses them).
-    let mut seen: HashMap<[usize; 8], u64> = HashMap::with_capacity(file_hexes.len());
-    for (h, &(etag, _)) in file_hexes.iter().zip(&hex_tags) {
-        let mut key = *h;
+    // A cell listed twice (the same nodes, in any order, under another tag) would be counted
+    // twice: its faces would stop being boundary faces (a clamped face loses them).
+    let mut seen: HashMap<(CellKind, Vec<usize>), u64> = HashMap::with_capacity(file_nodes.len());
+    for (h, &(etag, kind, _)) in file_nodes.iter().zip(&file_cells) {
+        let mut key = h.clone();
         key.sort_unstable();
-        if let Some(first) = seen.insert(key, etag) {
+        if let Some(first) = seen.insert((kind, key), etag) {
             return Err(format!(
-                "hexahedra {first} and {etag} have the same 8 nodes (an element listed twice); remove one"
+                "{} {first} and {etag} have the same {} nodes (an element listed twice); remove one",
+                plural(kind),
+                kind.len()
             ));
         }
     }
-    check_scale(&coords, &file_hexes, &hex_tags)?;
+    drop(seen);
+    check_scale(&coords, &file_nodes, &file_cells)?;
     let mut local = vec![usize::MAX; coords.len()];
     let mut nodes = Vec::new();
     for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
         local[i] = nodes.len();
         nodes.push(*p);
     }
-    let mut hexes: Vec<[usize; 8]> = file_hexes.iter().map(|h| h.map(|i| local[i])).collect();
 
-    // Orientation.
-    for (h, &(etag, _)) in hexes.iter_mut().zip(&hex_tags) {
-        let j = corner_jacobians(&h.map(|v| nodes[v]));
-        if j.iter().all(|&d| d > 0.0) {
-            continue;
-        }
-        if j.iter().all(|&d| d < 0.0) {
-            h.swap(1, 3);
-            h.swap(5, 7);
-        } else {
-            return Err(format!(
-                "hexahedron {etag} is degenerate or twisted (its corner Jacobians do not share one sign)"
-            ));
-        }
+    // Cells in local numbering, each oriented (consistently inverted ones reordered).
+    let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
+    for (h, &(etag, kind, _)) in file_nodes.iter().zip(&file_cells) {
+        let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+        orient(&mut cell, &nodes).map_err(|why| format!("{} {etag} {why}", singular(kind)))?;
+        cells.push(cell);
     }
-
-    let cells: Vec<Cell> = hexes.iter().map(|h| Cell::hex8(*h)).collect();
 
     // Faces: named physical surfaces, in tag order, merged by name.
     let boundary = boundary_faces(&cells);
@@ -669,15 +669,15 @@ fn build(
         }
     }
     let mut faces: Vec<(String, Vec<Facet>)> = Vec::new();
-    // name → index into `faces`, and the quads each face holds (groups of one name merge)
+    // name → index into `faces`, and the facets each face holds (groups of one name merge)
     let mut face_of: HashMap<String, usize> = HashMap::new();
     let mut face_seen: Vec<HashSet<(usize, [usize; 4])>> = Vec::new();
     for (tag, ents) in groups {
         let name = group_name(names, 2, tag);
         let mut seen: HashSet<(usize, [usize; 4])> = HashSet::new();
         let mut list: Vec<Facet> = Vec::new();
-        for q in ents.iter().filter_map(|s| quads.get(s)).flatten() {
-            let Some(loc) = quad_local(q, &index, &local) else {
+        for q in ents.iter().filter_map(|s| surface_elems.get(s)).flatten() {
+            let Some(loc) = corners_local(q, &index, &local) else {
                 continue;
             };
             if let Some(fq) = find_boundary_facet(&boundary, &loc) {
@@ -707,17 +707,74 @@ fn build(
     Ok(BodyGeometry { nodes, cells, faces })
 }
 
+/// The volume element types read, for messages.
+const SUPPORTED: &str = "Hex8, Tet4, Tet10, Pri6 (wedge)";
+
+/// The cell type of a Gmsh volume element type, if it is one this reader takes.
+fn cell_kind(t: ElementType) -> Option<CellKind> {
+    match t {
+        ElementType::Hex8 => Some(CellKind::Hex8),
+        ElementType::Tet4 => Some(CellKind::Tet4),
+        ElementType::Tet10 => Some(CellKind::Tet10),
+        ElementType::Pri6 => Some(CellKind::Wedge6),
+        _ => None,
+    }
+}
+
+/// The corners and the name (in messages) of a Gmsh surface element type that can name a
+/// face: 3-, 4-, 6- and 8-node triangles and quadrangles.
+fn surface_kind(t: ElementType) -> Option<(usize, &'static str)> {
+    match t {
+        ElementType::Tri3 => Some((3, "triangle")),
+        ElementType::Qua4 => Some((4, "quadrangle")),
+        ElementType::Tri6 => Some((3, "6-node triangle")),
+        ElementType::Qua8 => Some((4, "8-node quadrangle")),
+        _ => None,
+    }
+}
+
+/// One cell of a type, in messages.
+fn singular(kind: CellKind) -> &'static str {
+    match kind {
+        CellKind::Hex8 => "hexahedron",
+        CellKind::Tet4 => "tetrahedron",
+        CellKind::Tet10 => "10-node tetrahedron",
+        CellKind::Wedge6 => "wedge",
+    }
+}
+
+/// Several cells of a type, in messages.
+fn plural(kind: CellKind) -> &'static str {
+    match kind {
+        CellKind::Hex8 => "hexahedra",
+        CellKind::Tet4 => "tetrahedra",
+        CellKind::Tet10 => "10-node tetrahedra",
+        CellKind::Wedge6 => "wedges",
+    }
+}
+
+/// The corner edges of a cell type (local node pairs).
+fn edges(kind: CellKind) -> &'static [[usize; 2]] {
+    const HEX: [[usize; 2]; 12] = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]];
+    const TET: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
+    const WEDGE: [[usize; 2]; 9] = [[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]];
+    match kind {
+        CellKind::Hex8 => &HEX,
+        CellKind::Tet4 | CellKind::Tet10 => &TET,
+        CellKind::Wedge6 => &WEDGE,
+    }
+}
+
 /// The length scale of the body: every element's longest edge and every coordinate must lie
 /// within what double precision carries through element volumes (∝ h³) and the stiffness
 /// (∝ E·h): [`crate::scene::range`]. (An element collapsed to a point is left to the
 /// orientation check, which calls it degenerate.)
-fn check_scale(coords: &[[f64; 3]], hexes: &[[usize; 8]], tags: &[(u64, &[u64])]) -> Result<(), String> {
+fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind, &[u64])]) -> Result<(), String> {
     use crate::scene::range::{MAX, MIN};
-    const EDGES: [[usize; 2]; 12] = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]];
-    // (edge, element tag) of the shortest and the longest longest-edge
-    let mut lo: Option<(f64, u64)> = None;
-    let mut hi: Option<(f64, u64)> = None;
-    for (h, &(etag, _)) in hexes.iter().zip(tags) {
+    // (edge, element tag, type) of the shortest and the longest longest-edge
+    let mut lo: Option<(f64, u64, CellKind)> = None;
+    let mut hi: Option<(f64, u64, CellKind)> = None;
+    for (h, &(etag, kind, _)) in cells.iter().zip(tags) {
         let len = |[a, b]: [usize; 2]| {
             let (p, q) = (coords[h[a]], coords[h[b]]);
             // scaled first: the squares of 1e-200 or 1e200 do not survive
@@ -729,22 +786,23 @@ fn check_scale(coords: &[[f64; 3]], hexes: &[[usize; 8]], tags: &[(u64, &[u64])]
                 m * d.iter().map(|v| (v / m) * (v / m)).sum::<f64>().sqrt()
             }
         };
-        let e = EDGES.iter().map(|&ab| len(ab)).fold(0.0f64, f64::max);
+        let e = edges(kind).iter().map(|&ab| len(ab)).fold(0.0f64, f64::max);
         if e > 0.0 && lo.is_none_or(|l| e < l.0) {
-            lo = Some((e, etag));
+            lo = Some((e, etag, kind));
         }
         if hi.is_none_or(|l| e > l.0) {
-            hi = Some((e, etag));
+            hi = Some((e, etag, kind));
         }
     }
     for (found, bad) in [(lo, lo.is_some_and(|l| l.0 < MIN)), (hi, hi.is_some_and(|l| l.0 > MAX))] {
-        if let (Some((e, etag)), true) = (found, bad) {
+        if let (Some((e, etag, kind)), true) = (found, bad) {
             return Err(format!(
-                "element edges of {e:.3e} m (hexahedron {etag}) lie outside {MIN:e} … {MAX:e} m, the length scale double precision carries through element volumes (∝ h³) and stiffness (∝ E·h); scale the mesh"
+                "element edges of {e:.3e} m ({} {etag}) lie outside {MIN:e} … {MAX:e} m, the length scale double precision carries through element volumes (∝ h³) and stiffness (∝ E·h); scale the mesh",
+                singular(kind)
             ));
         }
     }
-    let used: HashSet<usize> = hexes.iter().flatten().copied().collect();
+    let used: HashSet<usize> = cells.iter().flatten().copied().collect();
     let far = used.iter().flat_map(|&v| coords[v]).fold(0.0f64, |a, v| a.max(v.abs()));
     if far > MAX {
         return Err(format!("coordinates up to {far:.3e} m lie outside ±{MAX:e} m; move the mesh nearer the origin or scale it"));
@@ -752,17 +810,83 @@ fn check_scale(coords: &[[f64; 3]], hexes: &[[usize; 8]], tags: &[(u64, &[u64])]
     Ok(())
 }
 
-/// Local nodes of a file quadrangle, or `None` if one of them is not a node of the body.
-fn quad_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Option<[usize; 4]> {
-    let mut out = [0usize; 4];
-    for (o, t) in out.iter_mut().zip(q) {
-        let l = *local.get(*index.get(t)?)?;
-        if l == usize::MAX {
-            return None;
+/// Local nodes of the corners of a file surface element (its first three or four nodes), or
+/// `None` if one of them is not a node of the body.
+fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Option<Vec<usize>> {
+    let n = if q.len() == 3 || q.len() == 6 { 3 } else { 4 };
+    q.get(..n)?
+        .iter()
+        .map(|t| local.get(*index.get(t)?).copied().filter(|&l| l != usize::MAX))
+        .collect()
+}
+
+/// Orients `cell` (coordinates `x`): a cell whose corner Jacobians are all positive is kept,
+/// one whose corner Jacobians are all negative (mirrored) is reordered, anything else is the
+/// error (the reason, to follow the cell's name). A 10-node tetrahedron must then also have a
+/// positive Jacobian throughout (its edge nodes in place).
+fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
+    let p = cell.coords(x);
+    let j: Vec<f64> = match cell.kind {
+        CellKind::Hex8 => corner_jacobians(p.as_slice().try_into().map_err(|_| "has a wrong node count")?).to_vec(),
+        CellKind::Tet4 | CellKind::Tet10 => vec![scaled_triple(p[0], p[1], p[2], p[3])],
+        CellKind::Wedge6 => wedge_corner_jacobians(&p),
+    };
+    if j.iter().any(|&d| d <= 0.0) {
+        if !j.iter().all(|&d| d < 0.0) {
+            return Err(match cell.kind {
+                CellKind::Tet4 | CellKind::Tet10 => "is degenerate (its four corners lie in one plane)".into(),
+                _ => "is degenerate or twisted (its corner Jacobians do not share one sign)".into(),
+            });
         }
-        *o = l;
+        let swaps: &[(usize, usize)] = match cell.kind {
+            CellKind::Hex8 => &[(1, 3), (5, 7)],
+            CellKind::Tet4 => &[(1, 2)],
+            CellKind::Tet10 => &[(1, 2), (4, 6), (8, 9)],
+            CellKind::Wedge6 => &[(1, 2), (4, 5)],
+        };
+        let v = cell.nodes_mut();
+        for &(a, b) in swaps {
+            v.swap(a, b);
+        }
     }
-    Some(out)
+    if cell.kind == CellKind::Tet10 && crate::fem::cell::cell_min_jacobian(CellKind::Tet10, &cell.coords(x)) <= 0.0 {
+        return Err("is inverted between its corners (an edge node out of place)".into());
+    }
+    Ok(())
+}
+
+/// det(b − a, c − a, d − a) divided by the product of the three edge lengths; values within
+/// 1e-12 of zero (or not finite) are 0.
+fn scaled_triple(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> f64 {
+    let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let (u, v, w) = (sub(b, a), sub(c, a), sub(d, a));
+    let det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+    let scale = norm(u) * norm(v) * norm(w);
+    let s = if scale > 0.0 { det / scale } else { 0.0 };
+    if s.abs() <= 1e-12 || !s.is_finite() {
+        0.0
+    } else {
+        s
+    }
+}
+
+/// Scaled Jacobian at the six corners of a wedge: at a bottom corner the triple product of
+/// the edges to the next and the previous corner of its triangle and the edge up; at a top
+/// corner the same with the edge down, sign flipped.
+fn wedge_corner_jacobians(p: &[[f64; 3]]) -> Vec<f64> {
+    (0..6)
+        .map(|c| {
+            let (t, base) = (c % 3, c - c % 3);
+            let (next, prev, other) = (base + (t + 1) % 3, base + (t + 2) % 3, if c < 3 { c + 3 } else { c - 3 });
+            let s = scaled_triple(p[c], p[next], p[prev], p[other]);
+            if c < 3 {
+                s
+            } else {
+                -s
+            }
+        })
+        .collect()
 }
 
 /// Scaled Jacobian at the eight corners of a hex8 (VTK order): the triple product of the three
@@ -932,19 +1056,13 @@ mod tests {
     }
 
     #[test]
-    fn tetrahedra_only_is_refused() {
-        let e = read(&mesh_file("tet.msh"), None).unwrap_err().to_string();
-        assert!(
-            e.contains("no 8-node hexahedra") && e.contains("Tet4: 24"),
-            "{e}"
-        );
-        let e = read(&mesh_file("tet.msh"), Some("body"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("no 8-node hexahedra") && e.contains("Tet4: 24"),
-            "{e}"
-        );
+    fn tetrahedra_only_are_read() {
+        for volume in [None, Some("body")] {
+            let g = read(&mesh_file("tet.msh"), volume).expect("tet.msh");
+            assert_eq!(crate::mesh::cell_counts(&g.cells), [(CellKind::Tet4, 24)]);
+            assert_eq!(g.faces.len(), 1);
+            assert!(g.faces[0].1.iter().all(|q| q.kind == crate::mesh::FacetKind::Tri3));
+        }
     }
 
     #[test]
@@ -1109,5 +1227,140 @@ mod tests {
         // A quad that is not on the boundary of the body is skipped: the face is omitted.
         let g = parse(one_hex(tags, good, [1, 2, 7, 8]).as_bytes(), None).expect("skip");
         assert!(g.faces.is_empty());
+    }
+
+    /// A file with nodes 1… at `x`, the volume blocks `cells` (Gmsh type, then per element its
+    /// tag and node tags) in volume entity 1 (physical volume 7 "solid"), and the surface
+    /// blocks `surfaces` in surface entity 1 (physical surface 5 "side").
+    /// One element block: the Gmsh type, then per element its tag and node tags.
+    type Block = (i32, Vec<(u64, Vec<u64>)>);
+
+    fn msh_text(x: &[[f64; 3]], cells: &[Block], surfaces: &[Block]) -> String {
+        let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+        s += "$PhysicalNames\n2\n2 5 \"side\"\n3 7 \"solid\"\n$EndPhysicalNames\n";
+        s += "$Entities\n0 0 1 1\n1 0 0 0 1 1 1 1 5 0\n1 0 0 0 1 1 1 1 7 1 1\n$EndEntities\n";
+        let n = x.len();
+        s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
+        for t in 1..=n {
+            s += &format!("{t}\n");
+        }
+        for p in x {
+            s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+        }
+        let blocks: Vec<(i32, &Block)> = surfaces.iter().map(|b| (2, b)).chain(cells.iter().map(|b| (3, b))).collect();
+        let count: usize = blocks.iter().map(|(_, b)| b.1.len()).sum();
+        let max = blocks.iter().flat_map(|(_, b)| b.1.iter().map(|e| e.0)).max().unwrap_or(0);
+        s += &format!("$EndNodes\n$Elements\n{} {count} 1 {max}\n", blocks.len());
+        for (dim, (ty, elems)) in blocks {
+            s += &format!("{dim} 1 {ty} {}\n", elems.len());
+            for (tag, nodes) in elems {
+                s += &tag.to_string();
+                for v in nodes {
+                    s += &format!(" {v}");
+                }
+                s += "\n";
+            }
+        }
+        s + "$EndElements\n"
+    }
+
+    const TET: [[f64; 3]; 4] = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.]];
+
+    /// The unit tet10 (Gmsh order): corners, then the midpoints of the edges 4:(0,1) 5:(1,2)
+    /// 6:(2,0) 7:(3,0) 8:(3,2) 9:(3,1).
+    fn tet10() -> Vec<[f64; 3]> {
+        let mut x = TET.to_vec();
+        for [a, b] in crate::fem::tet::TET10_EDGES {
+            x.push(std::array::from_fn(|d| 0.5 * (TET[a][d] + TET[b][d])));
+        }
+        x
+    }
+
+    fn min_jacobian(g: &BodyGeometry, e: usize) -> f64 {
+        crate::fem::cell::cell_min_jacobian(g.cells[e].kind, &g.cells[e].coords(&g.nodes))
+    }
+
+    /// Mirrored tetrahedra (4 and 10 nodes) and wedges are reordered into positive ones that
+    /// keep their edge nodes on their edges; a face given by the file's corners only becomes the
+    /// cell's own outward facet (a 6-node one on the tet10).
+    #[test]
+    fn inverted_tetrahedra_and_wedges_are_reordered() {
+        // tet4 listed 0-2-1-3 (mirrored), its face y = 0 given as a triangle
+        let text = msh_text(&TET, &[(4, vec![(1, vec![1, 3, 2, 4])])], &[(2, vec![(2, vec![1, 4, 2])])]);
+        let g = parse(text.as_bytes(), Some("solid")).expect("tet4");
+        assert_eq!(g.cells[0].nodes(), [0, 1, 2, 3]);
+        assert!(min_jacobian(&g, 0) > 0.0);
+        let face = &g.faces[0].1;
+        assert_eq!((g.faces[0].0.as_str(), face.len(), face[0].nodes()), ("side", 1, &[0, 1, 3][..]));
+
+        // tet10 mirrored: corners 1↔2 and the edge nodes with them (4↔6, 8↔9); its face y = 0
+        // given by a 3-node triangle comes back as the tet10's 6-node facet
+        let mirrored: Vec<u64> = [0, 2, 1, 3, 6, 5, 4, 7, 9, 8].iter().map(|&i| i + 1).collect();
+        let text = msh_text(&tet10(), &[(11, vec![(1, mirrored)])], &[(2, vec![(2, vec![1, 2, 4])])]);
+        let g = parse(text.as_bytes(), None).expect("tet10");
+        assert_eq!(g.cells[0].kind, CellKind::Tet10);
+        assert_eq!(g.cells[0].nodes(), (0..10).collect::<Vec<_>>());
+        assert!(min_jacobian(&g, 0) > 0.0);
+        let q = &g.faces[0].1[0];
+        assert_eq!((q.kind, q.nodes()), (crate::mesh::FacetKind::Tri6, &[0, 1, 3, 4, 9, 7][..]));
+
+        // a tet10 whose edge node (0,1) sits near corner 1 is inverted there: refused
+        let mut x = tet10();
+        x[4] = [0.95, 0.0, 0.0];
+        let text = msh_text(&x, &[(11, vec![(3, (1..=10).collect())])], &[]);
+        let msg = parse(text.as_bytes(), None).unwrap_err();
+        assert!(msg.contains("10-node tetrahedron 3") && msg.contains("edge node"), "{msg}");
+
+        // wedge mirrored (1↔2, 4↔5)
+        let wedge = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 0., 1.], [0., 1., 1.]];
+        let text = msh_text(&wedge, &[(6, vec![(4, vec![1, 3, 2, 4, 6, 5])])], &[(3, vec![(9, vec![1, 2, 5, 4])])]);
+        let g = parse(text.as_bytes(), None).expect("wedge");
+        assert_eq!(g.cells[0].nodes(), [0, 1, 2, 3, 4, 5]);
+        assert!(min_jacobian(&g, 0) > 0.0);
+        assert_eq!(g.faces[0].1[0].nodes(), [0, 1, 4, 3]);
+
+        // a twisted wedge (top corners 3, 4 swapped) and a flat tetrahedron name their tags
+        let text = msh_text(&wedge, &[(6, vec![(4, vec![1, 2, 3, 5, 4, 6])])], &[]);
+        let msg = parse(text.as_bytes(), None).unwrap_err();
+        assert!(msg.contains("wedge 4 is degenerate or twisted"), "{msg}");
+        let flat = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.]];
+        let msg = parse(msh_text(&flat, &[(4, vec![(8, vec![1, 2, 3, 4])])], &[]).as_bytes(), None).unwrap_err();
+        assert!(msg.contains("tetrahedron 8 is degenerate"), "{msg}");
+        // the same tetrahedron under two tags
+        let text = msh_text(&TET, &[(4, vec![(1, vec![1, 2, 3, 4]), (2, vec![4, 3, 2, 1])])], &[]);
+        let msg = parse(text.as_bytes(), None).unwrap_err();
+        assert!(msg.contains("tetrahedra 1 and 2 have the same 4 nodes"), "{msg}");
+    }
+
+    /// A hexahedron with a tetrahedron on its top: one body of two cell types, its side y = 0
+    /// one quadrilateral and one triangle.
+    #[test]
+    fn mixed_hexahedron_and_tetrahedron_body() {
+        let x = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.], [0., 0., 1.], [1., 0., 1.], [1., 1., 1.], [0., 1., 1.], [0., 0., 2.]];
+        let cells = [(5, vec![(1, (1..=8).collect())]), (4, vec![(2, vec![5, 6, 8, 9])])];
+        let side = [(3, vec![(3, vec![1, 2, 6, 5])]), (2, vec![(4, vec![5, 6, 9])])];
+        let g = parse(msh_text(&x, &cells, &side).as_bytes(), Some("solid")).expect("mixed");
+        assert_eq!(crate::mesh::cell_counts(&g.cells), [(CellKind::Hex8, 1), (CellKind::Tet4, 1)]);
+        assert_eq!(g.nodes.len(), 9);
+        assert!((0..2).all(|e| min_jacobian(&g, e) > 0.0));
+        let kinds: Vec<_> = g.faces[0].1.iter().map(|q| (q.elem, q.kind)).collect();
+        use crate::mesh::FacetKind;
+        assert_eq!(kinds, [(0, FacetKind::Quad4), (1, FacetKind::Tri3)]);
+    }
+
+    /// Volume elements of another type are an error naming the type and the count, alone or
+    /// beside supported ones; a file without volume elements says what it holds.
+    #[test]
+    fn unsupported_volume_types_are_named() {
+        let x = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.], [0.5, 0.5, 1.], [0.5, 0.5, -1.]];
+        let pyramid = (7, vec![(1, vec![1, 2, 3, 4, 5]), (2, vec![1, 4, 3, 2, 6])]);
+        let tet = (4, vec![(3, vec![1, 2, 3, 5])]);
+        for cells in [vec![pyramid.clone()], vec![tet.clone(), pyramid.clone()]] {
+            let msg = parse(msh_text(&x, &cells, &[]).as_bytes(), Some("solid")).unwrap_err();
+            assert!(msg.contains("physical volume \"solid\"") && msg.contains("Pyr5: 2") && msg.contains("not supported"), "{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+        let msg = parse(msh_text(&x, &[], &[(2, vec![(1, vec![1, 2, 3])])]).as_bytes(), None).unwrap_err();
+        assert!(msg.contains("no volume elements (found: Tri3: 1)"), "{msg}");
     }
 }

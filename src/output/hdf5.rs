@@ -8,9 +8,23 @@
 //! | path | type | shape |
 //! |---|---|---|
 //! | `/mesh/coordinates` | f64 | nnodes × 3 |
-//! | `/mesh/hexahedra` | i64 | nelems × 8 |
+//! | `/mesh/hexahedra` | i64 | ncells × 8 (hex8 cells only, or no cells) |
+//! | `/mesh/tetrahedra` | i64 | ncells × 4 (tet4 cells only) |
+//! | `/mesh/tetrahedra10` | i64 | ncells × 10 (tet10 cells only) |
+//! | `/mesh/wedges` | i64 | ncells × 6 (wedge6 cells only) |
+//! | `/mesh/mixed` | i64 | Σ (1 + nodes of the cell) (cells of several types) |
 //! | `/fields/<name>` | f64 or i32 | `len` (ncomp = 1) or `len × ncomp` |
 //! | `/steps/<NNNN>/<name>` | f64 or i32 | as `/fields/<name>` |
+//!
+//! `/mesh` holds exactly one of the cell datasets ([`CellLayout`]; a mesh of hexahedra writes
+//! `/mesh/hexahedra` as it always has). Cells are rows in the global cell order, nodes as global
+//! node numbers in XDMF's (= VTK's) node order, which is ours but for a 10-node tetrahedron: its
+//! edge nodes (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — Gmsh's last two swapped. `/mesh/mixed` is
+//! XDMF's `Mixed` topology: per cell, in the global cell order, its XDMF type id
+//! ([`CellKind::xdmf_id`]: Hexahedron 9, Tetrahedron 6, Tetrahedron_10 38, Wedge 8) and its
+//! nodes. Cell-centred fields are indexed by the global cell order whatever the layout. Under
+//! MPI with a distributed mesh, the layout is agreed over the ranks ([`cell_layout`]), and each
+//! rank writes the mixed values of its block of cell rows at their offset in the global list.
 //!
 //! Each field dataset carries a string attribute `center` (`"node"` or `"cell"`). Every entry of
 //! [`OutputData::attributes`] is a variable-length UTF-8 string attribute on the root group.
@@ -34,6 +48,8 @@ use ::hdf5::{Attribute, Dataset, File, Group, H5Type, IndexType, IterationOrder,
 use super::{check_step_times, step_name, Center, Field, OutputData, Step, Values};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
+use crate::mesh::cell::MAX_CELL_NODES;
+use crate::mesh::{Cell, CellKind};
 
 const MESH: &str = "mesh";
 const FIELDS: &str = "fields";
@@ -41,6 +57,10 @@ const STEPS: &str = "steps";
 const TIME_ATTR: &str = "time";
 const COORDINATES: &str = "coordinates";
 const HEXAHEDRA: &str = "hexahedra";
+const TETRAHEDRA: &str = "tetrahedra";
+const TETRAHEDRA10: &str = "tetrahedra10";
+const WEDGES: &str = "wedges";
+const MIXED: &str = "mixed";
 const CENTER_ATTR: &str = "center";
 
 /// Distributed fields: field name → the rows this rank holds ([`OutputData::rows`]).
@@ -50,7 +70,7 @@ type Rows = std::collections::BTreeMap<String, Vec<usize>>;
 /// written file is removed.
 ///
 /// Fails on inconsistent data (a field, in `/fields` or in a step, whose length does not match
-/// the node/cell count, a hex referencing a missing node, an unusable field name, a string with
+/// the node/cell count, a cell referencing a missing node, an unusable field name, a string with
 /// an interior NUL, step times not finite and increasing) before anything is created.
 pub fn write(path: &Path, data: &OutputData) -> Result<()> {
     write_collective(&crate::comm::SerialComm, path, data)
@@ -97,7 +117,17 @@ fn check_room(path: &Path, data: &OutputData) -> Result<()> {
 /// ([`metadata_bytes`]).
 fn estimated_bytes(data: &OutputData) -> u64 {
     let fields = |fs: &[Field]| -> u64 { fs.iter().map(|f| (mesh_len(data, f.center) * f.ncomp * 8) as u64).sum() };
-    let mesh = (data.nnodes() * 3 * 8 + data.ncells() * 8 * 8) as u64;
+    // the cells' values: exact for a whole mesh; for a distributed one, the widest of this
+    // rank's cells for every cell
+    let cell_values = match (&data.mesh_rows, CellLayout::of_cells(&data.cells)) {
+        (None, CellLayout::Uniform(k)) => data.ncells() * k.len(),
+        (None, CellLayout::Mixed { len }) => len,
+        (Some(_), layout) => {
+            let mixed = usize::from(matches!(layout, CellLayout::Mixed { .. }));
+            data.ncells() * data.cells.iter().map(|c| c.kind.len() + mixed).max().unwrap_or(8)
+        }
+    };
+    let mesh = (data.nnodes() * 3 * 8 + cell_values * 8) as u64;
     mesh + fields(&data.fields) + data.steps.iter().map(|s| fields(&s.fields)).sum::<u64>() + metadata_bytes(data)
 }
 
@@ -424,18 +454,14 @@ fn write_contents<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) ->
     let rows = data.mesh_rows.as_ref().map(|m| (m.node_rows.as_slice(), m.cell_rows.as_slice()));
     let coords: Vec<f64> = data.coordinates.iter().flatten().copied().collect();
     write_dataset(w, &mesh, COORDINATES, &[data.nnodes(), 3], rows.map(|r| r.0), &coords)?;
-    if data.cells.iter().any(|c| c.kind != crate::mesh::CellKind::Hex8) {
-        return Err(Error::output(String::new(), "writing cells other than hexahedra is not implemented yet"));
+    let layout = w.all(cell_layout(w.comm, data))?;
+    match layout {
+        CellLayout::Uniform(kind) => {
+            let conn = w.all(cell_values(&data.cells, false, false))?;
+            write_dataset(w, &mesh, layout.dataset(), &[data.ncells(), kind.len()], rows.map(|r| r.1), &conn)?;
+        }
+        CellLayout::Mixed { len } => write_mixed(w, &mesh, data, len)?,
     }
-    let hexes = w.all(
-        data.cells
-            .iter()
-            .flat_map(|c| c.nodes().to_vec())
-            .map(i64::try_from)
-            .collect::<std::result::Result<Vec<i64>, _>>()
-            .map_err(|_| Error::output(String::new(), "node index does not fit in i64")),
-    )?;
-    write_dataset(w, &mesh, HEXAHEDRA, &[data.ncells(), 8], rows.map(|r| r.1), &hexes)?;
     drop(mesh);
 
     let fields = create_group(w, file, FIELDS)?;
@@ -449,6 +475,190 @@ fn write_contents<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) ->
         w.all(write_str_attr(file, name, value).map_err(|m| Error::output(String::new(), m)))?;
     }
     Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// cells
+
+/// How the cells of a result file are stored under `/mesh` (see the module's table).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellLayout {
+    /// Every cell of one type (an empty mesh: hexahedra): `/mesh/hexahedra`, `/mesh/tetrahedra`,
+    /// `/mesh/tetrahedra10` or `/mesh/wedges`, ncells × nodes per cell.
+    Uniform(CellKind),
+    /// Cells of several types: `/mesh/mixed`, `len` values, per cell its XDMF type id
+    /// ([`CellKind::xdmf_id`]) and its nodes.
+    Mixed { len: usize },
+}
+
+impl CellLayout {
+    /// From the number of cells of each type ([`CellKind::ALL`] order).
+    fn from_counts(n: [usize; 4]) -> Self {
+        let kinds: Vec<CellKind> = CellKind::ALL.iter().zip(n).filter(|(_, c)| *c > 0).map(|(&k, _)| k).collect();
+        match kinds.as_slice() {
+            [] => CellLayout::Uniform(CellKind::Hex8),
+            [k] => CellLayout::Uniform(*k),
+            _ => CellLayout::Mixed { len: CellKind::ALL.iter().zip(n).map(|(k, c)| c * (1 + k.len())).sum() },
+        }
+    }
+
+    /// The layout of the whole mesh `cells`.
+    pub fn of_cells(cells: &[Cell]) -> Self {
+        let mut n = [0usize; 4];
+        for c in cells {
+            n[c.kind.code()] += 1;
+        }
+        Self::from_counts(n)
+    }
+
+    /// The dataset under `/mesh` that holds the cells.
+    pub fn dataset(self) -> &'static str {
+        match self {
+            CellLayout::Uniform(CellKind::Hex8) => HEXAHEDRA,
+            CellLayout::Uniform(CellKind::Tet4) => TETRAHEDRA,
+            CellLayout::Uniform(CellKind::Tet10) => TETRAHEDRA10,
+            CellLayout::Uniform(CellKind::Wedge6) => WEDGES,
+            CellLayout::Mixed { .. } => MIXED,
+        }
+    }
+}
+
+/// The cell datasets [`read`] knows, one of which a file holds.
+const CELL_DATASETS: [&str; 5] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, MIXED];
+
+/// The layout of the cells of `data` over all ranks: that of `data.cells` where they are the
+/// whole mesh; where the mesh is distributed, that of the rows the ranks hold (their cell types
+/// sent to the ranks whose [`block`]s hold the rows, one all-to-all exchange, then one sum).
+/// Collective; the same result on every rank. A distributed mesh with a cell row that no rank
+/// holds is an error.
+pub fn cell_layout<C: Comm>(comm: &C, data: &OutputData) -> Result<CellLayout> {
+    let Some(m) = &data.mesh_rows else { return Ok(CellLayout::of_cells(&data.cells)) };
+    let ids: Vec<i64> = data.cells.iter().map(|c| c.kind.xdmf_id() as i64).collect();
+    let mine = gather_block(comm, m.cells, 1, &m.cell_rows, &ids);
+    // cells of each type in this rank's block, then the rows of it no rank holds (id 0)
+    let mut n = [0u64; 5];
+    for &id in &mine {
+        match kind_of_id(id) {
+            Some(k) => n[k.code()] += 1,
+            None => n[4] += 1,
+        }
+    }
+    comm.sum_u64(&mut n);
+    if n[4] > 0 {
+        return Err(Error::output(String::new(), format!("distributed mesh: {} of the {} cell rows are held by no rank", n[4], m.cells)));
+    }
+    Ok(CellLayout::from_counts(std::array::from_fn(|k| n[k] as usize)))
+}
+
+/// The cell type of an XDMF type id, if it is one of ours.
+fn kind_of_id(id: i64) -> Option<CellKind> {
+    CellKind::ALL.into_iter().find(|k| k.xdmf_id() as i64 == id)
+}
+
+/// The position in our node order of each node in the file's (XDMF's = VTK's) order: the same
+/// but for a 10-node tetrahedron, whose edge nodes (3,2) and (3,1) come the other way round
+/// there ((1,3) before (2,3)). An involution: it maps back as well.
+fn file_order(kind: CellKind) -> &'static [usize] {
+    const TET10: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
+    const IDENTITY: [usize; MAX_CELL_NODES] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+    match kind {
+        CellKind::Tet10 => &TET10,
+        k => &IDENTITY[..k.len()],
+    }
+}
+
+/// The cells as i64 values in the file's node order: per cell its nodes (`mixed` false); its
+/// XDMF type id and its nodes (`mixed`); and with `pad` each such record filled up with 0 to
+/// 1 + [`MAX_CELL_NODES`] values (to be sent in fixed-size rows).
+fn cell_values(cells: &[Cell], mixed: bool, pad: bool) -> Result<Vec<i64>> {
+    let mut out = Vec::with_capacity(cells.len() * (1 + MAX_CELL_NODES));
+    let big = || Error::output(String::new(), "node index does not fit in i64");
+    for c in cells {
+        if mixed {
+            out.push(c.kind.xdmf_id() as i64);
+        }
+        for &i in file_order(c.kind) {
+            out.push(i64::try_from(c.nodes()[i]).map_err(|_| big())?);
+        }
+        if pad {
+            out.extend(std::iter::repeat_n(0, MAX_CELL_NODES - c.kind.len()));
+        }
+    }
+    Ok(out)
+}
+
+/// Writes `/mesh/mixed` (`len` values): whole from every rank where the cells are the whole
+/// mesh; where they are distributed, each rank's cells first sent to the rank whose [`block`]
+/// of cell rows holds them, and each rank writes its block's values at their offset in the
+/// global order (the sum of the lower ranks' lengths, one sum over the ranks).
+fn write_mixed<C: Comm>(w: &Writer<'_, C>, group: &Group, data: &OutputData, len: usize) -> Result<()> {
+    let Some(m) = &data.mesh_rows else {
+        let flat = w.all(cell_values(&data.cells, true, false))?;
+        write_dataset(w, group, MIXED, &[len], None, &flat)?;
+        return Ok(());
+    };
+    const WIDTH: usize = 1 + MAX_CELL_NODES;
+    let records = w.all(cell_values(&data.cells, true, true))?;
+    let mine = gather_block(w.comm, m.cells, WIDTH, &m.cell_rows, &records);
+    let mut chunk = Vec::with_capacity(mine.len());
+    for r in mine.chunks_exact(WIDTH) {
+        // every row is held ([`cell_layout`] refused the mesh otherwise)
+        let n = kind_of_id(r[0]).map_or(0, CellKind::len);
+        chunk.extend_from_slice(&r[..1 + n]);
+    }
+    let (rank, size) = (w.comm.rank(), w.comm.size());
+    let mut lens = vec![0u64; size];
+    lens[rank] = chunk.len() as u64;
+    w.comm.sum_u64(&mut lens);
+    let lo = lens[..rank].iter().sum::<u64>() as usize;
+    let total = lens.iter().sum::<u64>() as usize;
+    w.all(match total == len {
+        true => Ok(()),
+        false => Err(Error::output(String::new(), format!("/mesh/{MIXED}: the ranks' cells make {total} values, expected {len}"))),
+    })?;
+    write_rows(w, group, MIXED, &[len], lo, lo + chunk.len(), &chunk)?;
+    Ok(())
+}
+
+/// The cells of `/mesh` in our node order, from whichever of [`CELL_DATASETS`] the file holds.
+fn read_cells(mesh: &Group) -> R<Vec<Cell>> {
+    let present: Vec<&str> = CELL_DATASETS.iter().copied().filter(|n| mesh.link_exists(n)).collect();
+    let name = match present.as_slice() {
+        [one] => *one,
+        [] => return Err(format!("/mesh holds no cells (none of {})", CELL_DATASETS.join(", "))),
+        several => return Err(format!("/mesh holds several cell datasets ({}), expected one", several.join(", "))),
+    };
+    let path = format!("/mesh/{name}");
+    let ds = mesh.dataset(name).map_err(h5e(format!("opening {path}")))?;
+    let shape = ds.shape();
+    let raw: Vec<i64> = read_raw(&ds).map_err(h5e(format!("reading {path}")))?;
+    let node = |v: i64| usize::try_from(v).map_err(|_| format!("{path}: negative node index {v}"));
+    let cell = |kind: CellKind, file: &[i64]| -> R<Cell> {
+        let mut n = [0usize; MAX_CELL_NODES];
+        for (k, &i) in file_order(kind).iter().enumerate() {
+            n[i] = node(file[k])?;
+        }
+        Ok(Cell::new(kind, &n[..kind.len()]))
+    };
+    if name == MIXED {
+        if shape.len() != 1 {
+            return Err(format!("{path}: shape {shape:?}, expected a flat list"));
+        }
+        let mut cells = Vec::new();
+        let mut at = 0;
+        while at < raw.len() {
+            let kind = kind_of_id(raw[at]).ok_or_else(|| format!("{path}: unknown XDMF cell type {} at value {at}", raw[at]))?;
+            let nodes = raw.get(at + 1..at + 1 + kind.len()).ok_or_else(|| format!("{path}: the last cell ({}) lacks nodes", kind.xdmf_name()))?;
+            cells.push(cell(kind, nodes)?);
+            at += 1 + kind.len();
+        }
+        return Ok(cells);
+    }
+    let kind = CellKind::ALL.into_iter().find(|&k| CellLayout::Uniform(k).dataset() == name).unwrap_or(CellKind::Hex8);
+    if shape.len() != 2 || shape[1] != kind.len() {
+        return Err(format!("{path}: shape {shape:?}, expected n × {}", kind.len()));
+    }
+    raw.chunks_exact(kind.len()).map(|c| cell(kind, c)).collect()
 }
 
 /// Creates the group `name` in `parent`, tracking the creation order of its links and
@@ -590,11 +800,6 @@ fn gather_block<T: Bits, C: Comm>(comm: &C, len: usize, ncomp: usize, rows: &[us
 /// where it is distributed. Collective (a rank with nothing to write still takes part with an
 /// empty selection), and through collective MPI-IO transfers under MPI.
 fn write_dataset<T: Bits, C: Comm>(w: &Writer<'_, C>, group: &Group, name: &str, shape: &[usize], rows: Option<&[usize]>, v: &[T]) -> Result<Dataset> {
-    use hdf5_sys::h5::hsize_t;
-    use hdf5_sys::h5d::{H5Dget_space, H5Dwrite};
-    use hdf5_sys::h5p::{H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER, H5P_DEFAULT};
-    use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_hyperslab, H5Sselect_none};
-    let what = || format!("dataset {}/{name}", group.name());
     let ncomp = shape.get(1).copied().unwrap_or(1);
     let (lo, hi) = block(shape[0], w.comm.rank(), w.comm.size());
     let gathered;
@@ -605,6 +810,20 @@ fn write_dataset<T: Bits, C: Comm>(w: &Writer<'_, C>, group: &Group, name: &str,
         }
         None => &v[lo * ncomp..hi * ncomp],
     };
+    write_rows(w, group, name, shape, lo, hi, vals)
+}
+
+/// Creates the dataset `name` of the global `shape` and writes the rows `[lo, hi)` of it from
+/// `vals` (`(hi − lo) × ncomp` values) as one hyperslab. Collective, like [`write_dataset`]:
+/// every rank calls it, each with its own rows (possibly none); the ranks' rows must not
+/// overlap.
+fn write_rows<T: Bits, C: Comm>(w: &Writer<'_, C>, group: &Group, name: &str, shape: &[usize], lo: usize, hi: usize, vals: &[T]) -> Result<Dataset> {
+    use hdf5_sys::h5::hsize_t;
+    use hdf5_sys::h5d::{H5Dget_space, H5Dwrite};
+    use hdf5_sys::h5p::{H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER, H5P_DEFAULT};
+    use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_hyperslab, H5Sselect_none};
+    let what = || format!("dataset {}/{name}", group.name());
+    let ncomp = shape.get(1).copied().unwrap_or(1);
     let ds = w.all(group.new_dataset::<T>().shape(shape.to_vec()).create(name).map_err(|e| ctx(format!("creating {}", what()))(e)))?;
     let mem_type = w.all(::hdf5::Datatype::from_type::<T>().map_err(|e| ctx(format!("datatype of {}", what()))(e)))?;
     let collective = w.comm.mpi_comm().is_some();
@@ -756,25 +975,7 @@ fn read_file(path: &Path) -> R<OutputData> {
     }
     let coordinates = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
 
-    let ds = mesh
-        .dataset(HEXAHEDRA)
-        .map_err(h5e("opening /mesh/hexahedra"))?;
-    let shape = ds.shape();
-    if shape.len() != 2 || shape[1] != 8 {
-        return Err(format!("/mesh/hexahedra: shape {shape:?}, expected n × 8"));
-    }
-    let raw: Vec<i64> = read_raw(&ds).map_err(h5e("reading /mesh/hexahedra"))?;
-    let hexahedra = raw
-        .chunks_exact(8)
-        .map(|c| {
-            let mut h = [0usize; 8];
-            for (dst, &src) in h.iter_mut().zip(c) {
-                *dst = usize::try_from(src)
-                    .map_err(|_| format!("/mesh/hexahedra: negative node index {src}"))?;
-            }
-            Ok(crate::mesh::Cell::hex8(h))
-        })
-        .collect::<R<Vec<_>>>()?;
+    let cells = read_cells(&mesh)?;
 
     let fields = read_fields(&file.group(FIELDS).map_err(h5e("opening /fields"))?)?;
     let steps = match file.link_exists(STEPS) {
@@ -793,7 +994,7 @@ fn read_file(path: &Path) -> R<OutputData> {
     }
     Ok(OutputData {
         coordinates,
-        cells: hexahedra,
+        cells,
         mesh_rows: None,
         fields,
         attributes,
@@ -1337,5 +1538,99 @@ mod tests {
         let mut data = with_steps();
         data.steps[2].time = 0.5;
         reject(&data, &["step 0003", "not after step 0002"]);
+    }
+
+    /// `sample()` on the 12 nodes with `cells` instead of its two hexahedra, the cell fields
+    /// resized to them.
+    fn with_cells(cells: Vec<Cell>) -> OutputData {
+        let mut data = sample();
+        let n = cells.len();
+        data.cells = cells;
+        data.fields[1].values = Values::F64((0..n).map(|i| i as f64 / 7.0).collect());
+        data.fields[2].values = Values::I32((0..n as i32).map(|i| -i).collect());
+        data
+    }
+
+    fn cell(kind: CellKind, from: usize) -> Cell {
+        Cell::new(kind, &(from..from + kind.len()).collect::<Vec<_>>())
+    }
+
+    /// Each layout: the dataset it names, its raw values (tet10 in XDMF order: its last two edge
+    /// nodes swapped; mixed: type id then nodes), and a round trip that gives the same cells;
+    /// the same file from the mesh given as rows (reversed), verified row by row.
+    #[test]
+    fn every_cell_layout_round_trips() {
+        // cells, their dataset, its shape, its values
+        type Case = (Vec<Cell>, &'static str, Vec<usize>, Vec<i64>);
+        let cases: Vec<Case> = vec![
+            (vec![cell(CellKind::Tet4, 0), cell(CellKind::Tet4, 4), cell(CellKind::Tet4, 8)], "tetrahedra", vec![3, 4], (0..12).collect()),
+            (vec![cell(CellKind::Tet10, 0), cell(CellKind::Tet10, 2)], "tetrahedra10", vec![2, 10], vec![0, 1, 2, 3, 4, 5, 6, 7, 9, 8, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10]),
+            (vec![cell(CellKind::Wedge6, 6), cell(CellKind::Wedge6, 0)], "wedges", vec![2, 6], vec![6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]),
+            (
+                vec![cell(CellKind::Hex8, 0), cell(CellKind::Tet10, 2), cell(CellKind::Tet4, 8), cell(CellKind::Wedge6, 1)],
+                "mixed",
+                vec![1 + 8 + 1 + 10 + 1 + 4 + 1 + 6],
+                [vec![9], (0..8).collect(), vec![38, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10, 6, 8, 9, 10, 11, 8], (1..7).collect()].concat(),
+            ),
+        ];
+        for (cells, name, shape, raw) in cases {
+            let whole = with_cells(cells);
+            let path = tmp(&format!("layout_{name}.h5"));
+            write(&path, &whole).unwrap();
+            let file = File::open(&path).unwrap();
+            let mesh = file.group(MESH).unwrap();
+            assert_eq!(CELL_DATASETS.iter().filter(|d| mesh.link_exists(d)).collect::<Vec<_>>(), [&name], "{name}");
+            let ds = mesh.dataset(name).unwrap();
+            assert_eq!(ds.shape(), shape, "{name}");
+            assert_eq!(ds.read_raw::<i64>().unwrap(), raw, "{name}");
+            drop((ds, mesh, file));
+            let back = read(&path).unwrap();
+            assert_same(&whole, &back);
+            assert!(verify(&path, &whole).is_ok(), "{name}");
+
+            let (nn, nc) = (whole.coordinates.len(), whole.cells.len());
+            let mut dist = whole.clone();
+            let cell_rows: Vec<usize> = (0..nc).rev().collect();
+            dist.cells = cell_rows.iter().map(|&r| whole.cells[r]).collect();
+            dist.mesh_rows = Some(crate::output::MeshRows { nodes: nn, cells: nc, node_rows: (0..nn).collect(), cell_rows });
+            let path2 = tmp(&format!("layout_{name}_rows.h5"));
+            write(&path2, &dist).unwrap();
+            assert_same(&read(&path2).unwrap(), &back);
+            assert_eq!(verify(&path2, &dist).unwrap(), verify(&path, &whole).unwrap(), "{name}");
+            let layout = cell_layout(&crate::comm::SerialComm, &dist).unwrap();
+            assert_eq!(layout, CellLayout::of_cells(&whole.cells));
+            assert_eq!(layout.dataset(), name);
+
+            // a distributed mesh with a cell row nobody holds is refused, no file left
+            dist.cells.pop();
+            dist.mesh_rows.as_mut().unwrap().cell_rows.pop();
+            let path3 = tmp(&format!("layout_{name}_hole.h5"));
+            let e = write(&path3, &dist).unwrap_err().to_string();
+            assert!(e.contains("1 of the") && e.contains("held by no rank"), "{e}");
+            assert!(!path3.exists());
+            for p in [path, path2] {
+                std::fs::remove_file(p).unwrap();
+            }
+        }
+    }
+
+    /// A file with a cell dataset that does not parse is an error naming it.
+    #[test]
+    fn bad_cell_datasets_are_named() {
+        let path = tmp("bad_cells.h5");
+        write(&path, &with_cells(vec![cell(CellKind::Hex8, 0), cell(CellKind::Tet4, 0)])).unwrap();
+        let file = ::hdf5::File::open_rw(&path).unwrap();
+        let mesh = file.group(MESH).unwrap();
+        mesh.unlink(MIXED).unwrap();
+        mesh.new_dataset::<i64>().shape([6]).create(MIXED).unwrap().write_raw(&[6i64, 0, 1, 2, 3, 7]).unwrap();
+        drop((mesh, file));
+        let e = read(&path).unwrap_err().to_string();
+        assert!(e.contains("/mesh/mixed") && e.contains("unknown XDMF cell type 7"), "{e}");
+        let file = ::hdf5::File::open_rw(&path).unwrap();
+        file.group(MESH).unwrap().new_dataset::<i64>().shape([1, 4]).create(TETRAHEDRA).unwrap().write_raw(&[0i64, 1, 2, 3]).unwrap();
+        drop(file);
+        let e = read(&path).unwrap_err().to_string();
+        assert!(e.contains("several cell datasets"), "{e}");
+        std::fs::remove_file(&path).unwrap();
     }
 }

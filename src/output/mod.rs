@@ -41,8 +41,9 @@ pub struct Field {
 pub struct OutputData {
     /// `/mesh/coordinates`, nnodes × 3 (this rank's rows only where `mesh_rows` is set).
     pub coordinates: Vec<[f64; 3]>,
-    /// The cells, Gmsh/VTK node order, global node numbers (this rank's rows only where
-    /// `mesh_rows` is set).
+    /// The cells (any mix of [`crate::mesh::CellKind`]s), our (Gmsh's) node order, global node
+    /// numbers (this rank's rows only where `mesh_rows` is set); the HDF5 file stores them in
+    /// XDMF's node order ([`hdf5`]'s table).
     pub cells: Vec<crate::mesh::Cell>,
     /// A distributed mesh: the sizes of the whole mesh and the rows this rank holds of it.
     /// None: `coordinates` and `cells` are the whole mesh (on every rank).
@@ -259,7 +260,9 @@ pub fn stage<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report
     }
     let staged = Staged { targets, temps, json, root: comm.is_root(), committed: false };
     comm.agree(hdf5::write_collective(comm, staged.h5_temp(), data))?;
-    comm.agree(if comm.is_root() { write_sidecars(&staged, h5, data, xdmf, report) } else { Ok(()) })?;
+    // the layout of the cells over all ranks (collective), for rank 0's XDMF topology
+    let cells = comm.agree(hdf5::cell_layout(comm, data))?;
+    comm.agree(if comm.is_root() { write_sidecars(&staged, h5, data, cells, xdmf, report) } else { Ok(()) })?;
     Ok(staged)
 }
 
@@ -285,10 +288,10 @@ fn write_json(temp: &Path, shown: &Path, report: &serde_json::Value) -> Result<(
 }
 
 /// Rank 0's part of [`stage`]: the sidecars under their temporary names.
-fn write_sidecars(staged: &Staged, h5: &Path, data: &OutputData, xdmf: bool, report: Option<&serde_json::Value>) -> Result<()> {
+fn write_sidecars(staged: &Staged, h5: &Path, data: &OutputData, cells: hdf5::CellLayout, xdmf: bool, report: Option<&serde_json::Value>) -> Result<()> {
     if xdmf {
         let name = h5.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        xdmf::write(&staged.temps[1], &name, data)?;
+        xdmf::write(&staged.temps[1], &name, data, cells)?;
     }
     if let (Some(r), Some(i)) = (report, staged.json) {
         write_json(&staged.temps[i], &staged.targets[i], r)?;

@@ -1,8 +1,14 @@
 //! The XDMF 3 sidecar that lets ParaView (and VisIt) open the HDF5 result file.
 //!
-//! One uniform grid: `Hexahedron` topology from `/mesh/hexahedra`, `XYZ` geometry from
-//! `/mesh/coordinates`, and one `Attribute` per field from `/fields/<name>`: `Scalar` for one
-//! component, `Vector` for 3, `Tensor6` for 6, `Tensor` for 9, `Matrix` otherwise.
+//! One uniform grid: its `Topology` from the cell dataset of `/mesh` ([`CellLayout`]), `XYZ`
+//! geometry from `/mesh/coordinates`, and one `Attribute` per field from `/fields/<name>`:
+//! `Scalar` for one component, `Vector` for 3, `Tensor6` for 6, `Tensor` for 9, `Matrix`
+//! otherwise. The topology of a mesh of one cell type is `Hexahedron` (`/mesh/hexahedra`, n × 8),
+//! `Tetrahedron` (`/mesh/tetrahedra`, n × 4), `Tetrahedron_10` (`/mesh/tetrahedra10`, n × 10)
+//! or `Wedge` (`/mesh/wedges`, n × 6), with `NumberOfElements` n; that of a mesh of several types
+//! is `Mixed` (`/mesh/mixed`, a flat list of per cell its XDMF type id and its nodes), with
+//! `NumberOfElements` the cells and the list's length as its `Dimensions`. The node orders are
+//! XDMF's (VTK's), which the HDF5 file stores.
 //!
 //! A load path ([`OutputData::steps`] non-empty) is instead one temporal collection,
 //! `<Grid Name="load path" GridType="Collection" CollectionType="Temporal">`, that ParaView
@@ -17,20 +23,22 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::hdf5::CellLayout;
 use super::{check_step_times, step_name, Center, Field, OutputData, Values};
 use crate::error::{Error, Result};
 
 /// Writes the XDMF description of `data` to `xdmf_path`; `h5_file_name` is the HDF5 file
 /// written by [`super::hdf5::write`], relative to the directory of `xdmf_path` (normally its
-/// bare file name).
-pub fn write(xdmf_path: &Path, h5_file_name: &str, data: &OutputData) -> Result<()> {
+/// bare file name); `cells` the layout of its cells over all ranks
+/// ([`super::hdf5::cell_layout`]; for a whole mesh [`CellLayout::of_cells`]).
+pub fn write(xdmf_path: &Path, h5_file_name: &str, data: &OutputData, cells: CellLayout) -> Result<()> {
     let shown = xdmf_path.display().to_string();
-    let text = render(h5_file_name, data).map_err(|m| Error::output(&shown, m))?;
+    let text = render(h5_file_name, data, cells).map_err(|m| Error::output(&shown, m))?;
     std::fs::write(xdmf_path, text.as_bytes()).map_err(|e| Error::io(&shown, e))
 }
 
 /// The XDMF document as a string.
-fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
+fn render(h5: &str, data: &OutputData, cells: CellLayout) -> std::result::Result<String, String> {
     if h5.is_empty() || h5.contains(':') {
         // XDMF splits `file:/path` at the colon.
         return Err(format!(
@@ -48,7 +56,7 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
     let _ = writeln!(s, "  <Domain>");
     if data.steps.is_empty() {
         let _ = writeln!(s, r#"    <Grid Name="mesh" GridType="Uniform">"#);
-        mesh(&mut s, 6, &h5, data);
+        mesh(&mut s, 6, &h5, data, cells);
         attributes(&mut s, 6, &h5, "/fields", data, &data.fields, &data.rows)?;
         let _ = writeln!(s, "    </Grid>");
     } else {
@@ -62,7 +70,7 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
             let _ = writeln!(s, r#"      <Grid Name="step {name}" GridType="Uniform">"#);
             // Debug formatting: the shortest text that reads back as the same f64.
             let _ = writeln!(s, r#"        <Time Value="{:?}"/>"#, step.time);
-            mesh(&mut s, 8, &h5, data);
+            mesh(&mut s, 8, &h5, data, cells);
             attributes(&mut s, 8, &h5, &format!("/steps/{name}"), data, &step.fields, &step.rows)
                 .map_err(|m| format!("step {name}: {m}"))?;
             let _ = writeln!(s, "      </Grid>");
@@ -75,15 +83,19 @@ fn render(h5: &str, data: &OutputData) -> std::result::Result<String, String> {
 }
 
 /// The `Topology` and `Geometry` of a grid, indented by `indent` spaces.
-fn mesh(s: &mut String, indent: usize, h5: &str, data: &OutputData) {
+fn mesh(s: &mut String, indent: usize, h5: &str, data: &OutputData, cells: CellLayout) {
     let nnodes = data.nnodes();
     let nelems = data.ncells();
     let pad = " ".repeat(indent);
+    let (topology, dims) = match cells {
+        CellLayout::Uniform(kind) => (kind.xdmf_name(), format!("{nelems} {}", kind.len())),
+        CellLayout::Mixed { len } => ("Mixed", len.to_string()),
+    };
     let _ = writeln!(
         s,
-        r#"{pad}<Topology TopologyType="Hexahedron" NumberOfElements="{nelems}">"#
+        r#"{pad}<Topology TopologyType="{topology}" NumberOfElements="{nelems}">"#
     );
-    data_item(s, indent + 2, &format!("{nelems} 8"), "Int", 8, h5, "/mesh/hexahedra");
+    data_item(s, indent + 2, &dims, "Int", 8, h5, &format!("/mesh/{}", cells.dataset()));
     let _ = writeln!(s, "{pad}</Topology>");
     let _ = writeln!(s, r#"{pad}<Geometry GeometryType="XYZ">"#);
     data_item(s, indent + 2, &format!("{nnodes} 3"), "Float", 8, h5, "/mesh/coordinates");
@@ -376,7 +388,7 @@ mod tests {
     fn xdmf_is_well_formed_and_complete() {
         let data = sample();
         let path = tmp("ok.xdmf");
-        write(&path, "r&d result.h5", &data).unwrap();
+        write(&path, "r&d result.h5", &data, CellLayout::of_cells(&data.cells)).unwrap();
         let doc = std::fs::read_to_string(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
 
@@ -427,15 +439,15 @@ mod tests {
         let mut data = sample();
         data.fields[1].values = Values::F64(vec![1.0; 3]);
         let path = tmp("bad.xdmf");
-        let err = write(&path, "r.h5", &data).unwrap_err().to_string();
+        let err = write(&path, "r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap_err().to_string();
         assert!(err.contains("bad.xdmf") && err.contains("von"), "{err}");
         assert!(!path.exists());
 
-        let err = write(&path, "c:r.h5", &sample()).unwrap_err().to_string();
+        let err = write(&path, "c:r.h5", &sample(), CellLayout::Uniform(crate::mesh::CellKind::Hex8)).unwrap_err().to_string();
         assert!(err.contains("':'"), "{err}");
         let mut data = sample();
         data.fields[0].name = "a\u{1}b".into();
-        assert!(write(&path, "r.h5", &data).is_err());
+        assert!(write(&path, "r.h5", &data, CellLayout::of_cells(&data.cells)).is_err());
         assert!(!path.exists());
     }
 
@@ -461,7 +473,7 @@ mod tests {
     #[test]
     fn load_path_is_a_temporal_collection() {
         let data = with_steps();
-        let doc = render("r&d result.h5", &data).unwrap();
+        let doc = render("r&d result.h5", &data, CellLayout::of_cells(&data.cells)).unwrap();
         let names = check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
         let count = |n: &str| names.iter().filter(|x| *x == n).count();
         // The collection and one uniform grid per step, each with its mesh and step fields.
@@ -491,16 +503,47 @@ mod tests {
     fn bad_steps_are_an_error() {
         let mut data = with_steps();
         data.steps[1].fields[2].values = Values::I32(vec![0; 3]);
-        let err = render("r.h5", &data).unwrap_err();
+        let err = render("r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap_err();
         assert!(err.contains("step 0002") && err.contains("status"), "{err}");
         let mut data = with_steps();
         data.steps[0].time = f64::INFINITY;
-        assert!(render("r.h5", &data).unwrap_err().contains("not finite"));
+        assert!(render("r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap_err().contains("not finite"));
         let mut data = with_steps();
         data.steps.swap(0, 2);
-        assert!(render("r.h5", &data).unwrap_err().contains("not after"));
+        assert!(render("r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap_err().contains("not after"));
         let mut data = with_steps();
         data.steps[2].fields[0].name = "a\u{1}b".into();
-        assert!(render("r.h5", &data).is_err());
+        assert!(render("r.h5", &data, CellLayout::of_cells(&data.cells)).is_err());
+    }
+
+    /// Meshes of one other cell type get their own uniform topology, meshes of several types a
+    /// `Mixed` one whose data item is the flat list (its length, not cells × nodes).
+    #[test]
+    fn other_cell_types_and_mixed_meshes_have_their_topology() {
+        use crate::mesh::{Cell, CellKind};
+        let mut data = sample();
+        let tet = |k: CellKind| Cell::new(k, &(0..k.len()).collect::<Vec<_>>());
+        for (kind, dims, dataset) in [(CellKind::Tet4, "2 4", "tetrahedra"), (CellKind::Tet10, "2 10", "tetrahedra10"), (CellKind::Wedge6, "2 6", "wedges")] {
+            data.cells = vec![tet(kind); 2];
+            let doc = render("r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap();
+            check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
+            assert!(doc.contains(&format!(r#"<Topology TopologyType="{}" NumberOfElements="2">"#, kind.xdmf_name())), "{doc}");
+            assert!(doc.contains(&format!(r#"Dimensions="{dims}" NumberType="Int" Precision="8" Format="HDF">r.h5:/mesh/{dataset}<"#)), "{doc}");
+        }
+        assert_eq!(CellKind::Tet10.xdmf_name(), "Tetrahedron_10");
+        // a hexahedron and a 10-node tetrahedron: 1 + 8 + 1 + 10 values
+        data.cells = vec![data.cells[0], tet(CellKind::Hex8)];
+        data.cells[0] = tet(CellKind::Tet10);
+        let layout = CellLayout::of_cells(&data.cells);
+        assert_eq!(layout, CellLayout::Mixed { len: 20 });
+        let doc = render("r.h5", &data, layout).unwrap();
+        check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
+        assert!(doc.contains(r#"<Topology TopologyType="Mixed" NumberOfElements="2">"#), "{doc}");
+        assert!(doc.contains(r#"Dimensions="20" NumberType="Int" Precision="8" Format="HDF">r.h5:/mesh/mixed<"#), "{doc}");
+        // in a load path every step's grid has it
+        data.steps = vec![crate::output::Step { time: 1.0, fields: Vec::new(), rows: Default::default() }; 2];
+        data.steps[1].time = 2.0;
+        let doc = render("r.h5", &data, layout).unwrap();
+        assert_eq!(doc.matches(r#"TopologyType="Mixed""#).count(), 2);
     }
 }

@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""Writes the tetrahedral, quadratic and mixed Gmsh 4.1 test meshes of this folder, each in
+ASCII (`<name>.msh`) and binary (`<name>_binary.msh`) encoding.
+
+    pip install gmsh      # the Python API (the files were made with Gmsh 4.15.2)
+    cd mesh && python3 make_fixtures.py
+
+two_tet_blocks     the two-block benchmark of two_blocks.geo meshed with 4-node tetrahedra:
+                   physical volumes "upper" (0,2)x(0,1)x(1,2) and "lower" (0,2)x(0,1)x(0,1),
+                   no shared nodes on z = 1, the physical surfaces of two_blocks.geo
+two_tet10_blocks   the same at order 2 (10-node tetrahedra, 6-node triangles)
+wedge_layer        the unit cube as one body "body": a boundary layer of wedges (triangles of
+                   z = 0 extruded to z = 0.2 in 2 layers) under 4-node tetrahedra; its
+                   sub-volumes are also "layer" and "core"; physical surfaces "bottom" (z = 0,
+                   triangles), "top" (z = 1, triangles), "xmin" (x = 0: quadrangles of the
+                   layer and triangles of the core)
+
+Only elements of physical groups are saved (Mesh.SaveAll = 0).
+"""
+
+import gmsh
+
+
+def save(name):
+    for binary, suffix in ((0, ""), (1, "_binary")):
+        gmsh.option.setNumber("Mesh.Binary", binary)
+        gmsh.write(f"{name}{suffix}.msh")
+
+
+def common_options():
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.SaveAll", 0)
+    gmsh.option.setNumber("Mesh.RandomSeed", 1)
+
+
+def two_blocks(name, order, size):
+    gmsh.clear()
+    gmsh.model.add(name)
+    occ = gmsh.model.occ
+    occ.addBox(0, 0, 1, 2, 1, 1, 1)  # upper
+    occ.addBox(0, 0, 0, 2, 1, 1, 2)  # lower
+    occ.synchronize()
+    # OpenCASCADE numbers the faces of a box x=min, x=max, y=min, y=max, z=min, z=max.
+    model = gmsh.model
+    model.addPhysicalGroup(3, [1], name="upper")
+    model.addPhysicalGroup(3, [2], name="lower")
+    for tag, face in (
+        (6, "upper_top"),
+        (5, "upper_bottom"),
+        (1, "upper_left"),
+        (2, "upper_right"),
+        (12, "lower_top"),
+        (7, "lower_left"),
+    ):
+        model.addPhysicalGroup(2, [tag], name=face)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    model.mesh.generate(3)
+    if order > 1:
+        model.mesh.setOrder(order)
+    save(name)
+
+
+def wedge_layer(name, size):
+    gmsh.clear()
+    gmsh.model.add(name)
+    geo = gmsh.model.geo
+    p = [geo.addPoint(x, y, 0, size) for x, y in ((0, 0), (1, 0), (1, 1), (0, 1))]
+    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+    base = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    # boundary layer: 2 layers of wedges up to z = 0.2
+    layer = geo.extrude([(2, base)], 0, 0, 0.2, numElements=[2], recombine=True)
+    top_of_layer = layer[0][1]
+    layer_volume = layer[1][1]
+    # the core above it, meshed with tetrahedra
+    core = geo.extrude([(2, top_of_layer)], 0, 0, 0.8)
+    top = core[0][1]
+    core_volume = core[1][1]
+    geo.synchronize()
+    model = gmsh.model
+    model.addPhysicalGroup(3, [layer_volume, core_volume], name="body")
+    model.addPhysicalGroup(3, [layer_volume], name="layer")
+    model.addPhysicalGroup(3, [core_volume], name="core")
+    model.addPhysicalGroup(2, [base], name="bottom")
+    model.addPhysicalGroup(2, [top], name="top")
+    # x = 0: the side surfaces of both extrusions with a bounding box at x = 0
+    xmin = []
+    for dim, tag in model.getEntities(2):
+        x0, _, _, x1, _, _ = model.getBoundingBox(dim, tag)
+        if abs(x0) < 1e-6 and abs(x1) < 1e-6:
+            xmin.append(tag)
+    model.addPhysicalGroup(2, xmin, name="xmin")
+    model.mesh.generate(3)
+    save(name)
+
+
+gmsh.initialize()
+common_options()
+two_blocks("two_tet_blocks", 1, 0.4)
+two_blocks("two_tet10_blocks", 2, 0.5)
+wedge_layer("wedge_layer", 0.3)
+gmsh.finalize()
