@@ -259,3 +259,93 @@ fn the_cli_solves_a_tet10_seed() {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
     assert!(json.get("contact").is_some(), "{json}");
 }
+
+/// Counts the bytes the current thread holds, and its peak, for the memory test below.
+struct Counting;
+
+thread_local! {
+    static NOW: std::cell::Cell<isize> = const { std::cell::Cell::new(0) };
+    static PEAK: std::cell::Cell<isize> = const { std::cell::Cell::new(0) };
+}
+
+fn count(delta: isize) {
+    let _ = NOW.try_with(|n| {
+        n.set(n.get() + delta);
+        let _ = PEAK.try_with(|p| p.set(p.get().max(n.get())));
+    });
+}
+
+unsafe impl std::alloc::GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: std::alloc::Layout) -> *mut u8 {
+        let p = unsafe { std::alloc::System.alloc(l) };
+        if !p.is_null() {
+            count(l.size() as isize);
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, l: std::alloc::Layout) -> *mut u8 {
+        let p = unsafe { std::alloc::System.alloc_zeroed(l) };
+        if !p.is_null() {
+            count(l.size() as isize);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: std::alloc::Layout) {
+        unsafe { std::alloc::System.dealloc(p, l) };
+        count(-(l.size() as isize));
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: std::alloc::Layout, new: usize) -> *mut u8 {
+        let q = unsafe { std::alloc::System.realloc(p, l, new) };
+        if !q.is_null() {
+            count(new as isize - l.size() as isize);
+        }
+        q
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// The peak bytes this thread held above its start while `f` ran, and `f`'s value.
+fn peak_of<T>(f: impl FnOnce() -> T) -> (f64, T) {
+    let start = NOW.with(|n| n.get());
+    PEAK.with(|p| p.set(start));
+    let v = f();
+    ((PEAK.with(|p| p.get()) - start) as f64, v)
+}
+
+/// The pre-mesh memory estimate of a tetrahedral seed: its counts (nodes, cells, facets) are
+/// the built model's exactly, its `mesh` part is 0.8–1.5× the peak the mesh phase
+/// (`model::build`) allocates, and nnz(L) of [`nd_nnz_l`] on the body's DOFs is within 0.6–1.6×
+/// the plan's count of the monolithic factors. Catches an estimate that counts hexahedra for
+/// tetrahedral boxes (a tet10 mesh is ≈ 8× the nodes and 6× the cells of the hex8 one).
+#[test]
+fn the_memory_estimate_follows_the_cell_type() {
+    use tresca_feti::pipeline::memory::{nd_nnz_l, MeshCount};
+    for cells in ["hex8", "tet4", "tet10"] {
+        let sets = seed(12, cells);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+        let ls = scene::load(&path, &sets).unwrap();
+        let c = MeshCount::of(&ls);
+        let (peak, model) = peak_of(|| model::build(&ls).unwrap());
+        let m = MeshCount::of_model(&ls, &model);
+        assert_eq!((c.nodes, c.elements, c.facets, &c.body_dofs), (m.nodes, m.elements, m.facets, &m.body_dofs), "{cells}");
+        let mesh_ratio = c.bytes() / peak;
+        let dec = tresca_feti::scene::DecompositionSettings { subdomains: Some(1), ..Default::default() };
+        let priced = tresca_feti::pipeline::plan::price(&SerialComm, &model, &dec, &ls.scene.solver.params.common, 1).unwrap();
+        let mono = priced.iter().find(|p| !p.tfeti).expect("the monolithic candidate");
+        let estimated: f64 = c.body_dofs.iter().map(|&d| nd_nnz_l(d)).sum();
+        let nnz_ratio = estimated / mono.nnz_l;
+        eprintln!(
+            "{cells} N=12: {} nodes, {} cells, {} facets; mesh estimate {:.1} MB / build peak {:.1} MB = {mesh_ratio:.2}; nnz(L) estimate {estimated:.3e} / counted {:.3e} = {nnz_ratio:.2}",
+            c.nodes,
+            c.elements,
+            c.facets,
+            c.bytes() / 1e6,
+            peak / 1e6,
+            mono.nnz_l
+        );
+        assert!((0.8..=1.5).contains(&mesh_ratio), "{cells}: mesh estimate / measured peak = {mesh_ratio:.2}");
+        assert!((0.6..=1.6).contains(&nnz_ratio), "{cells}: nnz(L) estimate / count = {nnz_ratio:.2}");
+    }
+}
