@@ -1,6 +1,8 @@
 //! Finite-element correctness: patch tests (a linear field is reproduced exactly, under
 //! Dirichlet-only and mixed Dirichlet/traction conditions, on distorted meshes) and convergence
-//! to an analytic solution of the Navier equations at the rates of trilinear elements.
+//! to an analytic solution of the Navier equations at the rates of trilinear elements; for
+//! tet4, tet10 and wedge6 cells: convergence to a manufactured solution with body force, patch
+//! tests on distorted meshes and the six rigid modes of a free body.
 
 use tresca_feti::fem::assembly::{add_traction, assemble_body, DofMap};
 use tresca_feti::fem::element::{hex_gradients, hex_shape};
@@ -191,4 +193,405 @@ fn converges_at_the_rates_of_trilinear_elements() {
     // |u| ≈ 1…4 on the cube: at h = 1/16 the L² error is a few 1e-4
     let (l2, _) = prev.unwrap();
     assert!(l2 < 1e-3, "finest L2 error {l2:e}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tetrahedra (tet4, tet10) and wedges: convergence on a manufactured solution with body force,
+// patch tests on distorted meshes, rigid modes of a free body.
+
+use tresca_feti::fem::tet::{tet10_gradients, tet10_shape, tet4_gradients, tet4_shape, TET10_EDGES};
+use tresca_feti::fem::wedge::{wedge6_gradients, wedge6_shape};
+use tresca_feti::mesh::{BodyGeometry, Cell, CellKind};
+
+/// Gauss–Legendre points and weights on [0, 1].
+fn gauss01(n: usize) -> Vec<(f64, f64)> {
+    let (p, w): (&[f64], &[f64]) = match n {
+        4 => (&[-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6], &[0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9]),
+        5 => (
+            &[-0.906_179_845_938_664, -0.538_469_310_105_683, 0.0, 0.538_469_310_105_683, 0.906_179_845_938_664],
+            &[0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1],
+        ),
+        _ => unreachable!(),
+    };
+    p.iter().zip(w).map(|(&x, &w)| (0.5 * (x + 1.0), 0.5 * w)).collect()
+}
+
+/// A high-order rule on the reference cell of `kind` (weights sum to its volume: 1/6 for the
+/// tetrahedron, 1 for the prism {ξ, η ≥ 0, ξ + η ≤ 1} × [−1, 1]): 5 Gauss points per direction,
+/// collapsed (Duffy) on the simplex — exact for polynomials of degree 7.
+fn fine_rule(kind: CellKind) -> Vec<([f64; 3], f64)> {
+    let g = gauss01(5);
+    let mut r = Vec::new();
+    for &(u, wu) in &g {
+        for &(v, wv) in &g {
+            for &(w, ww) in &g {
+                match kind {
+                    CellKind::Tet4 | CellKind::Tet10 => {
+                        r.push(([u, (1.0 - u) * v, (1.0 - u) * (1.0 - v) * w], wu * wv * ww * (1.0 - u).powi(2) * (1.0 - v)))
+                    }
+                    CellKind::Wedge6 => r.push(([u, (1.0 - u) * v, 2.0 * w - 1.0], 2.0 * wu * wv * ww * (1.0 - u))),
+                    CellKind::Hex8 => unreachable!(),
+                }
+            }
+        }
+    }
+    r
+}
+
+/// Shape functions, physical gradients and det J of a tet4, tet10 or wedge6 cell at `xi`.
+fn shape_at(kind: CellKind, x: &[[f64; 3]], xi: [f64; 3]) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
+    match kind {
+        CellKind::Tet4 => {
+            let (g, det) = tet4_gradients(x.try_into().unwrap());
+            (tet4_shape(xi).to_vec(), g.to_vec(), det)
+        }
+        CellKind::Tet10 => {
+            let (g, det) = tet10_gradients(x.try_into().unwrap(), xi);
+            (tet10_shape(xi).to_vec(), g.to_vec(), det)
+        }
+        CellKind::Wedge6 => {
+            let (g, det) = wedge6_gradients(x.try_into().unwrap(), xi);
+            (wedge6_shape(xi).to_vec(), g.to_vec(), det)
+        }
+        CellKind::Hex8 => unreachable!(),
+    }
+}
+
+/// The rule is exact for monomials up to degree 7: ∫ ξ^a η^b ζ^c over the reference
+/// tetrahedron = a! b! c! / (a + b + c + 3)! (and the prism's volume is 1). Catches a wrong
+/// collapse Jacobian or Gauss table, which would bias every error norm below.
+#[test]
+fn the_fine_rule_integrates_degree_seven_exactly() {
+    let fact = |n: usize| (1..=n).map(|k| k as f64).product::<f64>();
+    let r = fine_rule(CellKind::Tet4);
+    for (a, b, c) in [(0, 0, 0), (1, 0, 0), (2, 3, 0), (1, 1, 5), (0, 7, 0), (3, 2, 2)] {
+        let exact = fact(a) * fact(b) * fact(c) / fact(a + b + c + 3);
+        let q: f64 = r.iter().map(|(p, w)| w * p[0].powi(a as i32) * p[1].powi(b as i32) * p[2].powi(c as i32)).sum();
+        assert!((q - exact).abs() <= 1e-14 * exact.max(1e-3), "ξ^{a} η^{b} ζ^{c}: {q} vs {exact}");
+    }
+    let r = fine_rule(CellKind::Wedge6);
+    let q: f64 = r.iter().map(|(p, w)| w * p[0] * p[1].powi(2) * p[2].powi(4)).sum();
+    // ∫_T ξ η² · ∫ ζ⁴ = (1·2/5!) · (2/5)
+    assert!((q - 2.0 / 120.0 * 0.4).abs() < 1e-15, "{q}");
+}
+
+/// A unit-cube body of `kind` cells on an `n`-node grid: the box generator's hex8/tet4/tet10,
+/// or every hexahedron cut into the two wedges (0,1,2,4,5,6) and (0,2,3,4,6,7). Interior grid
+/// nodes moved pseudo-randomly by up to `jitter`·h per coordinate; tet10 edge nodes then put
+/// back at the middle of their (straight) edges.
+fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
+    let mut g = match kind {
+        CellKind::Wedge6 => {
+            let hex = boxgen::generate([0.0; 3], [1.0; 3], [n; 3]);
+            let cells = hex
+                .cells
+                .iter()
+                .flat_map(|h| {
+                    let c = h.nodes();
+                    [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]].map(|w| Cell::new(CellKind::Wedge6, &w.map(|l| c[l])))
+                })
+                .collect();
+            BodyGeometry { nodes: hex.nodes, cells, faces: Vec::new() }
+        }
+        k => boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], k).unwrap(),
+    };
+    let h = 1.0 / (n - 1) as f64;
+    let mut seed = 987654321u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    // the grid's nodes come first (the tet10's edge nodes are appended after them)
+    for p in g.nodes.iter_mut().take(n * n * n) {
+        if p.iter().all(|&c| c > 1e-12 && c < 1.0 - 1e-12) {
+            for c in p.iter_mut() {
+                *c += jitter * h * rnd();
+            }
+        }
+    }
+    if kind == CellKind::Tet10 {
+        for cell in &g.cells {
+            let v = cell.nodes();
+            for (e, [a, b]) in TET10_EDGES.iter().enumerate() {
+                g.nodes[v[4 + e]] = std::array::from_fn(|i| 0.5 * (g.nodes[v[*a]][i] + g.nodes[v[*b]][i]));
+            }
+        }
+    }
+    let mut m = Mesh::default();
+    m.push_body("cube", g);
+    m
+}
+
+/// Dirichlet constraints u = `exact` at every node on the cube's boundary.
+fn boundary_values(mesh: &Mesh, exact: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<(usize, usize, f64)> {
+    let mut cons = Vec::new();
+    for (v, p) in mesh.nodes.iter().enumerate() {
+        if p.iter().any(|&c| c.abs() < 1e-12 || (c - 1.0).abs() < 1e-12) {
+            let u = exact(*p);
+            cons.extend((0..3).map(|c| (v, c, u[c])));
+        }
+    }
+    cons
+}
+
+/// (value, first, second derivative) of sin(a t + b), cos(a t + b) or exp(a t + b).
+#[derive(Clone, Copy)]
+enum F1 {
+    Sin(f64, f64),
+    Cos(f64, f64),
+    Exp(f64, f64),
+}
+
+impl F1 {
+    fn eval(self, t: f64) -> [f64; 3] {
+        match self {
+            F1::Sin(a, b) => {
+                let (s, c) = (a * t + b).sin_cos();
+                [s, a * c, -a * a * s]
+            }
+            F1::Cos(a, b) => {
+                let (s, c) = (a * t + b).sin_cos();
+                [c, -a * s, -a * a * c]
+            }
+            F1::Exp(a, b) => {
+                let e = (a * t + b).exp();
+                [e, a * e, a * a * e]
+            }
+        }
+    }
+}
+
+/// The manufactured field: u_i = f_i0(x) f_i1(y) f_i2(z), with neither zero divergence nor
+/// zero Laplacian, so the interior is loaded.
+const MANUFACTURED: [[F1; 3]; 3] = [
+    [F1::Sin(1.3, 0.2), F1::Cos(0.9, 0.0), F1::Exp(0.5, 0.0)],
+    [F1::Exp(0.4, 0.0), F1::Sin(1.1, 0.3), F1::Cos(0.7, 0.0)],
+    [F1::Cos(0.8, 0.0), F1::Exp(-0.6, 0.0), F1::Sin(1.2, 0.1)],
+];
+
+/// u, ∇u (g[i][j] = ∂u_i/∂x_j) and the body force f = −div σ(u) = −μ Δu − (λ + μ) ∇(div u).
+fn manufactured(p: [f64; 3], lame: Lame) -> ([f64; 3], [[f64; 3]; 3], [f64; 3]) {
+    let mut u = [0.0; 3];
+    let mut g = [[0.0; 3]; 3];
+    let mut hess = [[[0.0; 3]; 3]; 3]; // hess[i][j][k] = ∂²u_i/∂x_j∂x_k
+    for i in 0..3 {
+        let f: [[f64; 3]; 3] = std::array::from_fn(|d| MANUFACTURED[i][d].eval(p[d]));
+        // the derivative orders (0, 1, 2) per direction, multiplied out
+        let d = |o: [usize; 3]| f[0][o[0]] * f[1][o[1]] * f[2][o[2]];
+        u[i] = d([0, 0, 0]);
+        for j in 0..3 {
+            let mut o = [0; 3];
+            o[j] = 1;
+            g[i][j] = d(o);
+            for k in 0..3 {
+                let mut o = [0; 3];
+                o[j] += 1;
+                o[k] += 1;
+                hess[i][j][k] = d(o);
+            }
+        }
+    }
+    let f = std::array::from_fn(|i| {
+        let lap: f64 = (0..3).map(|j| hess[i][j][j]).sum();
+        let grad_div: f64 = (0..3).map(|j| hess[j][j][i]).sum();
+        -lame.mu * lap - (lame.lambda + lame.mu) * grad_div
+    });
+    (u, g, f)
+}
+
+/// Checks [`manufactured`]'s derivatives against central differences (a wrong body force would
+/// still converge — to another solution — and pass unnoticed at a weak rate).
+#[test]
+fn the_manufactured_body_force_is_minus_div_sigma() {
+    let lame = Lame::from_young_poisson(1.0, 0.3);
+    let stress = |q: [f64; 3]| -> [[f64; 3]; 3] {
+        let g = manufactured(q, lame).1;
+        let s = lame.stress(&[g[0][0], g[1][1], g[2][2], g[0][1] + g[1][0], g[1][2] + g[2][1], g[2][0] + g[0][2]]);
+        [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]]
+    };
+    let p = [0.3, 0.7, 0.45];
+    let (u, g, f) = manufactured(p, lame);
+    let h = 1e-5;
+    let shift = |j: usize, s: f64| std::array::from_fn(|k| p[k] + if k == j { s } else { 0.0 });
+    for i in 0..3 {
+        let div: f64 = (0..3).map(|j| (stress(shift(j, h))[i][j] - stress(shift(j, -h))[i][j]) / (2.0 * h)).sum();
+        assert!((f[i] + div).abs() < 1e-7, "f_{i} = {} vs −div σ = {}", f[i], -div);
+        for (j, gij) in g[i].iter().enumerate() {
+            let fd = (manufactured(shift(j, h), lame).0[i] - manufactured(shift(j, -h), lame).0[i]) / (2.0 * h);
+            assert!((gij - fd).abs() < 1e-8, "∂u_{i}/∂x_{j}");
+        }
+    }
+    assert!(u.iter().all(|v| v.abs() > 0.1) && f.iter().all(|v| v.abs() > 0.1), "{u:?} {f:?}");
+}
+
+/// Consistent nodal body forces ∫ f·N_a dV (fine rule per cell), per local DOF.
+fn body_loads(mesh: &Mesh, lame: Lame) -> Vec<f64> {
+    let mut loads = vec![0.0; 3 * mesh.nodes.len()];
+    for (e, cell) in mesh.cells.iter().enumerate() {
+        let x = mesh.cell_coords(e);
+        for (xi, w) in fine_rule(cell.kind) {
+            let (n, _, det) = shape_at(cell.kind, &x, xi);
+            let p: [f64; 3] = std::array::from_fn(|i| n.iter().zip(&x).map(|(na, xa)| na * xa[i]).sum());
+            let f = manufactured(p, lame).2;
+            for (a, &v) in cell.nodes().iter().enumerate() {
+                for c in 0..3 {
+                    loads[3 * v + c] += w * det * n[a] * f[c];
+                }
+            }
+        }
+    }
+    loads
+}
+
+/// (L² error, H¹-seminorm error) of the FE field `u` against `exact` (value, gradient), fine rule
+/// per cell.
+fn cell_errors(mesh: &Mesh, u: &[[f64; 3]], exact: impl Fn([f64; 3]) -> ([f64; 3], [[f64; 3]; 3])) -> (f64, f64) {
+    let (mut l2, mut h1) = (0.0, 0.0);
+    for (e, cell) in mesh.cells.iter().enumerate() {
+        let x = mesh.cell_coords(e);
+        for (xi, w) in fine_rule(cell.kind) {
+            let (n, g, det) = shape_at(cell.kind, &x, xi);
+            let mut p = [0.0; 3];
+            let mut uh = [0.0; 3];
+            let mut gh = [[0.0; 3]; 3];
+            for (a, &v) in cell.nodes().iter().enumerate() {
+                for i in 0..3 {
+                    p[i] += n[a] * x[a][i];
+                    uh[i] += n[a] * u[v][i];
+                    for j in 0..3 {
+                        gh[i][j] += u[v][i] * g[a][j];
+                    }
+                }
+            }
+            let (ux, gx) = exact(p);
+            for i in 0..3 {
+                l2 += w * det * (uh[i] - ux[i]).powi(2);
+                for j in 0..3 {
+                    h1 += w * det * (gh[i][j] - gx[i][j]).powi(2);
+                }
+            }
+        }
+    }
+    (l2.sqrt(), h1.sqrt())
+}
+
+/// The manufactured problem (Dirichlet = exact on the whole boundary, body force inside) on
+/// grids of `ns` nodes per edge; prints the table and returns the (L², H¹) rates per halving
+/// of h.
+fn convergence(kind: CellKind, ns: &[usize]) -> Vec<(f64, f64)> {
+    let lame = Lame::from_young_poisson(1.0, 0.3);
+    let mut rows: Vec<(f64, usize, f64, f64)> = Vec::new();
+    for &n in ns {
+        let mesh = unit_body(kind, n, 0.0);
+        let cons = boundary_values(&mesh, |p| manufactured(p, lame).0);
+        let u = solve(&mesh, lame, &cons, &body_loads(&mesh, lame));
+        let (l2, h1) = cell_errors(&mesh, &u, |p| {
+            let (u, g, _) = manufactured(p, lame);
+            (u, g)
+        });
+        rows.push((1.0 / (n - 1) as f64, 3 * mesh.nodes.len(), l2, h1));
+    }
+    let rates: Vec<(f64, f64)> = rows.windows(2).map(|w| ((w[0].2 / w[1].2).ln() / (w[0].0 / w[1].0).ln(), (w[0].3 / w[1].3).ln() / (w[0].0 / w[1].0).ln())).collect();
+    eprintln!("{kind:?}: manufactured solution with body force, Dirichlet on the whole boundary");
+    eprintln!("  {:>8} {:>8} {:>12} {:>6} {:>12} {:>6}", "h", "DOFs", "L2 error", "rate", "H1 error", "rate");
+    for (i, (h, dofs, l2, h1)) in rows.iter().enumerate() {
+        let (rl, rh) = if i == 0 { (String::new(), String::new()) } else { (format!("{:.2}", rates[i - 1].0), format!("{:.2}", rates[i - 1].1)) };
+        eprintln!("  {h:>8.4} {dofs:>8} {l2:>12.3e} {rl:>6} {h1:>12.3e} {rh:>6}");
+    }
+    rates
+}
+
+#[test]
+fn tet4_converges_at_rates_two_and_one() {
+    let rates = convergence(CellKind::Tet4, &[5, 9, 17]);
+    for (rl2, rh1) in &rates {
+        assert!(*rl2 >= 1.8 && *rl2 <= 2.3, "L2 rate {rl2} (all: {rates:?})");
+        assert!(*rh1 >= 0.9 && *rh1 <= 1.2, "H1 rate {rh1} (all: {rates:?})");
+    }
+}
+
+#[test]
+fn tet10_converges_at_rates_three_and_two() {
+    let rates = convergence(CellKind::Tet10, &[4, 7, 13]);
+    for (rl2, rh1) in &rates {
+        assert!(*rl2 >= 2.7 && *rl2 <= 3.4, "L2 rate {rl2} (all: {rates:?})");
+        assert!(*rh1 >= 1.8 && *rh1 <= 2.3, "H1 rate {rh1} (all: {rates:?})");
+    }
+}
+
+#[test]
+fn wedge6_converges_at_rates_two_and_one() {
+    let rates = convergence(CellKind::Wedge6, &[5, 9, 17]);
+    for (rl2, rh1) in &rates {
+        assert!(*rl2 >= 1.8 && *rl2 <= 2.3, "L2 rate {rl2} (all: {rates:?})");
+        assert!(*rh1 >= 0.9 && *rh1 <= 1.2, "H1 rate {rh1} (all: {rates:?})");
+    }
+}
+
+/// Patch test on distorted tet4, tet10 (straight edges) and wedge meshes: a linear field on the
+/// boundary is reproduced at every node (1e-10 relative) and the stress at every point of the
+/// fine rule of every cell is the field's constant stress (1e-8 relative). Catches a wrong
+/// shape-function derivative, an inconsistent node order between the kernels and the generator
+/// or an assembly that mixes up local DOFs.
+#[test]
+fn patch_tests_on_distorted_tetrahedra_and_wedges() {
+    let lame = Lame::from_young_poisson(50_000.0, 0.3);
+    let eps = [H[0][0], H[1][1], H[2][2], H[0][1] + H[1][0], H[1][2] + H[2][1], H[2][0] + H[0][2]];
+    let sigma = lame.stress(&eps);
+    let smax = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+    for kind in [CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6] {
+        let mesh = unit_body(kind, 6, 0.2);
+        // the jitter really distorted it: no interior grid node is left on its grid point
+        let moved = mesh.nodes.iter().take(216).filter(|p| p.iter().any(|c| ((c * 5.0).round() - c * 5.0).abs() > 1e-3)).count();
+        assert_eq!(moved, 64, "{kind:?}: interior nodes moved");
+        let cons = boundary_values(&mesh, linear);
+        let u = solve(&mesh, lame, &cons, &vec![0.0; 3 * mesh.nodes.len()]);
+        let e = max_rel_error(&mesh, &u, linear);
+        assert!(e <= 1e-10, "{kind:?}: patch test displacement error {e:e}");
+        let mut worst: f64 = 0.0;
+        for (c, cell) in mesh.cells.iter().enumerate() {
+            let x = mesh.cell_coords(c);
+            let ue: Vec<[f64; 3]> = cell.nodes().iter().map(|&v| u[v]).collect();
+            for (xi, _) in fine_rule(kind).into_iter().step_by(7) {
+                let (_, g, det) = shape_at(kind, &x, xi);
+                assert!(det > 0.0, "{kind:?} cell {c} inverted by the jitter");
+                let s = lame.stress(&tresca_feti::fem::element::strain(&g, &ue));
+                worst = worst.max(s.iter().zip(&sigma).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / smax);
+            }
+            let sc = tresca_feti::fem::cell::cell_center_stress(kind, &x, &ue, lame);
+            worst = worst.max(sc.iter().zip(&sigma).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / smax);
+        }
+        assert!(worst <= 1e-8, "{kind:?}: stress off the constant by {worst:e}");
+        eprintln!("{kind:?} distorted patch test: displacement {e:.1e}, stress {worst:.1e} (relative)");
+    }
+}
+
+/// The assembled stiffness of a free body (no constraint) has exactly six zero eigenvalues, the
+/// rigid motions: a seventh would be a spurious (hourglass-like) mode or a node no cell holds,
+/// fewer a kernel that resists rigid motions. Dense eigenvalues of a 3-node-per-edge box.
+#[test]
+fn free_bodies_have_exactly_six_rigid_modes() {
+    let lame = Lame::from_young_poisson(1.0, 0.3);
+    for (kind, n) in [(CellKind::Tet10, 3), (CellKind::Tet4, 4), (CellKind::Wedge6, 4)] {
+        let mesh = unit_body(kind, n, 0.1);
+        let dofs = DofMap::new(mesh.bodies[0].nodes.clone(), &[]);
+        let k = assemble_body(&mesh, 0, lame, &dofs, &vec![0.0; 3 * mesh.nodes.len()]).unwrap().k;
+        let mut dense = faer::Mat::<f64>::zeros(k.n, k.n);
+        for j in 0..k.n {
+            for p in k.col_ptr[j]..k.col_ptr[j + 1] {
+                let i = k.row_idx[p];
+                dense[(i, j)] = k.values[p];
+                dense[(j, i)] = k.values[p];
+            }
+        }
+        let ev = dense.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+        let top = ev.iter().fold(0.0f64, |m, &e| m.max(e.abs()));
+        let zero = ev.iter().filter(|&&e| e.abs() <= 1e-11 * top).count();
+        let mut sorted = ev.clone();
+        sorted.sort_by(f64::total_cmp);
+        eprintln!("{kind:?}, {} DOFs: eigenvalues / max: {:.1e} … {:.1e} | {:.1e}", k.n, sorted[0] / top, sorted[5] / top, sorted[6] / top);
+        assert_eq!(zero, 6, "{kind:?}: {zero} zero eigenvalues");
+        assert!(sorted[0] > -1e-11 * top, "{kind:?}: negative eigenvalue {}", sorted[0]);
+        assert!(sorted[6] > 1e-4 * top, "{kind:?}: the seventh eigenvalue {:e} is nearly zero", sorted[6] / top);
+    }
 }

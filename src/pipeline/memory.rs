@@ -3,10 +3,12 @@
 //!
 //! Per rank (the busiest), in named parts:
 //! - `process`: the program with MPI and HDF5 loaded ([`PROCESS`]);
-//! - `mesh`: the whole mesh as generated or read, on every rank — nodes [`NODE_BYTES`],
-//!   hexahedra [`ELEMENT_BYTES`], boundary quadrilaterals [`QUAD_BYTES`] (each array as built
-//!   and as copied into the mesh, the load vectors) and, for a Gmsh file, the file's bytes and
-//!   the parser's arrays ([`GMSH_NODE_BYTES`], [`GMSH_ELEMENT_BYTES`]);
+//! - `mesh`: the whole mesh as generated or read, on every rank — nodes [`NODE_BYTES`], cells
+//!   [`ELEMENT_BYTES`], boundary facets [`FACET_BYTES`] (each array as built and as copied into
+//!   the mesh, the load vectors; a box's counts by its cell type, [`box_counts`]), what the box
+//!   generator holds while it cuts hexahedra into tetrahedra ([`tetrahedralize_bytes`]) and,
+//!   for a Gmsh file, the file's bytes and the parser's arrays ([`GMSH_NODE_BYTES`],
+//!   [`GMSH_ELEMENT_BYTES`]);
 //! - `setup`: what every rank repeats for the plan and the partition (node graphs, METIS, the
 //!   decomposition, B's rows): [`SETUP_PER_DOF`] per DOF of the whole mesh;
 //! - `stiffness`: the rank's share of the DOFs (TFETI: interface nodes counted in every
@@ -29,6 +31,7 @@ use std::sync::OnceLock;
 
 use crate::comm::Comm;
 use crate::error::{human_bytes, Error, Result};
+use crate::mesh::{Cell, CellKind, Facet};
 use crate::model::Model;
 use crate::scene::{DecompositionSettings, LoadedScene};
 
@@ -39,10 +42,12 @@ pub const PROCESS: f64 = 30e6;
 /// Per node of the mesh: coordinates as generated and in the mesh (2 × 24 B), the load vector
 /// and one traction's unit loads (2 × 24 B).
 pub const NODE_BYTES: f64 = 96.0;
-/// Per hexahedron: 8 node numbers as generated and in the mesh (2 × 64 B).
-pub const ELEMENT_BYTES: f64 = 128.0;
-/// Per boundary quadrilateral: element and 4 nodes, as generated and in the mesh (2 × 40 B).
-pub const QUAD_BYTES: f64 = 80.0;
+/// Per cell of any type: a [`Cell`] (its type and room for ten node numbers, 88 B) as generated
+/// and in the mesh.
+pub const ELEMENT_BYTES: f64 = 2.0 * std::mem::size_of::<Cell>() as f64;
+/// Per boundary facet of any type: a [`Facet`] (cell, type, room for eight nodes, 80 B) as
+/// generated and in the mesh.
+pub const FACET_BYTES: f64 = 2.0 * std::mem::size_of::<Facet>() as f64;
 /// Per node of a Gmsh file, in the parser's arrays (coordinates and tag) besides ours.
 pub const GMSH_NODE_BYTES: f64 = 32.0;
 /// Per element of a Gmsh file, in the parser's arrays (8 node tags, the element tag).
@@ -64,9 +69,13 @@ pub const GATHER_PER_NODE: f64 = 64.0;
 pub struct MeshCount {
     pub nodes: f64,
     pub elements: f64,
-    pub quads: f64,
+    /// Boundary facets (quadrilaterals, triangles).
+    pub facets: f64,
     /// Bytes of the Gmsh files (read whole) and the parser's arrays.
     pub files: f64,
+    /// What the box generator holds only while it cuts one body into tetrahedra, the largest
+    /// body's ([`tetrahedralize_bytes`]; the bodies are made one after the other).
+    pub transient: f64,
     /// DOFs of every body.
     pub body_dofs: Vec<f64>,
     /// The scene key that sets the size (`mesh.n`, `body[i].box.nodes`, `body[i].gmsh.file`):
@@ -83,10 +92,10 @@ impl MeshCount {
         let mut largest = -1.0;
         for (i, b) in scene.bodies.iter().enumerate() {
             let key = key_of(ls, i);
-            let (nodes, elements, quads) = if let Some(bx) = &b.boxed {
-                let n = bx.nodes.unwrap_or([scene.mesh.n; 3]).map(|v| v as f64);
-                let e = n.map(|v| v - 1.0);
-                (n[0] * n[1] * n[2], e[0] * e[1] * e[2], 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]))
+            let (nodes, elements, facets) = if let Some(bx) = &b.boxed {
+                let (n, kind) = (bx.nodes.unwrap_or([scene.mesh.n; 3]), bx.cells.unwrap_or(scene.mesh.cells).kind());
+                c.transient = c.transient.max(tetrahedralize_bytes(n, kind));
+                box_counts(n, kind)
             } else if let Some(g) = &b.gmsh {
                 let (nodes, elements, bytes) = crate::mesh::gmsh::header_counts(&ls.dir().join(&g.file)).map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));
                 c.files += bytes + GMSH_NODE_BYTES * nodes + GMSH_ELEMENT_BYTES * elements;
@@ -97,7 +106,7 @@ impl MeshCount {
             };
             c.nodes += nodes;
             c.elements += elements;
-            c.quads += quads;
+            c.facets += facets;
             c.body_dofs.push(3.0 * nodes);
             if nodes > largest {
                 (largest, c.key) = (nodes, key);
@@ -115,8 +124,9 @@ impl MeshCount {
         MeshCount {
             nodes: model.size.nodes as f64,
             elements: model.size.elements as f64,
-            quads: mesh.faces.iter().map(|f| f.facets.len() as f64).sum(),
+            facets: mesh.faces.iter().map(|f| f.facets.len() as f64).sum(),
             files: 0.0,
+            transient: 0.0,
             body_dofs,
             key: key_of(ls, largest),
         }
@@ -128,8 +138,47 @@ impl MeshCount {
 
     /// The mesh as generated or read (every rank).
     pub fn bytes(&self) -> f64 {
-        NODE_BYTES * self.nodes + ELEMENT_BYTES * self.elements + QUAD_BYTES * self.quads + self.files
+        NODE_BYTES * self.nodes + ELEMENT_BYTES * self.elements + FACET_BYTES * self.facets + self.files + self.transient
     }
+}
+
+/// Nodes, cells and boundary facets of a box of `n` nodes per direction meshed with `kind`, as
+/// [`crate::mesh::boxgen::try_generate_cells`] makes it: hexahedra and quadrilaterals; tet4 six
+/// tetrahedra per hexahedron and two triangles per square; tet10 besides a node on every edge
+/// of the tetrahedral mesh (the grid's edges, one diagonal per grid square, one per hexahedron:
+/// ≈ 7 per grid node).
+pub fn box_counts(n: [usize; 3], kind: CellKind) -> (f64, f64, f64) {
+    let n = n.map(|v| v as f64);
+    let e = n.map(|v| v - 1.0);
+    let hexes = e[0] * e[1] * e[2];
+    let squares = 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]);
+    let grid = n[0] * n[1] * n[2];
+    match kind {
+        CellKind::Hex8 | CellKind::Wedge6 => (grid, hexes, squares),
+        CellKind::Tet4 => (grid, 6.0 * hexes, 2.0 * squares),
+        CellKind::Tet10 => {
+            let axis = e[0] * n[1] * n[2] + n[0] * e[1] * n[2] + n[0] * n[1] * e[2];
+            let diagonals = e[0] * e[1] * n[2] + e[0] * n[1] * e[2] + n[0] * e[1] * e[2] + hexes;
+            (grid + axis + diagonals, 6.0 * hexes, 2.0 * squares)
+        }
+    }
+}
+
+/// What the box generator holds only while it cuts a box of `n` nodes per direction into
+/// tetrahedra (0 for hexahedra), besides the arrays [`MeshCount::bytes`] counts: the hexahedra
+/// it cuts, the map of every face of the tetrahedra it sorts the boundary with (created for 3
+/// faces per cell: `next_power_of_two(3 C · 8/7)` buckets of a 120-byte entry and a control
+/// byte) and, for tet10, the map of edge nodes (≈ 32 B per edge).
+pub fn tetrahedralize_bytes(n: [usize; 3], kind: CellKind) -> f64 {
+    if !matches!(kind, CellKind::Tet4 | CellKind::Tet10) {
+        return 0.0;
+    }
+    let (hex_nodes, hexes, _) = box_counts(n, CellKind::Hex8);
+    let (nodes, cells, _) = box_counts(n, kind);
+    let entry = std::mem::size_of::<([usize; 4], (usize, Facet))>() as f64 + 1.0;
+    let buckets = ((3.0 * cells * 8.0 / 7.0).ceil().max(1.0) as u64).next_power_of_two() as f64;
+    let edges = nodes - hex_nodes;
+    std::mem::size_of::<Cell>() as f64 * hexes + entry * buckets + 32.0 * edges
 }
 
 /// The scene key that sets the size of body `i`.
@@ -390,7 +439,7 @@ mod tests {
         let nodes = (n * n * n) as f64;
         let e = ((n - 1) * (n - 1) * (n - 1)) as f64;
         let q = 6.0 * ((n - 1) * (n - 1)) as f64;
-        MeshCount { nodes: 2.0 * nodes, elements: 2.0 * e, quads: 2.0 * q, files: 0.0, body_dofs: vec![3.0 * nodes; 2], key: "mesh.n".into() }
+        MeshCount { nodes: 2.0 * nodes, elements: 2.0 * e, facets: 2.0 * q, files: 0.0, transient: 0.0, body_dofs: vec![3.0 * nodes; 2], key: "mesh.n".into() }
     }
 
     #[test]
@@ -413,7 +462,9 @@ mod tests {
         let c = seed(500);
         assert_eq!(c.nodes, 2.5e8);
         assert_eq!(64.0 * c.elements / 2.0, 7_952_095_936.0);
-        assert!((c.bytes() - (96.0 * 2.5e8 + 128.0 * c.elements + 80.0 * c.quads)).abs() < 1.0);
+        // every cell and facet type in one array: 88 B a cell, 80 B a facet, each held twice
+        assert_eq!((ELEMENT_BYTES, FACET_BYTES), (176.0, 160.0));
+        assert!((c.bytes() - (96.0 * 2.5e8 + 176.0 * c.elements + 160.0 * c.facets)).abs() < 1.0);
         let e = before_mesh(&c, &DecompositionSettings::default(), 1);
         assert_eq!(e.part("setup"), SETUP_PER_DOF * 7.5e8);
         assert_eq!(e.part("factors"), 0.0, "the plan has not chosen the decomposition yet");
@@ -422,6 +473,26 @@ mod tests {
         let e2 = before_mesh(&c, &DecompositionSettings::default(), 2);
         assert_eq!(e2.part("stiffness"), e.part("stiffness") / 2.0);
         assert_eq!(e2.part("mesh"), e.part("mesh"));
+    }
+
+    /// The box counts by cell type are the generator's exactly: nodes (tet10: with an edge node
+    /// on every edge), cells and boundary facets. Catches an estimate that still counts
+    /// hexahedra for a tetrahedral box (6× the cells, ≈ 8× the tet10 nodes).
+    #[test]
+    fn box_counts_match_the_generated_mesh_for_every_cell_type() {
+        for n in [[2, 2, 2], [4, 3, 5], [6, 6, 6]] {
+            for kind in [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10] {
+                let g = crate::mesh::boxgen::try_generate_cells([0.0; 3], [1.0, 2.0, 3.0], n, kind).unwrap();
+                let facets: usize = g.faces.iter().map(|f| f.1.len()).sum();
+                let counted = (g.nodes.len() as f64, g.cells.len() as f64, facets as f64);
+                assert_eq!(box_counts(n, kind), counted, "{kind:?} {n:?}");
+                assert_eq!(tetrahedralize_bytes(n, kind) == 0.0, kind == CellKind::Hex8);
+            }
+        }
+        // N = 41: ≈ 7.7 nodes per grid node with tet10, six cells per hexahedron
+        let (h, t4, t10) = (box_counts([41; 3], CellKind::Hex8), box_counts([41; 3], CellKind::Tet4), box_counts([41; 3], CellKind::Tet10));
+        assert_eq!(t4.1, 6.0 * h.1);
+        assert!((7.5..8.0).contains(&(t10.0 / h.0)), "{}", t10.0 / h.0);
     }
 
     #[test]
