@@ -288,9 +288,6 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64)
     fn facets(f: &Face) -> Vec<SurfaceFacet<'_>> {
         f.facets.iter().map(|q| SurfaceFacet { nodes: q.nodes() }).collect()
     }
-    if let Some(q) = slave.facets.iter().chain(&master.facets).find(|q| !matches!(q.kind, FacetKind::Tri3 | FacetKind::Quad4)) {
-        return Err(Error::scene(key, format!("mortar needs linear facets (tri3, quad4); faces {} / {} hold {}", slave.name, master.name, q.kind.plural())));
-    }
     let params = MortarParams { search_distance: search, ..Default::default() };
     let r = dual_mortar(&mesh.nodes, &facets(slave), &facets(master), &params)
         .map_err(|e| Error::scene(key, format!("mortar of {} on {}: {e}", slave.name, master.name)))?;
@@ -307,6 +304,15 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64)
 fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>) -> Result<(Vec<RowGeom>, Discretization)> {
     let search = || search.unwrap_or_else(|| default_search_distance(diagonal(mesh, &slave.nodes())));
     let mortar = || Ok((mortar_rows(mesh, key, slave, master, search())?, Discretization::Mortar));
+    // a quadratic facet's corner nodes carry no area (∫ N dA = 0 on a tri6's corners): nodal
+    // pairs there would hold no force; the mortar's modified dual basis gives every node one
+    let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+    if quadratic && discretization == Some(Discretization::NodeToNode) {
+        return Err(Error::scene(key, format!("face {} has quadratic facets, whose corner nodes carry no area: node-to-node cannot use them (discretization = \"mortar\" can)", slave.name)));
+    }
+    if quadratic {
+        return mortar();
+    }
     match discretization {
         Some(Discretization::Mortar) => mortar(),
         Some(Discretization::NodeToNode) => match node_to_node(mesh, key, slave, master, tol) {
