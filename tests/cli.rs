@@ -167,21 +167,24 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("pair-zmin-xmin", &pair("upper.zmin", "lower.xmin"), &n4, &["contact.pair[0]", "upper.zmin", "lower.xmin", "do not face each other"]);
     bad.add("pair-zmax-zmax", &pair("upper.zmax", "lower.zmax"), &n4, &["contact.pair[0]", "upper.zmax", "lower.zmax", "do not face each other"]);
     bad.add("pair-zmin-zmin", &pair("upper.zmin", "lower.zmin"), &n4, &["contact.pair[0]", "do not face each other"]);
-    // opposite normals but the master lies behind the slave
-    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "overlap"]);
+    // opposite normals but the master lies behind the slave: no master facet in front (mortar,
+    // the default where the nodes do not match) names a slave node
+    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "slave node", "no master facet"]);
     bad.add("pair-same-body", &pair("upper.zmin", "upper.zmax"), &n4, &["contact.pair[0]", "same body"]);
     bad.add("pair-unknown-body", &pair("upper.zmin", "ground.zmax"), &n4, &["contact.pair[0].master", "ground.zmax"]);
+    // non-matching faces refused where node-to-node is asked for (mortar takes them)
+    let n2n = |scene: String| scene.replacen("master = \"lower.zmax\"", "master = \"lower.zmax\"\ndiscretization = \"node-to-node\"", 1);
     let lower_box = "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }";
     let upper_box = "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0] }";
     let more_nodes = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [5, 4, 4] }");
-    bad.add("pair-node-count", &more_nodes, &n4, &["contact.pair[0]", "16 nodes", "20", "node-to-node"]);
+    bad.add("pair-node-count", &n2n(more_nodes), &n4, &["contact.pair[0]", "16 nodes", "20", "node-to-node"]);
     // the same node count (5 × 4) on both faces, but in other places
     let crossed = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [4, 5, 4] }")
         .replacen(upper_box, "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = [5, 4, 4] }", 1);
-    bad.add("pair-crossed-grids", &crossed, &n4, &["contact.pair[0]", "do not match node to node"]);
+    bad.add("pair-crossed-grids", &n2n(crossed), &n4, &["contact.pair[0]", "do not match node to node"]);
     // shifted sideways by half an element (h = 2/3 at N = 4)
     let shifted = seed_with(upper_box, "box = { min = [0.3333333333333333, 0.0, 1.0], max = [2.3333333333333333, 1.0, 2.0] }");
-    bad.add("pair-half-shift", &shifted, &n4, &["contact.pair[0]", "do not match node to node", "0.333333"]);
+    bad.add("pair-half-shift", &n2n(shifted), &n4, &["contact.pair[0]", "do not match node to node", "0.333333"]);
     let overlap = seed_with(upper_box, "box = { min = [0.0, 0.0, 0.9], max = [2.0, 1.0, 2.0] }");
     bad.add("overlap", &overlap, &n4, &["contact.pair[0]", "bodies overlap", "1.000e-1"]);
     // the same interface twice, or once from each side: doubled constraints and friction
