@@ -151,6 +151,17 @@ fn axis_name(c: usize) -> &'static str {
     ["x", "y", "z"][c]
 }
 
+/// The mesh's cell type of a box's `cells`.
+pub fn cell_kind(c: crate::scene::BoxCells) -> crate::mesh::CellKind {
+    use crate::mesh::CellKind;
+    use crate::scene::BoxCells;
+    match c {
+        BoxCells::Hex8 => CellKind::Hex8,
+        BoxCells::Tet4 => CellKind::Tet4,
+        BoxCells::Tet10 => CellKind::Tet10,
+    }
+}
+
 /// Builds the model of a loaded scene.
 pub fn build(ls: &LoadedScene) -> Result<Model> {
     let scene: &Scene = &ls.scene;
@@ -158,7 +169,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
             (Some(bx), _) => {
-                let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), bx.cells.unwrap_or(scene.mesh.cells).kind())?;
+                let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
                 if let Some(c) = &bx.cylinder {
                     // the curved side moves out by the bulge, the nodes between in proportion
                     let (lo, hi) = (bx.min[2], bx.max[2]);

@@ -74,14 +74,6 @@ impl BoxCells {
     pub fn is_hex8(&self) -> bool {
         *self == BoxCells::Hex8
     }
-
-    pub fn kind(self) -> crate::mesh::CellKind {
-        match self {
-            BoxCells::Hex8 => crate::mesh::CellKind::Hex8,
-            BoxCells::Tet4 => crate::mesh::CellKind::Tet4,
-            BoxCells::Tet10 => crate::mesh::CellKind::Tet10,
-        }
-    }
 }
 
 fn default_n() -> usize {

@@ -8,8 +8,7 @@
 use super::element::{add_stiffness, physical_gradients, strain};
 use super::material::Lame;
 
-/// The corner pairs of the tet10's edge nodes 4…9.
-pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [3, 0], [3, 2], [3, 1]];
+pub use crate::mesh::cell::TET10_EDGES;
 
 /// Reference gradients of the barycentric coordinates L₀…L₃ (∂L/∂ξ).
 const DL: [[f64; 3]; 4] = [[-1.0, -1.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];

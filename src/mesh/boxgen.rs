@@ -128,7 +128,7 @@ fn tetrahedralize(hex: BodyGeometry, min: [f64; 3], max: [f64; 3], quadratic: bo
             }
             if quadratic {
                 let mut all = v.to_vec();
-                for [p, q] in crate::fem::tet::TET10_EDGES {
+                for [p, q] in super::cell::TET10_EDGES {
                     let key = (v[p].min(v[q]), v[p].max(v[q]));
                     let m = *mids.entry(key).or_insert_with(|| {
                         let (x, y) = (nodes[key.0], nodes[key.1]);

@@ -8,6 +8,9 @@
 //! A facet lists its corners first (right-hand rule = outward normal of its cell), then for
 //! tri6 the edge nodes (0,1), (1,2), (2,0).
 
+/// The corner pairs of the tet10's edge nodes 4…9 (Gmsh's order).
+pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [3, 0], [3, 2], [3, 1]];
+
 /// The most nodes a cell has (tet10).
 pub const MAX_CELL_NODES: usize = 10;
 /// The most DOFs a cell has.
@@ -278,7 +281,7 @@ mod tests {
         let tet4: Vec<[f64; 3]> = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.]];
         let mid = |a: [f64; 3], b: [f64; 3]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, (a[2] + b[2]) / 2.0];
         let mut tet10 = tet4.clone();
-        for [a, b] in crate::fem::tet::TET10_EDGES {
+        for [a, b] in TET10_EDGES {
             tet10.push(mid(tet4[a], tet4[b]));
         }
         let wedge: Vec<[f64; 3]> = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 0., 1.], [0., 1., 1.]];

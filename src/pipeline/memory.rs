@@ -93,7 +93,7 @@ impl MeshCount {
         for (i, b) in scene.bodies.iter().enumerate() {
             let key = key_of(ls, i);
             let (nodes, elements, facets) = if let Some(bx) = &b.boxed {
-                let (n, kind) = (bx.nodes.unwrap_or([scene.mesh.n; 3]), bx.cells.unwrap_or(scene.mesh.cells).kind());
+                let (n, kind) = (bx.nodes.unwrap_or([scene.mesh.n; 3]), crate::model::cell_kind(bx.cells.unwrap_or(scene.mesh.cells)));
                 c.transient = c.transient.max(tetrahedralize_bytes(n, kind));
                 box_counts(n, kind)
             } else if let Some(g) = &b.gmsh {
