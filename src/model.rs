@@ -170,12 +170,12 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         let geom = match (&b.boxed, &b.gmsh) {
             (Some(bx), _) => {
                 let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
-                if let Some(c) = &bx.cylinder {
+                if let Some(side) = bx.curved_side() {
                     // the curved side moves out by the bulge, the nodes between in proportion
                     let (lo, hi) = (bx.min[2], bx.max[2]);
                     for p in &mut geom.nodes {
-                        let b = bx.bulge(p[0]);
-                        p[2] += if c.side == "zmin" { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
+                        let b = bx.bulge(p[0], p[1]);
+                        p[2] += if side == "zmin" { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
                     }
                 }
                 geom

@@ -121,6 +121,10 @@ pub struct BoxDef {
     /// line, bulging outward); the nodes between follow linearly so the opposite side stays flat.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cylinder: Option<Cylinder>,
+    /// Bends the `zmin` or `zmax` side into a spherical cap (pole above `centre`, bulging
+    /// outward); the nodes between follow linearly so the opposite side stays flat.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<Sphere>,
     /// The cells; defaults to `mesh.cells`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cells: Option<BoxCells>,
@@ -134,13 +138,53 @@ pub struct Cylinder {
     pub radius: f64,
 }
 
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    /// `zmin` or `zmax`.
+    pub side: String,
+    pub radius: f64,
+    /// The pole's (x, y); defaults to the side's centre. A quarter model puts it at a corner.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre: Option<[f64; 2]>,
+}
+
+impl Sphere {
+    /// The pole's (x, y) on the box `bx`.
+    pub fn pole(&self, bx: &BoxDef) -> [f64; 2] {
+        self.centre.unwrap_or([0.5 * (bx.min[0] + bx.max[0]), 0.5 * (bx.min[1] + bx.max[1])])
+    }
+
+    /// The largest distance from the pole's line to a point of the side: the farthest corner.
+    pub fn reach(&self, bx: &BoxDef) -> f64 {
+        let c = self.pole(bx);
+        let dx = (bx.min[0] - c[0]).abs().max((bx.max[0] - c[0]).abs());
+        let dy = (bx.min[1] - c[1]).abs().max((bx.max[1] - c[1]).abs());
+        dx.hypot(dy)
+    }
+}
+
 impl BoxDef {
-    /// How far the curved side lies outside the flat box at x: √(r² − (x − x_c)²) − √(r² − h²)
-    /// (h the half-width in x): the full sagitta on the centre line, 0 at the edges.
-    pub fn bulge(&self, x: f64) -> f64 {
-        let Some(c) = &self.cylinder else { return 0.0 };
-        let (xc, h, r) = (0.5 * (self.min[0] + self.max[0]), 0.5 * (self.max[0] - self.min[0]), c.radius);
-        (r * r - (x - xc) * (x - xc)).max(0.0).sqrt() - (r * r - h * h).max(0.0).sqrt()
+    /// How far the curved side lies outside the flat box at (x, y). Cylinder: √(R² − (x − x_c)²)
+    /// − √(R² − h²) (h the half-width in x): the full sagitta on the centre line, 0 at the edges.
+    /// Sphere: √(R² − r²) − √(R² − h²), r the distance from the pole's line and h its largest
+    /// value over the side (the farthest corner): the full sagitta at the pole, 0 at that corner.
+    pub fn bulge(&self, x: f64, y: f64) -> f64 {
+        if let Some(c) = &self.cylinder {
+            let (xc, h, r) = (0.5 * (self.min[0] + self.max[0]), 0.5 * (self.max[0] - self.min[0]), c.radius);
+            return (r * r - (x - xc) * (x - xc)).max(0.0).sqrt() - (r * r - h * h).max(0.0).sqrt();
+        }
+        if let Some(s) = &self.sphere {
+            let (c, h, r) = (s.pole(self), s.reach(self), s.radius);
+            let d2 = (x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]);
+            return (r * r - d2).max(0.0).sqrt() - (r * r - h * h).max(0.0).sqrt();
+        }
+        0.0
+    }
+
+    /// The curved side (`zmin` or `zmax`) of a cylinder or sphere, if any.
+    pub fn curved_side(&self) -> Option<&str> {
+        self.cylinder.as_ref().map(|c| c.side.as_str()).or(self.sphere.as_ref().map(|s| s.side.as_str()))
     }
 }
 
@@ -893,8 +937,34 @@ impl Scene {
                         if !range::carries(c.radius, false) {
                             return Err(Error::scene(k("box.cylinder.radius"), out_of_range("radius", c.radius, " m")));
                         }
-                        if bx.bulge(0.5 * (bx.min[0] + bx.max[0])) >= t {
+                        if bx.bulge(0.5 * (bx.min[0] + bx.max[0]), bx.min[1]) >= t {
                             return Err(Error::scene(k("box.cylinder.radius"), format!("the curved side would bulge more than the box's height {t}")));
+                        }
+                    }
+                    if let Some(s) = &bx.sphere {
+                        if bx.cylinder.is_some() {
+                            return Err(Error::scene(k("box.sphere"), "give at most one of `cylinder` and `sphere`"));
+                        }
+                        if s.side != "zmin" && s.side != "zmax" {
+                            return Err(Error::scene(k("box.sphere.side"), format!("must be \"zmin\" or \"zmax\", got \"{}\"", s.side)));
+                        }
+                        if let Some(c) = s.centre {
+                            finite(k("box.sphere.centre"), &c)?;
+                            if c.iter().any(|v| v.abs() > range::MAX) {
+                                return Err(Error::scene(k("box.sphere.centre"), format!("coordinates beyond ±{:e} m, got {c:?}", range::MAX)));
+                            }
+                        }
+                        let h = s.reach(bx);
+                        if !(s.radius.is_finite() && s.radius > h) {
+                            return Err(Error::scene(k("box.sphere.radius"), format!("must be finite and exceed the distance {h} from the pole to the side's farthest corner, got {}", s.radius)));
+                        }
+                        if !range::carries(s.radius, false) {
+                            return Err(Error::scene(k("box.sphere.radius"), out_of_range("radius", s.radius, " m")));
+                        }
+                        let pole = s.pole(bx);
+                        let t = bx.max[2] - bx.min[2];
+                        if bx.bulge(pole[0], pole[1]) >= t {
+                            return Err(Error::scene(k("box.sphere.radius"), format!("the curved side would bulge more than the box's height {t}")));
                         }
                     }
                     if (0..3).any(|d| bx.max[d] <= bx.min[d]) {
@@ -1084,5 +1154,85 @@ impl Scene {
     /// Material name → index, for looking up every body's material in linear time.
     pub fn material_index(&self) -> std::collections::HashMap<&str, usize> {
         self.materials.iter().enumerate().map(|(i, m)| (m.name.as_str(), i)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPHERE_SCENE: &str = r#"
+[mesh]
+n = 5
+[[material]]
+name = "m"
+E = 1.0
+nu = 0.3
+[[body]]
+name = "cap"
+material = "m"
+box = { min = [0.0, 0.0, 1.0], max = [1.0, 2.0, 2.0], nodes = [5, 9, 3], sphere = { side = "zmin", radius = 4.0, centre = [0.0, 0.0] } }
+[[dirichlet]]
+face = "cap.zmax"
+[contact]
+enabled = false
+"#;
+
+    #[test]
+    fn sphere_bulge_geometry() {
+        let scene = parse(SPHERE_SCENE, "t", &[]).expect("valid");
+        let bx = scene.bodies[0].boxed.as_ref().unwrap();
+        let (r, h2) = (4.0f64, 1.0f64 + 4.0);
+        // pole at the corner (0, 0): full sagitta there, 0 at the farthest corner (1, 2)
+        assert!((bx.bulge(0.0, 0.0) - (r - (r * r - h2).sqrt())).abs() < 1e-14);
+        assert!(bx.bulge(1.0, 2.0).abs() < 1e-14);
+        assert!((bx.bulge(0.6, 0.8) - ((r * r - 1.0).sqrt() - (r * r - h2).sqrt())).abs() < 1e-14);
+        // rotationally symmetric about the pole's line, ≥ 0 over the side
+        assert_eq!(bx.bulge(0.0, 1.0), bx.bulge(1.0, 0.0));
+        for i in 0..=10 {
+            for j in 0..=20 {
+                assert!(bx.bulge(0.1 * i as f64, 0.1 * j as f64) >= -1e-15);
+            }
+        }
+        // the default centre is the side's centre: the half-diagonal is the reach
+        let mut centred = bx.clone();
+        centred.sphere.as_mut().unwrap().centre = None;
+        assert_eq!(centred.sphere.as_ref().unwrap().pole(&centred), [0.5, 1.0]);
+        assert!((centred.sphere.as_ref().unwrap().reach(&centred) - 1.25f64.sqrt()).abs() < 1e-15);
+        assert!(centred.bulge(0.0, 0.0).abs() < 1e-14 && centred.bulge(1.0, 2.0).abs() < 1e-14);
+        // the built mesh: the zmin nodes lie on the sphere of radius R centred above the pole,
+        // the zmax nodes stay flat, the ones between in proportion
+        let model = crate::model::build(&LoadedScene { scene, path: "t.toml".into() }).expect("builds");
+        let zc = 1.0 + (r * r - h2).sqrt(); // the sphere's centre: the far corner at z = 1
+        let (mut low, mut top) = (0, 0);
+        for p in &model.mesh.nodes {
+            let b = (r * r - p[0] * p[0] - p[1] * p[1]).sqrt() - (r * r - h2).sqrt();
+            if p[2] < 1.0 + 1e-12 {
+                low += 1;
+                assert!(((p[0] * p[0] + p[1] * p[1] + (p[2] - zc) * (p[2] - zc)).sqrt() - r).abs() < 1e-12, "{p:?} off the sphere");
+            } else if (p[2] - 2.0).abs() < 1e-12 {
+                top += 1;
+            } else {
+                assert!((p[2] - (1.5 - b * 0.5)).abs() < 1e-12, "{p:?} not in proportion");
+            }
+        }
+        assert_eq!((low, top), (45, 45));
+    }
+
+    #[test]
+    fn sphere_is_validated() {
+        let bad = |from: &str, to: &str, key: &str| {
+            let text = SPHERE_SCENE.replace(from, to);
+            let e = parse(&text, "t", &[]).expect_err(to).to_string();
+            assert!(e.contains(key), "{to}: {e}");
+        };
+        // the radius must exceed the reach √5 of the corner pole (and the half-diagonal by default)
+        bad("radius = 4.0", "radius = 2.2", "box.sphere.radius");
+        bad("radius = 4.0, centre = [0.0, 0.0]", "radius = 1.1", "box.sphere.radius");
+        bad("side = \"zmin\"", "side = \"xmin\"", "box.sphere.side");
+        bad("nodes = [5, 9, 3],", "nodes = [5, 9, 3], cylinder = { side = \"zmin\", radius = 4.0 },", "box.sphere");
+        // a cap higher than the box
+        bad("max = [1.0, 2.0, 2.0]", "max = [1.0, 2.0, 1.2]", "bulge more than");
+        assert!(parse(&SPHERE_SCENE.replace(", centre = [0.0, 0.0]", ""), "t", &[]).is_ok());
     }
 }
