@@ -310,7 +310,11 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         contact.push((s, m));
     }
     let contact_active = scene.contact.enabled && !contact.is_empty();
-    let pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
+    let mut pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
+    if let Some(c) = pairs.as_mut() {
+        let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
+        c.void_held_tangents(|v, k| held.contains(&(v, k)));
+    }
     let mut tie_faces = Vec::new();
     for (i, t) in scene.ties.iter().enumerate() {
         let s = face_index(&mesh, &faces, format!("tie[{i}].slave"), &t.slave)?;

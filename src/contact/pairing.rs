@@ -31,6 +31,10 @@ use crate::qp::sets::{Disc, Ellipse, TangentSet};
 use crate::qp::Lambda;
 use crate::scene::{default_search_distance, ContactPair, Discretization, Friction, Tie};
 
+/// A tangent whose part along the slave node's free DOFs is at most this (of 1) is held by the
+/// Dirichlet conditions: its row is left empty ([`Contact::void_held_tangents`]).
+pub const VOID_FREE_PART: f64 = 0.05;
+
 /// Slip bound of one pair, as a nodal force.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SlipBound {
@@ -66,6 +70,10 @@ pub struct Contact {
     pub coulomb: Vec<Coefficient>,
     /// How each `[[contact.pair]]` entry was discretized.
     pub discretization: Vec<Discretization>,
+    /// Tangential rows left empty (per pair, t₁ and t₂): the slave node's DOFs along that
+    /// tangent are all prescribed (a symmetry plane's rollers), so friction along it means
+    /// nothing there ([`Contact::void_held_tangents`]). Empty: none.
+    pub void: Vec<[bool; 2]>,
 }
 
 impl Contact {
@@ -81,6 +89,28 @@ impl Contact {
     /// Row i's (node, coefficient) couples.
     pub fn row(&self, i: usize) -> &[(usize, f64)] {
         &self.coupling[i]
+    }
+
+    /// Whether tangential row `j` (0: t₁, 1: t₂) of pair `i` is left empty.
+    pub fn is_void(&self, i: usize, j: usize) -> bool {
+        self.void.get(i).is_some_and(|v| v[j])
+    }
+
+    /// Marks the tangential rows whose slave DOFs along the tangent are prescribed
+    /// (`held(node, component)`) up to a part of at most [`VOID_FREE_PART`]. Node to node such a row is zero anyway where the master node
+    /// is held alike; a mortar row keeps small coefficients on master nodes off the plane, and
+    /// neighbouring such rows that reach the same few master DOFs make B rank-deficient.
+    pub fn void_held_tangents(&mut self, held: impl Fn(usize, usize) -> bool) {
+        if !self.has_friction() {
+            return;
+        }
+        self.void = (0..self.len())
+            .map(|i| {
+                // the tangent's part along the free DOFs: under 5 % of it (a unit vector) is the
+                // averaged normal's tilt at a symmetry plane, not a direction of its own
+                [self.t1[i], self.t2[i]].map(|t| (0..3).filter(|&k| !held(self.slave[i], k)).map(|k| t[k] * t[k]).sum::<f64>().sqrt() <= VOID_FREE_PART)
+            })
+            .collect();
     }
 
     /// Whether any pair carries friction (i.e. tangential multipliers exist).

@@ -62,7 +62,10 @@ pub fn body_rows(contact: &Contact, layout: Layout, dofs: &DofMap) -> (Vec<(usiz
     for i in 0..contact.len() {
         let rows = std::iter::once((layout.normal(i), contact.normal[i]))
             .chain(layout.friction.then(|| [(layout.tangent(i, 0), contact.t1[i]), (layout.tangent(i, 1), contact.t2[i])]).into_iter().flatten());
-        for (row, dir) in rows {
+        for (k, (row, dir)) in rows.enumerate() {
+            if k > 0 && contact.is_void(i, k - 1) {
+                continue;
+            }
             for &(v, coef) in contact.row(i) {
                 add(row, v, coef, dir);
             }

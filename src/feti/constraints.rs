@@ -87,7 +87,9 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
         for i in 0..m {
             let pair_rows = std::iter::once((layout.normal(i), ct.normal[i]))
                 .chain(friction.then(|| [(layout.tangent(i, 0), ct.t1[i]), (layout.tangent(i, 1), ct.t2[i])]).into_iter().flatten());
-            for (row, dir) in pair_rows {
+            for (r, (row, dir)) in pair_rows.enumerate() {
+                // a void tangential row keeps its entries at 0 (its subdomains) and c = 0
+                let void = r > 0 && ct.is_void(i, r - 1);
                 for &(node, sign) in ct.row(i) {
                     let (s, l) = first(node);
                     for k in 0..3 {
@@ -95,6 +97,10 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
                             // a prescribed DOF's part moves to c (as on the monolithic dual); the
                             // entry stays with coefficient 0 so the row keeps its subdomains
                             let coef = sign * dir[k];
+                            if void {
+                                rows[s].push((row, 3 * l + k, 0.0));
+                                continue;
+                            }
                             match prescribed.get(&(node, k)) {
                                 Some(&(val, entry)) => {
                                     c[row] -= coef * val;

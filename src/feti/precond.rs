@@ -91,7 +91,11 @@ impl Scaling {
         }
         let mut diag = vec![0.0; n];
         let mut dense: Vec<(Vec<usize>, GroupInverse)> = Vec::new();
-        let singular = |rows: &[usize]| Error::numerical("the FETI preconditioner's scaling", format!("BBᵀ is singular on the rows {rows:?}: B lacks full row rank"));
+        let singular = |rows: &[usize]| {
+            let shown: Vec<String> = rows.iter().take(8).map(|r| r.to_string()).collect();
+            let more = if rows.len() > 8 { format!(", … ({} rows)", rows.len()) } else { String::new() };
+            Error::numerical("the FETI preconditioner's scaling", format!("BBᵀ is singular on the rows [{}{more}]: B lacks full row rank", shown.join(", ")))
+        };
         for rows in members.into_values() {
             let k = rows.len();
             if k > DENSE_MAX {

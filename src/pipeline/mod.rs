@@ -819,12 +819,13 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
         let _ = writeln!(
             s,
-            "contact: m = {} pairs ({}), Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential",
+            "contact: m = {} pairs ({}), Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential ({} void: held by Dirichlet conditions)",
             c.len(),
             c.discretization.iter().map(|d| format!("{d:?}").to_lowercase().replace("nodetonode", "node-to-node")).collect::<Vec<_>>().join(", "),
             c.area.iter().sum::<f64>(),
             c.len(),
-            tangential
+            tangential,
+            c.void.iter().flatten().filter(|&&v| v).count()
         );
     }
     if !model.ties.is_empty() {
