@@ -174,3 +174,74 @@ fn non_matching_tfeti_is_bitwise_identical_on_1_2_3_ranks() {
         assert!(r.1.iter().zip(&runs[0].1).all(|(a, b)| a.to_bits() == b.to_bits()), "contact pressure differs");
     }
 }
+
+/// The shear patch test: ν = 0, σ_zz = −p and σ_xz = τ uniform in both blocks (the exact
+/// u = (τz/G, 0, −pz/E) is linear: every mesh holds it), the lower block clamped at z = 0, the
+/// tractions that field puts on the faces applied, and Tresca friction g = 1 > τ = 0.3 on the
+/// non-matching interface: every slave node sticks and carries the pressure p and the shear τ
+/// exactly (to 1e-8), the stress is constant.
+#[test]
+fn a_uniform_shear_below_the_slip_limit_is_transmitted_exactly() {
+    let dir = tmpdir("shear");
+    let (p, tau): (f64, f64) = (1.0, 0.3);
+    for (name, up, cells) in [("hex-on-hex", [5, 4, 4], "hex8"), ("tet-on-hex", [4, 3, 4], "tet4")] {
+        let scene = format!(
+            r#"
+[[material]]
+name = "m"
+E = 1000.0
+nu = 0.0
+[[body]]
+name = "upper"
+material = "m"
+box = {{ min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = {up:?}, cells = "{cells}" }}
+[[body]]
+name = "lower"
+material = "m"
+box = {{ min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [7, 5, 6] }}
+[[dirichlet]]
+face = "lower.zmin"
+[[traction]]
+face = "upper.zmax"
+p = [{tau}, 0.0, -{p}]
+[[traction]]
+face = "upper.xmax"
+p = [0.0, 0.0, {tau}]
+[[traction]]
+face = "upper.xmin"
+p = [0.0, 0.0, -{tau}]
+[[traction]]
+face = "lower.xmax"
+p = [0.0, 0.0, {tau}]
+[[traction]]
+face = "lower.xmin"
+p = [0.0, 0.0, -{tau}]
+[[contact.pair]]
+slave = "upper.zmin"
+master = "lower.zmax"
+friction = {{ type = "tresca", g = 1.0 }}
+[solver]
+eps = 1e-10
+"#
+        );
+        let path = write(&dir, &scene);
+        let out = dir.join(format!("{name}.h5"));
+        solve(&path, &[], &out);
+        let data = fields(&out);
+        let vm = f64_field(&data, "von_mises");
+        let exact = (p * p + 3.0 * tau * tau).sqrt();
+        let worst = vm.iter().map(|v| (v - exact).abs()).fold(0.0f64, f64::max);
+        assert!(worst <= 1e-8 * exact, "{name}: von Mises off {exact} by {worst:.2e}");
+        let status = i32_field(&data, "contact_status");
+        let pressure = f64_field(&data, "contact_pressure");
+        let traction = f64_field(&data, "contact_traction");
+        let slave: Vec<usize> = (0..status.len()).filter(|&v| status[v] != 0).collect();
+        assert!(!slave.is_empty());
+        for &v in &slave {
+            assert_eq!(status[v], tresca_feti::contact::state::STICK, "{name}: node {v} does not stick");
+            assert!((pressure[v] - p).abs() <= 1e-8, "{name}: pressure {} at node {v}", pressure[v]);
+            let t = &traction[3 * v..3 * v + 3];
+            assert!((t[0].abs() - tau).abs() <= 1e-8 && t[1].abs() <= 1e-8 && t[2].abs() <= 1e-8, "{name}: traction {t:?} at node {v}");
+        }
+    }
+}
