@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{fields, mpirun, root, tmpdir};
+use common::{f64_field, fields, i32_field, mpirun, root, tmpdir};
 use tresca_feti::output::{OutputData, Values};
 
 /// One `mpirun -n ranks tresca-feti solve run/seed.toml --set …` into `dir/name.h5`; returns its
@@ -30,21 +30,7 @@ fn line<'a>(stdout: &'a str, prefix: &str) -> &'a str {
     stdout.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no `{prefix}` line in: {stdout}"))
 }
 
-fn f64_field<'a>(data: &'a OutputData, name: &str) -> &'a [f64] {
-    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
-    match &f.values {
-        Values::F64(v) => v,
-        Values::I32(_) => panic!("field {name} is not floating point"),
-    }
-}
 
-fn i32_field<'a>(data: &'a OutputData, name: &str) -> &'a [i32] {
-    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
-    match &f.values {
-        Values::I32(v) => v,
-        Values::F64(_) => panic!("field {name} is not integer"),
-    }
-}
 
 /// max|a − b| / max|a|.
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {

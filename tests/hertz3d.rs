@@ -86,10 +86,11 @@ fn cattaneo_mindlin3d_stick_radius_on_non_matching_meshes() {
 }
 
 /// Friction on a quarter model by TFETI: the symmetry planes' rollers hold the slave nodes
-/// there along one tangent, whose mortar rows (with small entries on master nodes off the plane)
-/// made B rank-deficient — "the FETI preconditioner's scaling: BBᵀ is singular" before those
-/// rows were left empty. Tresca on 2 subdomains per body solves, and the same scene on the
-/// monolithic dual gives the same u.
+/// there along one tangent, whose mortar rows (held entries moved to c, small entries left on
+/// master nodes off the plane) make B rank-deficient — "the FETI preconditioner's scaling: BBᵀ
+/// is singular" before its semi-definite blocks were shifted (`feti::precond::REGULARIZATION`).
+/// Tresca on 2 subdomains per body solves, and the same scene on the monolithic dual gives the
+/// same u.
 #[test]
 fn tresca_on_a_quarter_model_by_tfeti_keeps_b_of_full_rank() {
     let scene = root().join("run/validation/hertz3d.toml");

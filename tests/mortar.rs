@@ -5,36 +5,21 @@
 
 mod common;
 
-use common::{fields, mpirun, root, solve, tmpdir};
+use common::{f64_field, fields, i32_field, mpirun, root, solve, tmpdir};
 use tresca_feti::output::{OutputData, Values};
 
-fn f64_field<'a>(data: &'a OutputData, name: &str) -> &'a [f64] {
-    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
-    match &f.values {
-        Values::F64(v) => v,
-        Values::I32(_) => panic!("field {name} is not floating point"),
-    }
-}
 
-fn i32_field<'a>(data: &'a OutputData, name: &str) -> &'a [i32] {
-    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
-    match &f.values {
-        Values::I32(v) => v,
-        Values::F64(_) => panic!("field {name} is not integer"),
-    }
-}
 
-/// Two blocks of one material stacked at z = 1 with different meshes (upper `up` nodes per
-/// direction and cells `cells`, lower 7 × 5 × 6 hexahedra), on rollers (each body's xmin, ymin
-/// and the lower zmin held normally), pressed by p = 1 on top, joined by `interface` (a contact
-/// pair or a tie, TOML). The exact solution is uniaxial: σ_zz = −1 everywhere.
-fn stack(up: [usize; 3], cells: &str, interface: &str) -> String {
+/// Two blocks of one material (E = 1000, Poisson's ratio `nu`) stacked at z = 1 with different
+/// meshes (upper `up` nodes per direction and cells `cells`, lower 7 × 5 × 6 hexahedra), with
+/// the boundary conditions and interface `rest` (TOML), solved to ε = 1e-10.
+fn blocks(up: [usize; 3], cells: &str, nu: f64, rest: &str) -> String {
     format!(
         r#"
 [[material]]
 name = "m"
 E = 1000.0
-nu = 0.3
+nu = {nu:?}
 [[body]]
 name = "upper"
 material = "m"
@@ -43,29 +28,23 @@ box = {{ min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = {up:?}, cells = "
 name = "lower"
 material = "m"
 box = {{ min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [7, 5, 6] }}
-[[dirichlet]]
-face = "lower.zmin"
-components = ["z"]
-[[dirichlet]]
-face = "lower.xmin"
-components = ["x"]
-[[dirichlet]]
-face = "lower.ymin"
-components = ["y"]
-[[dirichlet]]
-face = "upper.xmin"
-components = ["x"]
-[[dirichlet]]
-face = "upper.ymin"
-components = ["y"]
-[[traction]]
-face = "upper.zmax"
-p = [0.0, 0.0, -1.0]
-{interface}
+{rest}
 [solver]
 eps = 1e-10
 "#
     )
+}
+
+/// [`blocks`] on rollers (each body's xmin, ymin and the lower zmin held normally), pressed by
+/// p = 1 on top, joined by `interface` (a contact pair or a tie). The exact solution is
+/// uniaxial: σ_zz = −1 everywhere.
+fn stack(up: [usize; 3], cells: &str, interface: &str) -> String {
+    let mut rest = String::new();
+    for (face, c) in [("lower.zmin", "z"), ("lower.xmin", "x"), ("lower.ymin", "y"), ("upper.xmin", "x"), ("upper.ymin", "y")] {
+        rest += &format!("[[dirichlet]]\nface = \"{face}\"\ncomponents = [\"{c}\"]\n");
+    }
+    rest += "[[traction]]\nface = \"upper.zmax\"\np = [0.0, 0.0, -1.0]\n";
+    blocks(up, cells, 0.3, &(rest + interface))
 }
 
 const CONTACT: &str = "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n";
@@ -185,45 +164,13 @@ fn a_uniform_shear_below_the_slip_limit_is_transmitted_exactly() {
     let dir = tmpdir("shear");
     let (p, tau): (f64, f64) = (1.0, 0.3);
     for (name, up, cells) in [("hex-on-hex", [5, 4, 4], "hex8"), ("tet-on-hex", [4, 3, 4], "tet4")] {
-        let scene = format!(
-            r#"
-[[material]]
-name = "m"
-E = 1000.0
-nu = 0.0
-[[body]]
-name = "upper"
-material = "m"
-box = {{ min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = {up:?}, cells = "{cells}" }}
-[[body]]
-name = "lower"
-material = "m"
-box = {{ min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [7, 5, 6] }}
-[[dirichlet]]
-face = "lower.zmin"
-[[traction]]
-face = "upper.zmax"
-p = [{tau}, 0.0, -{p}]
-[[traction]]
-face = "upper.xmax"
-p = [0.0, 0.0, {tau}]
-[[traction]]
-face = "upper.xmin"
-p = [0.0, 0.0, -{tau}]
-[[traction]]
-face = "lower.xmax"
-p = [0.0, 0.0, {tau}]
-[[traction]]
-face = "lower.xmin"
-p = [0.0, 0.0, -{tau}]
-[[contact.pair]]
-slave = "upper.zmin"
-master = "lower.zmax"
-friction = {{ type = "tresca", g = 1.0 }}
-[solver]
-eps = 1e-10
-"#
-        );
+        let mut rest = String::from("[[dirichlet]]\nface = \"lower.zmin\"\n");
+        for (face, t) in [("upper.zmax", [tau, 0.0, -p]), ("upper.xmax", [0.0, 0.0, tau]), ("upper.xmin", [0.0, 0.0, -tau]), ("lower.xmax", [0.0, 0.0, tau]), ("lower.xmin", [0.0, 0.0, -tau])] {
+            rest += &format!("[[traction]]\nface = \"{face}\"\np = {t:?}\n");
+        }
+        rest += CONTACT;
+        rest += "friction = { type = \"tresca\", g = 1.0 }\n";
+        let scene = blocks(up, cells, 0.0, &rest);
         let path = write(&dir, &scene);
         let out = dir.join(format!("{name}.h5"));
         solve(&path, &[], &out);

@@ -96,10 +96,14 @@ impl Contact {
         self.void.get(i).is_some_and(|v| v[j])
     }
 
-    /// Marks the tangential rows whose slave DOFs along the tangent are prescribed
-    /// (`held(node, component)`) up to a part of at most [`VOID_FREE_PART`]. Node to node such a row is zero anyway where the master node
-    /// is held alike; a mortar row keeps small coefficients on master nodes off the plane, and
-    /// neighbouring such rows that reach the same few master DOFs make B rank-deficient.
+    /// Marks the tangential rows held on both sides (`held(node, component)`): the slave
+    /// node's DOFs along the tangent up to a part of [`VOID_FREE_PART`], and most of the master
+    /// side (the free part of Σ|c|·t over the master nodes at most half of Σ|c|) — a symmetry
+    /// plane's rollers, where friction along the plane's normal is zero by symmetry. Node to
+    /// node such a row is zero anyway; a mortar row keeps small coefficients on master nodes off
+    /// the plane, and neighbouring rows that reach the same few master DOFs make B
+    /// rank-deficient. A held slave node over a free master node (a clamped face's edge on the
+    /// contact) keeps its rows: friction acts on the master there.
     pub fn void_held_tangents(&mut self, held: impl Fn(usize, usize) -> bool) {
         if !self.has_friction() {
             return;
@@ -108,7 +112,12 @@ impl Contact {
             .map(|i| {
                 // the tangent's part along the free DOFs: under 5 % of it (a unit vector) is the
                 // averaged normal's tilt at a symmetry plane, not a direction of its own
-                [self.t1[i], self.t2[i]].map(|t| (0..3).filter(|&k| !held(self.slave[i], k)).map(|k| t[k] * t[k]).sum::<f64>().sqrt() <= VOID_FREE_PART)
+                let free = |v: usize, t: [f64; 3]| (0..3).filter(|&k| !held(v, k)).map(|k| t[k] * t[k]).sum::<f64>().sqrt();
+                [self.t1[i], self.t2[i]].map(|t| {
+                    let master = self.coupling[i].iter().filter(|e| e.0 != self.slave[i]);
+                    let (total, loose) = master.fold((0.0, 0.0), |(a, b), &(v, c)| (a + c.abs(), b + c.abs() * free(v, t)));
+                    free(self.slave[i], t) <= VOID_FREE_PART && loose <= 0.5 * total
+                })
             })
             .collect();
     }

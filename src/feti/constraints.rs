@@ -65,6 +65,20 @@ impl Constraints {
     }
 }
 
+/// One entry `coef` of `row` on local DOF `dof` of a subdomain (`rows`), for DOF (node, k): a
+/// prescribed DOF's part moves to c (c −= coef · value, recorded in `moved`) and the entry stays
+/// with coefficient 0, so the row keeps its subdomains.
+fn put(rows: &mut Vec<(usize, usize, f64)>, c: &mut [f64], moved: &mut Vec<(usize, usize, f64)>, prescribed: &std::collections::HashMap<(usize, usize), (f64, usize)>, (row, dof): (usize, usize), at: (usize, usize), coef: f64) {
+    match prescribed.get(&at) {
+        Some(&(val, entry)) => {
+            c[row] -= coef * val;
+            moved.push((row, entry, coef));
+            rows.push((row, dof, 0.0));
+        }
+        None => rows.push((row, dof, coef)),
+    }
+}
+
 /// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a
 /// later entry for the same DOF winning; `contact` the pairs (if contact is on); `eliminated`
 /// per subdomain the local DOFs held inside it (sorted; empty: all Dirichlet rows).
@@ -101,14 +115,7 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
                                 rows[s].push((row, 3 * l + k, 0.0));
                                 continue;
                             }
-                            match prescribed.get(&(node, k)) {
-                                Some(&(val, entry)) => {
-                                    c[row] -= coef * val;
-                                    c_moved.push((row, entry, coef));
-                                    rows[s].push((row, 3 * l + k, 0.0));
-                                }
-                                None => rows[s].push((row, 3 * l + k, coef)),
-                            }
+                            put(&mut rows[s], &mut c, &mut c_moved, &prescribed, (row, 3 * l + k), (node, k), coef);
                         }
                     }
                 }
@@ -165,14 +172,7 @@ pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Opti
             c.push(0.0);
             for &(node, coef) in coupling {
                 let (s, l) = d.copies[node][0];
-                match prescribed.get(&(node, k)) {
-                    Some(&(val, entry)) => {
-                        c[row] -= coef * val;
-                        c_moved.push((row, entry, coef));
-                        rows[s].push((row, 3 * l + k, 0.0));
-                    }
-                    None => rows[s].push((row, 3 * l + k, coef)),
-                }
+                put(&mut rows[s], &mut c, &mut c_moved, &prescribed, (row, 3 * l + k), (node, k), coef);
             }
             tie_rows += 1;
         }

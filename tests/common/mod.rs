@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use tresca_feti::output::{self, OutputData};
+use tresca_feti::output::{self, OutputData, Values};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
 
@@ -80,4 +80,22 @@ pub fn assert_clean_failure(name: &str, scene: &str, extra: &[&str], expect: &[&
     }
     let left: Vec<_> = std::fs::read_dir(dir.join("out")).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
     assert!(left.is_empty(), "{name}: files left behind: {left:?}");
+}
+
+/// The values of a floating-point field of a result; panics naming a missing or integer field.
+pub fn f64_field<'a>(data: &'a OutputData, name: &str) -> &'a [f64] {
+    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
+    match &f.values {
+        Values::F64(v) => v,
+        Values::I32(_) => panic!("field {name} is not floating point"),
+    }
+}
+
+/// The values of an integer field of a result.
+pub fn i32_field<'a>(data: &'a OutputData, name: &str) -> &'a [i32] {
+    let f = data.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
+    match &f.values {
+        Values::I32(v) => v,
+        Values::F64(_) => panic!("field {name} is not integer"),
+    }
 }
