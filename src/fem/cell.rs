@@ -8,7 +8,9 @@ use super::tet::{tet10_min_jacobian, tet10_stiffness, tet10_strain, tet4_gradien
 use super::wedge::{wedge6_min_jacobian, wedge6_stiffness, wedge6_strain};
 use crate::mesh::{CellKind, FacetKind};
 
-/// An element stiffness, 3n × 3n for a cell of n nodes (DOF order 3a + i).
+/// An element stiffness, 3n × 3n for a cell of n nodes (DOF order 3a + i), on the stack (one
+/// per element in the assembly loop: no allocation).
+#[allow(clippy::large_enum_variant)]
 pub enum CellMatrix {
     Hex8([[f64; 24]; 24]),
     Tet4([[f64; 12]; 12]),

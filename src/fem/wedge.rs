@@ -94,9 +94,9 @@ mod tests {
         let x = skewed();
         let k = wedge6_stiffness(&x, Lame::from_young_poisson(1.0, 0.3));
         let m = Mat::<f64>::from_fn(18, 18, |i, j| k[i][j]);
-        for i in 0..18 {
-            for j in 0..18 {
-                assert!((k[i][j] - k[j][i]).abs() < 1e-14);
+        for (i, row) in k.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                assert!((v - k[j][i]).abs() < 1e-14);
             }
         }
         let ev = m.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();

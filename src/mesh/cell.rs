@@ -45,6 +45,7 @@ impl CellKind {
     pub const ALL: [CellKind; 4] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6];
 
     /// Number of nodes.
+    #[allow(clippy::len_without_is_empty)]
     pub const fn len(self) -> usize {
         match self {
             CellKind::Hex8 => 8,
@@ -122,6 +123,8 @@ impl CellKind {
 }
 
 impl FacetKind {
+    /// Number of nodes.
+    #[allow(clippy::len_without_is_empty)]
     pub const fn len(self) -> usize {
         match self {
             FacetKind::Tri3 => 3,
