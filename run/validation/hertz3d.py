@@ -39,8 +39,7 @@ def level_sets(n, cap, friction, mu):
     if cap != "hex8":
         sets.append(f'body.0.box.cells="{cap}"')
     if friction == "coulomb":
-        # the fixed point: the Newton method on the Coulomb law does not converge here (BiCGSTAB overflow)
-        sets += [f'contact.pair.0.friction={{type="coulomb", mu={mu}}}', 'solver.coulomb="fixed-point"']
+        sets += [f'contact.pair.0.friction={{type="coulomb", mu={mu}}}']
     return sets
 
 
