@@ -192,3 +192,21 @@ fn a_uniform_shear_below_the_slip_limit_is_transmitted_exactly() {
         }
     }
 }
+
+/// Tied non-matching blocks by TFETI (2 subdomains per body, tie rows crossing subdomains and
+/// ranks): 1, 2 and 3 ranks give bitwise the same displacement.
+#[test]
+fn tied_blocks_are_bitwise_identical_on_1_2_3_ranks() {
+    let dir = tmpdir("tie-ranks");
+    let path = write(&dir, &stack([5, 4, 4], "hex8", "[[tie]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n"));
+    let mut runs = Vec::new();
+    for ranks in [1, 2, 3] {
+        let out = dir.join(format!("r{ranks}.h5"));
+        let o = mpirun(ranks, &["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap(), "--set", "decomposition.subdomains=2"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", String::from_utf8_lossy(&o.stderr));
+        runs.push(f64_field(&fields(&out), "displacement").to_vec());
+    }
+    for r in &runs[1..] {
+        assert!(r.iter().zip(&runs[0]).all(|(a, b)| a.to_bits() == b.to_bits()), "displacement differs");
+    }
+}
