@@ -1,4 +1,5 @@
-//! Contact: node-to-node pairing of slave and master faces, with the local frames, nodal areas,
+//! Contact: the rows of slave and master faces — node to node or by dual mortar — with the local
+//! frames, nodal areas,
 //! slip bounds and initial gaps that define the contact rows N, T of B and the set Λ
 //! ([`pairing`]), whether they can hold the bodies held by contact alone under the load
 //! ([`hold`]), and the contact state recovered from the dual solution ([`state`]: open /

@@ -1,6 +1,9 @@
-//! Node-to-node contact pairing.
+//! Contact rows of each `[[contact.pair]]` (and the equality rows of each `[[tie]]`): node to
+//! node where the faces match, dual mortar ([`super::mortar`]) otherwise or when asked; each
+//! row is a coupling list Σ c·u_node (node to node: [(slave, 1), (master, −1)]) with the frame,
+//! area, gap and slip bound of its slave node.
 //!
-//! For each `[[contact.pair]]`, every node of the slave face is matched with the master node that
+//! Node to node: every node of the slave face is matched with the master node that
 //! has the same position in the contact plane (distance measured after projecting out the slave
 //! normal, within `tolerance`; failing that, the master node whose normal line passes through
 //! the slave node, so a curved slave face pairs with a flat master); the distance along the
