@@ -51,13 +51,7 @@ pub struct MeshSize {
 impl MeshSize {
     /// "1000 hexahedra", "24 4-node tetrahedra and 8 wedges".
     pub fn describe(&self) -> String {
-        let parts: Vec<String> =
-            crate::mesh::CellKind::ALL.iter().zip(self.by_kind).filter(|(_, n)| *n > 0).map(|(k, n)| format!("{n} {}", k.plural())).collect();
-        if parts.is_empty() {
-            "no cells".into()
-        } else {
-            parts.join(" and ")
-        }
+        crate::mesh::describe_counts(crate::mesh::CellKind::ALL.iter().zip(self.by_kind).map(|(k, n)| (n, k.plural())), "no cells")
     }
 }
 

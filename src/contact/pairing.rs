@@ -237,12 +237,12 @@ enum NodeToNode {
     Fail(Error),
 }
 
-/// The bounding box diagonal of the nodes `v`.
-fn diagonal(mesh: &Mesh, v: &[usize]) -> f64 {
-    let (lo, hi) = v.iter().map(|&i| mesh.nodes[i]).fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
+/// The bounding-box diagonal of `points` (0 for none).
+fn diagonal<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> f64 {
+    let (lo, hi) = points.fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
         (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d])))
     });
-    if v.is_empty() {
+    if lo[0] > hi[0] {
         0.0
     } else {
         dot(sub(hi, lo), sub(hi, lo)).sqrt()
@@ -344,7 +344,7 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64)
 /// The rows of interface `slave`–`master` under `discretization` (None: node-to-node where the
 /// faces match, mortar otherwise), and the discretization taken.
 fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>) -> Result<(Vec<RowGeom>, Discretization)> {
-    let search = || search.unwrap_or_else(|| default_search_distance(diagonal(mesh, &slave.nodes())));
+    let search = || search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
     let mortar = || Ok((mortar_rows(mesh, key, slave, master, search())?, Discretization::Mortar));
     // a quadratic facet's corner nodes carry no area (∫ N dA = 0 on a tri6's corners): nodal
     // pairs there would hold no force; the mortar's modified dual basis gives every node one
@@ -373,7 +373,7 @@ fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64,
 /// Pairs the faces of every contact entry of the scene. `faces[k]` = (slave, master) indices into
 /// `mesh.faces` for `pairs[k]`.
 pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Result<Contact> {
-    let size = diagonal(mesh, &(0..mesh.nodes.len()).collect::<Vec<_>>()).max(f64::MIN_POSITIVE);
+    let size = diagonal(mesh.nodes.iter()).max(f64::MIN_POSITIVE);
     let mut c = Contact::default();
     // (slave, master) node couples, unordered, and the entry that made each
     let mut couples: HashMap<(usize, usize), usize> = HashMap::new();
@@ -460,7 +460,7 @@ impl Tied {
 
 /// The rows of every `[[tie]]` (mortar on any meshes; node-to-node where the faces match).
 pub fn tie(mesh: &Mesh, ties: &[Tie], faces: &[(usize, usize)]) -> Result<Tied> {
-    let size = diagonal(mesh, &(0..mesh.nodes.len()).collect::<Vec<_>>()).max(f64::MIN_POSITIVE);
+    let size = diagonal(mesh.nodes.iter()).max(f64::MIN_POSITIVE);
     let mut t = Tied::default();
     for (k, (p, &(sf, mf))) in ties.iter().zip(faces).enumerate() {
         let key = format!("tie[{k}]");

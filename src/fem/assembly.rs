@@ -9,7 +9,7 @@ use super::cell::{cell_min_jacobian, cell_stiffness, facet_nodal_areas};
 use super::material::Lame;
 use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;
-use crate::mesh::{try_vec, Cell, Face, Mesh, MAX_CELL_DOFS};
+use crate::mesh::{try_vec, Cell, Face, Mesh, MAX_CELL_DOFS, MAX_CELL_NODES};
 
 /// Marks a constrained DOF in [`DofMap::free`].
 pub const FIXED: usize = usize::MAX;
@@ -198,13 +198,14 @@ pub fn assemble_elements(
     debug_assert_eq!(row_idx.len(), nnz);
     let mut k = SymCsc { n: dofs.nfree, col_ptr, row_idx, values };
     let mut f = dofs.restrict(loads);
+    let mut xbuf = [[0.0; 3]; MAX_CELL_NODES];
     for e in elems {
         let cell = &cells[e];
-        let x = cell.coords(nodes);
-        if cell_min_jacobian(cell.kind, &x) <= 0.0 {
+        let x = cell.coords_in(nodes, &mut xbuf);
+        if cell_min_jacobian(cell.kind, x) <= 0.0 {
             return Err(AssemblyError::Element(e, "inverted or degenerate (non-positive Jacobian)"));
         }
-        let ke = cell_stiffness(cell.kind, &x, lame);
+        let ke = cell_stiffness(cell.kind, x, lame);
         let (nd, ke) = ke.rows();
         let mut ld = [0usize; MAX_CELL_DOFS];
         for (r, d) in ld[..nd].iter_mut().enumerate() {

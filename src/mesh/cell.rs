@@ -203,6 +203,15 @@ impl Cell {
     pub fn coords(&self, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
         self.nodes().iter().map(|&v| x[v]).collect()
     }
+
+    /// The coordinates of its nodes in `buf` (no allocation: the assembly loop).
+    pub fn coords_in<'b>(&self, x: &[[f64; 3]], buf: &'b mut [[f64; 3]; MAX_CELL_NODES]) -> &'b [[f64; 3]] {
+        let n = self.kind.len();
+        for (b, &v) in buf[..n].iter_mut().zip(self.nodes()) {
+            *b = x[v];
+        }
+        &buf[..n]
+    }
 }
 
 /// One facet of a named face: the cell it bounds, its type and its nodes, corners ordered so

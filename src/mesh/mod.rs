@@ -15,7 +15,7 @@ use std::ops::Range;
 
 use crate::error::{Error, Result};
 
-pub use cell::{Cell, CellKind, Facet, FacetKind, MAX_CELL_DOFS};
+pub use cell::{Cell, CellKind, Facet, FacetKind, MAX_CELL_DOFS, MAX_CELL_NODES};
 
 /// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
 /// (instead of the allocator's abort).
@@ -148,28 +148,24 @@ pub fn cell_counts(cells: &[Cell]) -> Vec<(CellKind, usize)> {
     CellKind::ALL.iter().zip(n).filter(|(_, k)| *k > 0).map(|(&t, k)| (t, k)).collect()
 }
 
+/// "1000 hexahedra", "24 4-node tetrahedra and 8 wedges" from (count, plural name) pairs (zero
+/// counts left out); `none` when all are zero.
+pub fn describe_counts<'a>(counts: impl IntoIterator<Item = (usize, &'a str)>, none: &str) -> String {
+    let parts: Vec<String> = counts.into_iter().filter(|(n, _)| *n > 0).map(|(n, name)| format!("{n} {name}")).collect();
+    if parts.is_empty() {
+        none.into()
+    } else {
+        parts.join(" and ")
+    }
+}
+
 /// "1000 hexahedra", "24 4-node tetrahedra and 8 wedges".
 pub fn describe_cells(cells: &[Cell]) -> String {
-    let parts: Vec<String> = cell_counts(cells).iter().map(|(t, k)| format!("{k} {}", t.plural())).collect();
-    match parts.len() {
-        0 => "no cells".into(),
-        _ => parts.join(" and "),
-    }
+    describe_counts(cell_counts(cells).into_iter().map(|(t, k)| (k, t.plural())), "no cells")
 }
 
 /// "64 quadrilaterals", "32 triangles and 8 quadrilaterals".
 pub fn describe_facets(facets: &[Facet]) -> String {
     let kinds = [FacetKind::Tri3, FacetKind::Quad4, FacetKind::Tri6, FacetKind::Quad8];
-    let parts: Vec<String> = kinds
-        .iter()
-        .filter_map(|&k| {
-            let n = facets.iter().filter(|f| f.kind == k).count();
-            (n > 0).then(|| format!("{n} {}", k.plural()))
-        })
-        .collect();
-    if parts.is_empty() {
-        "no facets".into()
-    } else {
-        parts.join(" and ")
-    }
+    describe_counts(kinds.map(|k| (facets.iter().filter(|f| f.kind == k).count(), k.plural())), "no facets")
 }
