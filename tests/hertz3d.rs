@@ -61,6 +61,34 @@ fn hertz3d_peak_pressure_and_contact_radius_on_non_matching_meshes() {
     assert!(nodes.iter().all(|n| n.2 != STICK && n.4 == 0.0));
 }
 
+/// The same on a linear-tetrahedral cap (Kuhn split of the 33 × 33 × 17 grid, a/h ≈ 8) on the
+/// hexahedral flat (28 nodes per edge): the peak (largest nodal) pressure within 2 % of p₀ and
+/// the contact radius within one element. The pole itself reads ≈ 5 % low: on the symmetry planes
+/// the quarter model's Kuhn mesh is not symmetric, and the nodes there read ≈ 3 % below the
+/// profile at every level, while the nodes off the planes converge to it (run/validation/hertz3d.py).
+#[test]
+fn hertz3d_on_a_tetrahedral_cap() {
+    let scene = root().join("run/validation/hertz3d.toml");
+    let dir = tmpdir("hertz3d-tet4");
+    let out = dir.join("t.h5");
+    let s = solve(&scene, &["body.0.box.nodes=[33, 33, 17]", "body.1.box.nodes=[28, 28, 15]", "body.0.box.cells=\"tet4\""], &out);
+    let h = 1.0 / 32.0;
+    let force = 4.0 * s.report.contact.as_ref().unwrap().total_force_on_slave[2];
+    let (a, p0) = hertz(force);
+    let nodes = slave_nodes(&out);
+    let peak = nodes.iter().map(|n| n.3).fold(0.0f64, f64::max);
+    let err = (peak - p0) / p0;
+    let mut axis: Vec<_> = nodes.iter().filter(|n| n.1 == 0.0).collect();
+    axis.sort_by(|u, v| u.0.total_cmp(&v.0));
+    let last = axis.iter().rposition(|n| n.2 != OPEN).unwrap();
+    let mid = 0.5 * (axis[last].0 + axis[last + 1].0);
+    eprintln!("tet4 cap: a = {a:.4} ({:.2} h), p0 = {p0:.2}, peak {peak:.2} ({:+.2} %), contact radius midpoint {:+.2} h from a", a / h, 100.0 * err, (mid - a) / h);
+    assert!(a > 7.0 * h && a < 9.0 * h, "a = {a} is not the sized a ≈ 8h");
+    // measured +1.76 % at this level
+    assert!(err.abs() <= 0.02, "peak pressure {peak:.2} vs Hertz p0 = {p0:.2}: {:+.2} %", 100.0 * err);
+    assert!((mid - a).abs() <= h, "contact radius {mid:.4} vs a = {a:.4}: more than one element (h = {h})");
+}
+
 #[test]
 fn cattaneo_mindlin3d_stick_radius_on_non_matching_meshes() {
     let scene = root().join("run/validation/cattaneo_mindlin3d.toml");

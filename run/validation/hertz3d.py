@@ -7,7 +7,9 @@ Solves the scene at each refinement (the cap with n×n×(n+1)/2 nodes, the flat 
 different count, ≈ 0.85 n, so the contact faces never match), or reads the given results, and
 prints per level: the measured quarter force F (×4 for the full sphere), Hertz's
 a = (3·4F·R/(4E*))^{1/3} and p₀ = 3·4F/(2πa²) (identical materials: 1/E* = 2(1 − ν²)/E), the
-pressure at the pole node and its relative error, the contact radius along the x axis (last
+pressure at the pole node, the peak (largest nodal) pressure and their relative errors, the
+mean relative error (in p₀) of the nodes within a/2 of the pole off and on the symmetry planes
+(a mesh that is not symmetric about them, Kuhn tetrahedra, reads lower there), the contact radius along the x axis (last
 closed / first open node, their midpoint against a in element sizes h), the relative L2 error of
 the nodal pressure against p₀√(1 − r²/a²) over the slave nodes, and the observed rates.
 """
@@ -94,19 +96,25 @@ def analyse(path):
     ph = p0 * np.sqrt(np.clip(1 - r**2 / a**2, 0, None))
     l2 = np.linalg.norm(p[sel] - ph) / np.linalg.norm(ph)
     rc, ro = axis_radius(x, st, sel, h)
-    out = dict(F=F, a=a, p0=p0, h=h, ppole=p[pole], rc=rc, ro=ro, l2=l2, closed=int((st > 1).sum()), x=x, st=st, p=p, q=q, rep=rep, sel=sel)
+    # the nodes within a/2 of the pole, off and on the symmetry planes x = 0, y = 0
+    ids = np.where(sel)[0]
+    inner = np.hypot(x[ids, 0], x[ids, 1]) < 0.5 * a
+    plane = (np.abs(x[ids, 0]) < 1e-9 * h) | (np.abs(x[ids, 1]) < 1e-9 * h)
+    rel = (p[ids] - ph) / p0
+    out = dict(F=F, a=a, p0=p0, h=h, ppole=p[pole], pmax=p[sel].max(), inner=rel[inner & ~plane].mean(), plane=rel[inner & plane].mean(), rc=rc, ro=ro, l2=l2, closed=int((st > 1).sum()), x=x, st=st, p=p, q=q, rep=rep, sel=sel)
     out["tang"] = None if q is None else np.linalg.norm(q[sel], axis=1).max()
     return out
 
 
 def table(results, label):
     print(f"\n{label}")
-    print(f"{'h':>8} {'a/h':>5} {'4F':>9} {'a':>7} {'p0':>9} {'p(pole)':>9} {'err':>7} {'last closed':>11} {'first open':>10} {'(mid-a)/h':>9} {'L2 err':>7} {'rate':>5}")
+    print(f"{'h':>8} {'a/h':>5} {'4F':>9} {'a':>7} {'p0':>9} {'p(pole)':>9} {'err':>7} {'max p':>9} {'err':>7} {'<a/2':>7} {'planes':>7} {'last closed':>11} {'first open':>10} {'(mid-a)/h':>9} {'L2 err':>7} {'rate':>5}")
     prev = None
     for r in results:
         mid = 0.5 * (r["rc"] + r["ro"])
         rate = "" if prev is None else f"{math.log(prev['l2'] / r['l2']) / math.log(prev['h'] / r['h']):5.2f}"
         print(f"{r['h']:8.5f} {r['a'] / r['h']:5.2f} {r['F']:9.3f} {r['a']:7.4f} {r['p0']:9.2f} {r['ppole']:9.2f} {(r['ppole'] - r['p0']) / r['p0']:+7.2%} "
+              f"{r['pmax']:9.2f} {(r['pmax'] - r['p0']) / r['p0']:+7.2%} {r['inner']:+7.2%} {r['plane']:+7.2%} "
               f"{r['rc']:11.4f} {r['ro']:10.4f} {(mid - r['a']) / r['h']:+9.2f} {r['l2']:7.4f} {rate:>5}")
         prev = r
 
