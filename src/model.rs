@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact, SlipBound, Tied};
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
 use crate::fem::material::Lame;

@@ -237,7 +237,7 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     params.common.coulomb = qp::params::CoulombSolve::FixedPoint;
     let zero = vec![0.0; dual.dim()];
     let coulomb = qp::solve_friction(&Qp::new(&dual, &b, &set), Some(&contact.coulomb), &zero, &params, &mut Silent).unwrap();
-    let fixed = qp::coulomb::bounds(&set, &contact.coulomb, &coulomb.lambda);
+    let fixed = qp::cone::bounds(&set, &contact.coulomb, &coulomb.lambda);
     let tresca = qp::solve(&Qp::new(&dual, &b, &fixed), &zero, &params, &mut Silent).unwrap();
     let (uc, ut) = (dual.recover(&coulomb.lambda).u, dual.recover(&tresca.lambda).u);
     let (mut d, mut m) = (0.0f64, 0.0f64);
@@ -256,7 +256,7 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     eprintln!("Newton on the Coulomb law: {} products against the fixed point's {}, max|Δu|/max|u| = {:.2e}", newton.info.n_a, coulomb.info.n_a, dn / m);
     assert!(newton.info.fixed_point_iterations == 0 && dn <= 1e-8 * m, "Newton vs fixed point {:.2e}", dn / m);
     // and it is not a Tresca solution for any other bound: with g from λν of the elastic guess it differs
-    let slip = qp::solve(&Qp::new(&dual, &b, &qp::coulomb::bounds(&set, &contact.coulomb, &zero)), &zero, &params, &mut Silent).unwrap();
+    let slip = qp::solve(&Qp::new(&dual, &b, &qp::cone::bounds(&set, &contact.coulomb, &zero)), &zero, &params, &mut Silent).unwrap();
     let us = dual.recover(&slip.lambda).u;
     let ds = us.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(ds > 1e-4 * m, "frictionless bounds give a different u ({:.1e})", ds / m);

@@ -55,15 +55,20 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
 fn the_module_graph_has_no_cycle() {
     let g = graph();
     assert!(g.len() > 10, "found the modules: {g:?}");
-    // depth-first search with colours: 1 on the stack, 2 done
-    fn visit(u: &str, g: &BTreeMap<String, BTreeSet<String>>, colour: &mut BTreeMap<String, u8>, path: &mut Vec<String>) {
+    assert_acyclic(&g, "crate");
+}
+
+/// Panics naming the first import cycle of `g` (depth-first search with colours: 1 on the
+/// stack, 2 done).
+fn assert_acyclic(g: &BTreeMap<String, BTreeSet<String>>, what: &str) {
+    fn visit(u: &str, g: &BTreeMap<String, BTreeSet<String>>, colour: &mut BTreeMap<String, u8>, path: &mut Vec<String>, what: &str) {
         colour.insert(u.to_string(), 1);
         path.push(u.to_string());
         for v in g.get(u).into_iter().flatten() {
             match colour.get(v) {
-                Some(1) => panic!("import cycle: {} → {v}", path.join(" → ")),
+                Some(1) => panic!("import cycle in {what}: {} → {v}", path.join(" → ")),
                 Some(_) => {}
-                None => visit(v, g, colour, path),
+                None => visit(v, g, colour, path, what),
             }
         }
         path.pop();
@@ -72,7 +77,7 @@ fn the_module_graph_has_no_cycle() {
     let mut colour = BTreeMap::new();
     for u in g.keys() {
         if !colour.contains_key(u) {
-            visit(u, &g, &mut colour, &mut vec![]);
+            visit(u, g, &mut colour, &mut vec![], what);
         }
     }
 }
@@ -87,4 +92,36 @@ fn the_solver_layer_is_the_floor() {
     for m in ["dual", "feti", "pipeline", "contact"] {
         assert!(g[m].contains("qp"), "{m} does not use qp: {:?}", g[m]);
     }
+}
+
+/// Inside the solver layer too: the graph of `qp`'s submodules, read from their `super::…` and
+/// `crate::qp::…` paths (comments and test modules left out), has no cycle — shared code (the
+/// Coulomb cone's coefficients and bounds, `qp::cone`) sits below the methods that use it.
+#[test]
+fn the_solver_layers_modules_have_no_cycle() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/qp");
+    let files: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "rs")).collect();
+    let names: BTreeSet<String> = files.iter().map(|p| p.file_stem().unwrap().to_string_lossy().into_owned()).filter(|n| n != "mod").collect();
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for p in &files {
+        let me = p.file_stem().unwrap().to_string_lossy().into_owned();
+        if me == "mod" {
+            continue;
+        }
+        let text = std::fs::read_to_string(p).unwrap();
+        let code = text.split("#[cfg(test)]").next().unwrap();
+        let uses = g.entry(me.clone()).or_default();
+        for line in code.lines().map(str::trim_start).filter(|l| !l.starts_with("//")) {
+            for pat in ["super::", "crate::qp::"] {
+                for (i, _) in line.match_indices(pat) {
+                    let name: String = line[i + pat.len()..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
+                    if names.contains(&name) && name != me {
+                        uses.insert(name);
+                    }
+                }
+            }
+        }
+    }
+    assert!(g.len() > 8 && g["ssn"].contains("cone"), "read the graph: {g:?}");
+    assert_acyclic(&g, "qp");
 }

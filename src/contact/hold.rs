@@ -19,7 +19,7 @@ use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeCone
 use super::pairing::{Contact, SlipBound};
 use crate::error::{Error, Result};
 use crate::mesh::{rigid, Mesh};
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 
 /// A body held by contact alone: its index and an orthonormal basis of the rigid motions its
 /// Dirichlet conditions leave free ([`rigid::free_modes`]).

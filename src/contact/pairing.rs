@@ -29,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::fem::cell::{facet_nodal_areas, facet_normal_area};
 use crate::mesh::FacetKind;
 use crate::mesh::{Face, Mesh};
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 use crate::qp::sets::{Disc, Ellipse, TangentSet};
 use crate::qp::Lambda;
 use crate::scene::{default_search_distance, ContactPair, Discretization, Friction, Tie};

@@ -43,7 +43,7 @@ use super::DualProblem;
 use crate::comm::Comm;
 use crate::contact::pairing::Contact;
 use crate::error::{Error, Result};
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 
 /// The scene key named by the errors.
 const KEY: &str = "output.export_fclib";

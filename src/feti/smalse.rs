@@ -23,7 +23,7 @@
 use super::distribution::Distribution;
 use super::dual::TfetiDual;
 use crate::comm::Comm;
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 use crate::qp::{self, Info, Lambda, Monitor, Operator, Params, Preconditioner, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
 
 /// A_ϱ = PFP + ϱQ.

@@ -292,7 +292,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
             })?;
             total.absorb(&sol.info);
             // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-            let coulomb_set = coulomb.map(|mu| qp::coulomb::bounds(&set, mu, &sol.lambda));
+            let coulomb_set = coulomb.map(|mu| qp::cone::bounds(&set, mu, &sol.lambda));
             let set_k = coulomb_set.as_ref().unwrap_or(&set);
             let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
             let kkt = qp::kkt::residuals_scaled(set_k, &rec.lambda, &rec.gap, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
@@ -337,7 +337,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
 /// frictional-contact literature, u = W r + q with per contact (normal, t₁, t₂): W = A (by
 /// 3m products), q = −b, μ, our r = λ and u = W r + q; rank 0 writes.
 fn export_dual<C: Comm>(comm: &C, dual: &MonolithicDual<'_, C>, b: &[f64], contact: &crate::contact::pairing::Contact, lambda: &[f64], path: &std::path::Path) -> Result<()> {
-    use crate::qp::coulomb::Coefficient;
+    use crate::qp::cone::Coefficient;
     let m = contact.len();
     let mu: Vec<f64> = contact
         .coulomb

@@ -406,7 +406,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
                 // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
                 let pi = (!dual.coarse.held()).then(|| {
                     let set_k = match &mu {
-                        Some(mu) => qp::coulomb::bounds(&set, mu, &sol.lambda),
+                        Some(mu) => qp::cone::bounds(&set, mu, &sol.lambda),
                         None => set.clone(),
                     };
                     held_rows(&set_k, &sol.lambda)
@@ -426,7 +426,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
                 let ni = set_i.layout.dim();
                 let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
                 // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-                let set_i = if c.is_coulomb() { qp::coulomb::bounds(&set_i, &c.coulomb, &li) } else { set_i };
+                let set_i = if c.is_coulomb() { qp::cone::bounds(&set_i, &c.coulomb, &li) } else { set_i };
                 let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
                 (set_i, li, ri, kkt)
             });

@@ -11,7 +11,7 @@ use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{MethodParams, Params, Ssn};
 use super::Qp;
-use super::sets::{Disc, Ellipse, TangentSet};
+use super::cone::{bounds, Coefficient};
 use super::{Info, QpError, QpSolution};
 
 /// Settings of the fixed point.
@@ -27,32 +27,6 @@ impl Default for FixedPoint {
     fn default() -> Self {
         FixedPoint { max_iterations: 100, inner_factor: 0.1 }
     }
-}
-
-/// The friction coefficient of one pair.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Coefficient {
-    /// Not a Coulomb pair: its tangential set stays as given.
-    Fixed,
-    /// Isotropic: ‖λτ,ᵢ‖ ≤ μ λν,ᵢ.
-    Isotropic(f64),
-    /// Orthotropic in the pair's frame: (λ₁/μ₁)² + (λ₂/μ₂)² ≤ λν,ᵢ².
-    Orthotropic(f64, f64),
-}
-
-/// `set` with the tangential set of every Coulomb pair k cut at λν,k = x\[k\] (negative values
-/// count as 0: the point set).
-pub fn bounds(set: &Lambda, mu: &[Coefficient], x: &[f64]) -> Lambda {
-    let mut out = set.clone();
-    for (k, (t, c)) in out.tangent.iter_mut().zip(mu).enumerate() {
-        let ln = x[set.layout.normal(k)].max(0.0);
-        match *c {
-            Coefficient::Fixed => {}
-            Coefficient::Isotropic(m) => *t = TangentSet::Disc(Disc::new(m * ln)),
-            Coefficient::Orthotropic(a, b) => *t = TangentSet::Ellipse(Ellipse::new(a * ln, b * ln)),
-        }
-    }
-    out
 }
 
 /// Counters of the fixed point beside the summed ones of its Tresca solves.
@@ -135,6 +109,7 @@ pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[Coefficient], lambda0: &[f64], 
 mod tests {
     use super::*;
     use crate::qp::tssn::tests::{lcg, Dense};
+    use crate::qp::sets::{Disc, TangentSet};
     use crate::qp::{kkt, Method, Qp, Replicated, Silent};
 
     #[test]

@@ -13,6 +13,7 @@
 //! [`kkt`] measures how well a result satisfies the optimality conditions.
 
 pub mod cg;
+pub mod cone;
 pub mod coulomb;
 pub mod driver;
 pub mod gimssn;
@@ -68,8 +69,8 @@ impl<'a, A: Operator> Qp<'a, A> {
 
 /// Whether a Coulomb problem is solved by the Newton method on the Coulomb law: asked for, or
 /// `Auto` without a coarse projector; never with an orthotropic pair.
-pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[coulomb::Coefficient], how: params::CoulombSolve) -> bool {
-    let isotropic = !mu.iter().any(|c| matches!(c, coulomb::Coefficient::Orthotropic(..)));
+pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[cone::Coefficient], how: params::CoulombSolve) -> bool {
+    let isotropic = !mu.iter().any(|c| matches!(c, cone::Coefficient::Orthotropic(..)));
     isotropic && (how == params::CoulombSolve::Newton || (how == params::CoulombSolve::Auto && qp.coarse.is_none()))
 }
 
@@ -77,7 +78,7 @@ pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[coulomb::Coefficient], how: par
 /// `lambda0`: by the semi-smooth Newton method on the Coulomb law ([`coulomb::newton`]) or by
 /// the fixed point of [`coulomb::solve`] (default settings) with the method of `p`, as
 /// `common.coulomb` says ([`newton`]).
-pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[coulomb::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[cone::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     match coulomb {
         Some(mu) if newton(qp, mu, p.common.coulomb) => coulomb::newton(qp, mu, lambda0, p, monitor),
         Some(mu) => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),

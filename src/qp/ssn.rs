@@ -23,7 +23,7 @@
 
 use std::borrow::Cow;
 
-use super::coulomb::{bounds, Coefficient};
+use super::cone::{bounds, Coefficient};
 use super::driver::{err_of, Driver, Monitor, Setup};
 use super::krylov::{precondition, Bicgstab, InnerSystem, Subspace};
 use super::lambda::Lambda;

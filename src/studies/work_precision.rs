@@ -21,7 +21,7 @@ use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::pipeline::tfeti::setup;
-use crate::qp::coulomb::Coefficient;
+use crate::qp::cone::Coefficient;
 use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
 use crate::qp::{self, kkt, Lambda, Method, Operator, Params, Preconditioner, Qp, QpSolution, Silent, Space};
 use crate::scene::Projector;
@@ -230,7 +230,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let reference = qp::solve_friction(&qp_mono, coulomb.as_deref(), &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
         // the cones the KKT residuals are taken against: cut at each solution's λν (Coulomb)
         let cones = |set: &crate::qp::Lambda, l: &[f64]| match &coulomb {
-            Some(mu) => crate::qp::coulomb::bounds(set, mu, l),
+            Some(mu) => crate::qp::cone::bounds(set, mu, l),
             None => set.clone(),
         };
         let u_ref = dual.recover(&reference.lambda).u;
