@@ -255,6 +255,13 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     let dn = un.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     eprintln!("Newton on the Coulomb law: {} products against the fixed point's {}, max|Δu|/max|u| = {:.2e}", newton.info.n_a, coulomb.info.n_a, dn / m);
     assert!(newton.info.fixed_point_iterations == 0 && dn <= 1e-8 * m, "Newton vs fixed point {:.2e}", dn / m);
+    // and so does TSSN with lagged bounds
+    params.common.coulomb = qp::params::CoulombSolve::Lagged;
+    let lagged = qp::solve_friction(&Qp::new(&dual, &b, &set), Some(&contact.coulomb), &zero, &params, &mut Silent).unwrap();
+    let ul = dual.recover(&lagged.lambda).u;
+    let dl = ul.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    eprintln!("TSSN with lagged bounds: {} products, max|Δu|/max|u| = {:.2e}", lagged.info.n_a, dl / m);
+    assert!(lagged.info.coulomb == Some(qp::params::CoulombSolve::Lagged) && dl <= 1e-8 * m, "lagged vs fixed point {:.2e}", dl / m);
     // and it is not a Tresca solution for any other bound: with g from λν of the elastic guess it differs
     let slip = qp::solve(&Qp::new(&dual, &b, &qp::cone::bounds(&set, &contact.coulomb, &zero)), &zero, &params, &mut Silent).unwrap();
     let us = dual.recover(&slip.lambda).u;

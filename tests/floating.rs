@@ -45,7 +45,7 @@ fn a_block_dragged_by_one_face_sticks_below_mu_n_and_slides_at_mu_n_above() {
     let small = solve(&path, &[], &dir.join("a.h5"));
     let large = solve(&path, &["dirichlet.1.value=[0.0001, 0.0, 0.0]"], &dir.join("b.h5"));
     // a deep slide (100× the stick limit's displacement), by each way of solving Coulomb
-    for how in ["newton", "fixed-point"] {
+    for how in ["newton", "fixed-point", "lagged"] {
         let deep = solve(&path, &["dirichlet.1.value=[0.001, 0.0, 0.0]", &format!("solver.coulomb=\"{how}\"")], &dir.join("c.h5"));
         let c = deep.report.contact.as_ref().unwrap();
         let f = c.total_force_on_slave;

@@ -32,6 +32,7 @@ use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
+use crate::qp::params::CoulombSolve;
 use crate::qp::{self, Method, Operator, Qp, Space};
 use crate::contact::state::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
 use crate::scene::{LoadedScene, OrderingKind, Preconditioner};
@@ -649,11 +650,11 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         }),
         solver: match (outcome, sol.tfeti.as_ref().and_then(|f| f.cg.as_ref())) {
             (Some(o), _) => Some(SolverReport {
-                // a Coulomb solve without fixed-point steps was the Newton method on the law
-                method: if model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) && o.info.fixed_point_iterations == 0 {
-                    "coulomb-newton".into()
-                } else {
-                    solver.method().name().into()
+                // a Coulomb solve names its way unless it was the fixed point on the method
+                method: match o.info.coulomb {
+                    Some(CoulombSolve::Newton) => "coulomb-newton".into(),
+                    Some(CoulombSolve::Lagged) => "coulomb-lagged".into(),
+                    _ => solver.method().name().into(),
                 },
                 dual_dim: o.dim,
                 eps: solver.common.eps,

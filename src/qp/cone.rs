@@ -2,6 +2,8 @@
 //! method on the Coulomb law ([`super::ssn`]): each pair's friction coefficient and the Tresca
 //! set Λ(λ) whose tangential sets are the cones cut at the normal multipliers λν.
 
+use std::borrow::Cow;
+
 use super::lambda::Lambda;
 use super::sets::{Disc, Ellipse, TangentSet};
 
@@ -29,4 +31,12 @@ pub fn bounds(set: &Lambda, mu: &[Coefficient], x: &[f64]) -> Lambda {
         }
     }
     out
+}
+
+/// Λ itself, or — with coefficients — Λ(x), the cones of `set` cut at x's normals ([`bounds`]).
+pub fn cut<'s>(set: &'s Lambda, mu: Option<&[Coefficient]>, x: &[f64]) -> Cow<'s, Lambda> {
+    match mu {
+        Some(mu) => Cow::Owned(bounds(set, mu, x)),
+        None => Cow::Borrowed(set),
+    }
 }

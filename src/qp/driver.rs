@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use super::cone::{cut, Coefficient};
 use super::lambda::{ActiveSets, Lambda};
 use super::operator::{Operator, Space};
 use super::params::{Common, SigmaEstimate};
@@ -271,14 +272,15 @@ impl<'q, 'm, A: Operator> Driver<'q, 'm, A> {
     }
 
     /// The stop test of a solver whose iterate x need not lie in Λ (SSN, TSSN), once its own
-    /// ‖r̃_ρ(x)‖ ≤ ε‖b‖: confirm at P_Λ(x) with a fresh product. Returns the solution when it
-    /// holds there; otherwise x, r become P_Λ(x) and its gradient (the solver goes on from
-    /// there) and the error there is returned. `z`, `rz` are workspace, r̃ goes to `rt`.
+    /// ‖r̃_ρ(x)‖ ≤ ε‖b‖: confirm at P_Λ(x) with a fresh product (with Coulomb coefficients `mu`:
+    /// on Λ(x), then tested on Λ(P(x))). Returns the solution when it holds there; otherwise x,
+    /// r become P_Λ(x) and its gradient (the solver goes on from there) and the error there is
+    /// returned. `z`, `rz` are workspace, r̃ goes to `rt`.
     #[allow(clippy::too_many_arguments)]
-    pub fn confirm_projected(&mut self, k: usize, x: &mut Vec<f64>, r: &mut Vec<f64>, z: &mut Vec<f64>, rz: &mut Vec<f64>, rt: &mut [f64]) -> Result<QpSolution, f64> {
-        self.qp.set.project(x, z);
+    pub fn confirm_projected(&mut self, k: usize, mu: Option<&[Coefficient]>, x: &mut Vec<f64>, r: &mut Vec<f64>, z: &mut Vec<f64>, rz: &mut Vec<f64>, rt: &mut [f64]) -> Result<QpSolution, f64> {
+        cut(self.qp.set, mu, x).project(x, z);
         self.residual(z, rz);
-        let ez = self.err(z, rz, rt);
+        let ez = err_of(self.space(), &cut(self.qp.set, mu, z), z, rz, &self.st, rt);
         if self.met(ez) {
             return Ok(self.finish(k, std::mem::take(z), std::mem::take(rz), ez));
         }

@@ -67,21 +67,38 @@ impl<'a, A: Operator> Qp<'a, A> {
     }
 }
 
-/// Whether a Coulomb problem is solved by the Newton method on the Coulomb law: asked for, or
-/// `Auto` without a coarse projector; never with an orthotropic pair.
-pub fn newton<A: Operator>(qp: &Qp<'_, A>, mu: &[cone::Coefficient], how: params::CoulombSolve) -> bool {
+/// How a Coulomb problem is solved with the method `method`: the Newton method on the Coulomb
+/// law (asked for, or `Auto` without a coarse projector; isotropic μ only), TSSN with lagged
+/// bounds (asked for, or `Auto` with a coarse projector when TSSN is the method), or the fixed
+/// point on the bounds.
+pub fn coulomb_solve<A: Operator>(qp: &Qp<'_, A>, mu: &[cone::Coefficient], how: params::CoulombSolve, method: Method) -> params::CoulombSolve {
+    use params::CoulombSolve::*;
     let isotropic = !mu.iter().any(|c| matches!(c, cone::Coefficient::Orthotropic(..)));
-    isotropic && (how == params::CoulombSolve::Newton || (how == params::CoulombSolve::Auto && qp.coarse.is_none()))
+    match how {
+        Newton if isotropic => Newton,
+        Auto if isotropic && qp.coarse.is_none() => Newton,
+        Lagged => Lagged,
+        Auto if qp.coarse.is_some() && method == Method::Tssn => Lagged,
+        _ => FixedPoint,
+    }
 }
 
 /// Solves the QP, or — with Coulomb coefficients per pair of its Λ — the Coulomb problem from
-/// `lambda0`: by the semi-smooth Newton method on the Coulomb law ([`coulomb::newton`]) or by
-/// the fixed point of [`coulomb::solve`] (default settings) with the method of `p`, as
-/// `common.coulomb` says ([`newton`]).
+/// `lambda0` as [`coulomb_solve`] says: by the semi-smooth Newton method on the Coulomb law
+/// ([`coulomb::newton`]), by TSSN with lagged bounds ([`coulomb::lagged`]) or by the fixed point
+/// of [`coulomb::solve`] (default settings) with the method of `p`.
 pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[cone::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     match coulomb {
-        Some(mu) if newton(qp, mu, p.common.coulomb) => coulomb::newton(qp, mu, lambda0, p, monitor),
-        Some(mu) => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),
+        Some(mu) => {
+            let how = coulomb_solve(qp, mu, p.common.coulomb, p.method());
+            let mut sol = match how {
+                params::CoulombSolve::Newton => coulomb::newton(qp, mu, lambda0, p, monitor),
+                params::CoulombSolve::Lagged => coulomb::lagged(qp, mu, lambda0, p, monitor),
+                _ => coulomb::solve(qp.a.space(), qp.set, mu, lambda0, p, &Default::default(), |s, x, p| solve(&qp.with_set(s), x, p, monitor)).map(|r| r.0),
+            }?;
+            sol.info.coulomb = Some(how);
+            Ok(sol)
+        }
         None => solve(qp, lambda0, p, monitor),
     }
 }
@@ -161,6 +178,9 @@ pub struct Info {
     /// Steps of the Coulomb fixed point (each a Tresca solve; 0: not Coulomb).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub fixed_point_iterations: usize,
+    /// How a Coulomb problem was solved (None: not Coulomb).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coulomb: Option<params::CoulombSolve>,
     /// Every outer step.
     pub history: Vec<Step>,
 }
@@ -180,6 +200,7 @@ impl Info {
         self.inner_iterations += later.inner_iterations;
         self.preconditioner_applications += later.preconditioner_applications;
         self.fixed_point_iterations += later.fixed_point_iterations;
+        self.coulomb = later.coulomb.or(self.coulomb);
         self.history.extend(later.history.iter().cloned().map(|mut s| {
             s.n_a += n_a_before;
             s

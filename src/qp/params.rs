@@ -72,9 +72,9 @@ pub enum SigmaEstimate {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum CoulombSolve {
-    /// Newton where the inner solves have no coarse projector (the monolithic dual), the fixed
-    /// point where TSSN's projected, preconditioned CG does them (TFETI): what won on the
-    /// Coulomb benchmark set (README).
+    /// Newton where the inner solves have no coarse projector (the monolithic dual); with one
+    /// (TFETI), TSSN with lagged bounds when TSSN is the method, else the fixed point with the
+    /// method: what won on the Coulomb benchmark set (README, performance).
     #[default]
     Auto,
     /// The semi-smooth Newton method on the Coulomb law itself, the bound's dependence on λν in
@@ -84,6 +84,11 @@ pub enum CoulombSolve {
     /// A fixed point on the slip bounds, each step a Tresca solve with the method
     /// (`qp::coulomb::solve`).
     FixedPoint,
+    /// TSSN with lagged bounds: each Newton step takes the cones cut at the iterate's normals as
+    /// fixed (a symmetric system: CG, the FETI preconditioner, the coarse projector), so the
+    /// bounds settle inside one Newton loop (`qp::coulomb::lagged`). TSSN's settings when that
+    /// is the method, else their defaults.
+    Lagged,
 }
 
 /// Settings every method reads.

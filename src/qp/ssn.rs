@@ -21,12 +21,9 @@
 //! The same iteration solves the Coulomb law directly ([`run`] with coefficients: Λ(λ) cut at
 //! the iterate's normals, the bound's dependence on λν in J; `qp::coulomb::newton`).
 
-use std::borrow::Cow;
-
-use super::cone::{bounds, Coefficient};
+use super::cone::{cut, Coefficient};
 use super::driver::{err_of, Driver, Monitor, Setup};
 use super::krylov::{precondition, Bicgstab, InnerSystem, Subspace};
-use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{Common, Ssn};
 use super::{CgStop, Qp, QpError, QpSolution, StepKind};
@@ -48,12 +45,7 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
     let (a, set) = (qp.a, qp.set);
     let sp = a.space();
     let n = a.dim();
-    let at = |x: &[f64]| -> Cow<'_, Lambda> {
-        match mu {
-            Some(mu) => Cow::Owned(bounds(set, mu, x)),
-            None => Cow::Borrowed(set),
-        }
-    };
+    let at = |x: &[f64]| cut(set, mu, x);
     let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
     let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
     let mut lambda = vec![0.0; n];

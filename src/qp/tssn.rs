@@ -41,7 +41,10 @@
 //! ([`StepKind::Safeguard`]); a start that rose and was let through is not accepted as the
 //! reference. Newton steps are [`StepKind::Tangent`].
 
-use super::driver::{Driver, Monitor, Setup, SIGMA_SAFETY};
+use std::borrow::Cow;
+
+use super::cone::{cut, Coefficient};
+use super::driver::{err_of, Driver, Monitor, Setup, SIGMA_SAFETY};
 use super::gimssn;
 use super::krylov::{pcg, Coefficients, InnerSystem, Pcg};
 use super::lambda::Lambda;
@@ -124,13 +127,22 @@ impl InnerSystem for System {
 /// Solves min ½λᵀAλ − λᵀb over Λ from λ0 (projected onto Λ first) by TSSN; the QP's
 /// preconditioner, if any, acts in the inner CG.
 pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+    run(qp, None, lambda0, c, p, monitor)
+}
+
+/// The TSSN iteration on Λ, or — with Coulomb coefficients `mu` — with lagged bounds: each
+/// outer step takes Λ(λᵏ), the cones cut at the iterate's normals, as fixed for its Newton
+/// system (symmetric: the bound's dependence on λν is left out of the derivative), and the stop
+/// test is made on Λ(λ) at the result ([`super::coulomb::lagged`]).
+pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambda0: &[f64], c: &Common, p: &Tssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     let (a, set) = (qp.a, qp.set);
+    let at = |x: &[f64]| cut(set, mu, x);
     let sp = a.space();
     let n = a.dim();
     let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
     let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
     let mut x = vec![0.0; n];
-    set.project(lambda0, &mut x);
+    at(lambda0).project(lambda0, &mut x);
     let mut r = vec![0.0; n];
     if sp.max(x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) == 0.0 {
         // r(0) = −b: no product
@@ -139,7 +151,7 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
         drv.residual(&x, &mut r);
     }
     let mut rt = vec![0.0; n];
-    let mut err = drv.err(&x, &r, &mut rt);
+    let mut err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
     let err0 = err.max(f64::MIN_POSITIVE);
     let (mut x0, mut g0) = (vec![0.0; n], vec![0.0; n]);
     // the last accepted start (in Λ, exact gradient) and its q
@@ -147,16 +159,24 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
     // Newton starts in a row whose q exceeded the last accepted one
     let mut strikes = 0;
     let (mut z, mut rz) = (vec![0.0; n], vec![0.0; n]);
+    // Coulomb: the best error so far, and — once a step has raised it LAG_JUMP-fold — the frozen
+    // Λ(λ) with the normals it was cut at
+    let mut best = err;
+    let mut frozen: Option<(Lambda, Vec<f64>)> = None;
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
         if drv.met(err) {
-            match drv.confirm_projected(k, &mut x, &mut r, &mut z, &mut rz, &mut rt) {
+            match drv.confirm_projected(k, mu, &mut x, &mut r, &mut z, &mut rz, &mut rt) {
                 Ok(sol) => return Ok(sol),
                 Err(e) => err = e,
             }
         }
         drv.budget(k, err)?;
-        let sys = System::new(set, &x, &r, rho, p.slide_cap * drv.st.sigma, &mut x0);
+        let set_k = match &frozen {
+            Some((f, _)) => Cow::Borrowed(f),
+            None => at(&x),
+        };
+        let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, &mut x0);
         drv.residual(&x0, &mut g0);
         let q0 = drv.q(&x0, &g0);
         if !q0.is_finite() {
@@ -169,14 +189,14 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
             // the safeguard: a GIMSSN step from the last accepted start
             // GIMSSN's descent needs ρ < 2/σ_max
             let rho_g = rho.min(1.9 / (SIGMA_SAFETY * drv.st.sigma));
-            let g = gimssn::feasible_step(&drv, set, &base, &base_r, rho_g, (tol * bnorm).max(p.inner_floor * c.eps * bnorm), c.max_inner, k)?;
+            let g = gimssn::feasible_step(&drv, &set_k, &base, &base_r, rho_g, (tol * bnorm).max(p.inner_floor * c.eps * bnorm), c.max_inner, k)?;
             x.copy_from_slice(&g.lambda);
             r.copy_from_slice(&g.gradient);
             base.copy_from_slice(&x);
             base_r.copy_from_slice(&r);
             base_q = drv.q(&x, &r);
             strikes = 0;
-            err = drv.err(&x, &r, &mut rt);
+            err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
             let step = drv.newton(StepKind::Safeguard, err, tol, base_q, &sys.sets, g.inner);
             drv.record(step);
             continue;
@@ -208,11 +228,50 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
         let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
         let cg = pcg(qp, &opts, &mut x, &mut r, threshold, |_| {})?;
         drv.info.preconditioner_applications += cg.applications;
-        err = drv.err(&x, &r, &mut rt);
+        err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
+        if mu.is_some() {
+            settle_bounds(sp, &mut frozen, &at, &x, &r, (err, best, c.eps), &drv.st, &mut z);
+            best = best.min(err);
+        }
         let step = drv.newton(StepKind::Tangent, err, tol, q0, &sys.sets, cg.iterations);
         drv.record(step);
     }
     unreachable!("the outer loop returns")
+}
+
+/// An error rise of this factor over the best so far ends the lagged bounds: they are frozen
+/// and re-cut only as the fixed point would ([`settle_bounds`]). With [`RECUT`], what won on the
+/// Coulomb scenes (README, performance).
+const LAG_JUMP: f64 = 10.0;
+/// Frozen bounds are re-cut once the error over them is at most this fraction of the relative
+/// change of λν since their cut.
+const RECUT: f64 = 0.01;
+
+/// The lagged bounds' safeguard after a Coulomb step to x (error `err` over Λ(x), `best` the
+/// lowest before): near the solution a few pairs at the stick/slip border can flip back and
+/// forth under lagged bounds (the error then cycles); a rise by [`LAG_JUMP`] over the best
+/// freezes Λ(x), and frozen bounds are re-cut at x once the error over them is at most
+/// [`RECUT`] times the relative change of λν since their cut, or at most ε — the fixed point's
+/// rule, without its restarts. `work` is workspace.
+#[allow(clippy::too_many_arguments)]
+fn settle_bounds<'s, S: Space>(sp: &S, frozen: &mut Option<(Lambda, Vec<f64>)>, at: &impl Fn(&[f64]) -> Cow<'s, Lambda>, x: &[f64], r: &[f64], (err, best, eps): (f64, f64, f64), st: &Setup, work: &mut [f64]) {
+    let m = at(x).layout.m;
+    // the normal part of a vector, as a whole vector of the space (the fixed point's measure)
+    let normals = |v: &[f64]| -> Vec<f64> { v.iter().enumerate().map(|(i, a)| if i < m { *a } else { 0.0 }).collect() };
+    match frozen {
+        None if err > LAG_JUMP * best => *frozen = Some((at(x).into_owned(), normals(x))),
+        None => {}
+        Some((f, cut_at)) => {
+            let now = normals(x);
+            let diff: Vec<f64> = now.iter().zip(cut_at.iter()).map(|(a, b)| a - b).collect();
+            let change = sp.norm(&diff) / sp.norm(&now).max(f64::MIN_POSITIVE);
+            let ef = err_of(sp, f, x, r, st, work);
+            if ef <= RECUT * change || ef <= eps {
+                *f = at(x).into_owned();
+                *cut_at = now;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
