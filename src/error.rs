@@ -69,6 +69,28 @@ impl Error {
     pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Output { path: path.into(), msg: msg.into() }
     }
+
+    /// The section of `docs/troubleshooting.md` that says what to do (none for an error
+    /// forwarded from another rank: only its text travels).
+    pub fn docs_section(&self) -> Option<&'static str> {
+        Some(match self {
+            Error::Parse { .. } | Error::Scene { .. } => "scene-errors",
+            Error::Mesh { .. } => "mesh-errors",
+            Error::Io { .. } => "files-that-cannot-be-read",
+            Error::Numerical { .. } | Error::Solver { .. } => "solver-failures",
+            Error::Output { .. } => "writing-results",
+            Error::Memory { .. } => "too-large-for-the-machine",
+            Error::Remote(_) => return None,
+        })
+    }
+
+    /// The one line the command prints: `error: <message> (see docs/troubleshooting.md#…)`.
+    pub fn line(&self) -> String {
+        match self.docs_section() {
+            Some(s) => format!("error: {self} (see docs/troubleshooting.md#{s})"),
+            None => format!("error: {self}"),
+        }
+    }
 }
 
 /// A byte count for messages: `61.2 GB`, `512 MB`, `3.4 kB`, `12 B` (decimal units).

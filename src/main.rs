@@ -10,7 +10,12 @@ use tresca_feti::comm::{Comm, MpiComm};
 use tresca_feti::pipeline;
 
 #[derive(Parser)]
-#[command(name = "tresca-feti", version, about = "TFETI solver for 3D contact with Tresca friction")]
+#[command(
+    name = "tresca-feti",
+    version,
+    about = "TFETI solver for 3D linear-elastic contact with friction (Tresca, orthotropic, Coulomb)",
+    after_help = "A first run:\n  tresca-feti check run/tutorial.toml              validate a scene, print what it builds\n  mpirun -n 2 tresca-feti solve run/tutorial.toml  solve it on 2 MPI ranks\nResults: out/<scene name>.h5 (HDF5), .xdmf (open it in ParaView), .json (the report).\nErrors: one line naming the key or file, exit code 1; docs/troubleshooting.md says what to do.\nDocumentation: README.md; docs/tutorial.md, docs/scene-reference.md (every scene key),\ndocs/method.md, docs/validation.md, docs/performance.md."
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -18,7 +23,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Solve a scene and write HDF5 + XDMF + JSON results.
+    /// Solve a scene and write its results: HDF5 + XDMF (ParaView) + JSON report.
+    ///
+    /// Run it under `mpirun -n P` to spread the bodies or subdomains over P ranks. Prints each phase as it starts and one line per Newton iteration,
+    /// then a summary. The results go to `output.path` of the scene (default
+    /// `out/<scene name>.h5`, beside it `.xdmf` and `.json`), or `--out`; a load path writes
+    /// every step, which ParaView plays as an animation. Scene keys: docs/scene-reference.md.
     Solve {
         /// Scene file (TOML).
         scene: PathBuf,
@@ -40,7 +50,9 @@ enum Cmd {
         #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
         max_memory: Option<u64>,
     },
-    /// The paper's Table 1: iter/nA of the dual solvers on the seed scene for growing N, with
+    /// The paper's Table 1, reproduced on the seed scene.
+    ///
+    /// iter/nA of the dual solvers for growing N, with
     /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
     Table1 {
         /// The scene (its `mesh.n` is set per row).
@@ -66,7 +78,9 @@ enum Cmd {
         #[arg(long)]
         no_error: bool,
     },
-    /// TFETI benchmark and scaling study: for each N, S (subdomains per body; 0 = monolithic)
+    /// TFETI benchmark and scaling study (runs mpirun itself).
+    ///
+    /// For each N, S (subdomains per body; 0 = monolithic)
     /// and rank count P one `mpirun -n P tresca-feti solve`, tabulating nA, iterations, time per
     /// phase, peak memory and the time of one A-product against its memory-bound floor. Run it
     /// without mpirun.
@@ -107,7 +121,9 @@ enum Cmd {
         #[arg(long, default_value = "out/bench_tfeti.csv")]
         csv: PathBuf,
     },
-    /// Run time against error: every solver (and Clarabel on the primal SOCP) at every ε of a
+    /// Run time against error of every solver and Clarabel (the evidence).
+    ///
+    /// Every solver (and Clarabel on the primal SOCP) at every ε of a
     /// sweep, on the seed scene for each N: time, A-products, the error in u and λ against a
     /// tight reference, KKT residuals; a summary of the time to each target error; CSV. One rank,
     /// one thread (run it without mpirun); plots: `run/work-precision-plot CSV DIR`.
@@ -148,7 +164,9 @@ enum Cmd {
         #[arg(long, default_value = "out/work_precision.csv")]
         csv: PathBuf,
     },
-    /// The numerical-stability suite: solve every scene of a folder (run/stress/*.toml) and
+    /// The numerical-stability suite (run/stress/*.toml).
+    ///
+    /// Solves every scene of a folder (run/stress/*.toml) and
     /// print a table (iterations, nA, time, residuals, KKT, status). Exit code 1 if a run
     /// returns a result that fails its checks (non-finite, above ε, KKT above KKT_FACTOR·ε);
     /// a run that stops with a stated reason is listed as stopped. `stress` is an alias.
@@ -165,7 +183,9 @@ enum Cmd {
         #[arg(long, default_value_t = 100.0)]
         kkt_factor: f64,
     },
-    /// The coarse problem's cost as the subdomain count grows: for each S, C = G_E G_Eᵀ of the
+    /// The coarse problem's cost as the subdomain count grows.
+    ///
+    /// For each S, C = G_E G_Eᵀ of the
     /// scene's decomposition (clusters too), one solve with its factor (what every rank pays
     /// with `coarse_solve = "factor"`) against one rank's explicit inverse rows (`decomposition.coarse_solve =
     /// "explicit"`) for each pieces-per-rank; one process. The cost model's inputs.
@@ -184,7 +204,10 @@ enum Cmd {
         #[arg(long, default_value_t = 20)]
         repeat: usize,
     },
-    /// Validate a scene and print the resolved scene, mesh sizes and DOF counts.
+    /// Validate a scene without solving it.
+    ///
+    /// Prints the resolved scene (every default filled in), the mesh, faces, DOF counts, applied load, contact pairs, the decomposition chosen by
+    /// cost and the memory estimate.
     Check {
         scene: PathBuf,
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -421,7 +444,7 @@ fn main() -> ExitCode {
         return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln!("{}", e.line());
                 ExitCode::FAILURE
             }
         };
@@ -491,7 +514,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             if comm.is_root() {
-                eprintln!("error: {e}");
+                eprintln!("{}", e.line());
             }
             ExitCode::FAILURE
         }

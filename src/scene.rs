@@ -10,6 +10,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::qp;
 
+pub mod keys;
+
 /// A whole scene: bodies, materials, boundary conditions, contact, solver, decomposition, output.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
