@@ -228,3 +228,28 @@ fn work_precision_has_coulomb_rows() {
     let o = Command::new(BIN).args(["work-precision", "--scene", scene.to_str().unwrap(), "--sizes", "4", "--solvers", "tssn,clarabel"]).output().unwrap();
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--solvers"));
 }
+
+#[test]
+fn getfem_solves_the_same_discrete_problem_to_our_solution() {
+    // run/peer/getfem_compare builds the seed in GetFEM (Q1, 2×2×2 Gauss, our node-to-node pairs
+    // as the basic contact brick's BN/BT; Tresca through an auxiliary Coulomb brick) and compares
+    // it node by node with tresca-feti on 1 and 2 ranks and with Siconos' gfc3d on the FCLIB
+    // export: at tight tolerances all agree to 1e-9, Tresca and Coulomb
+    let script = root().join("run/peer/getfem_compare");
+    let o = Command::new(&script)
+        .args(["--n", "5", "--ranks", "1,2", "--siconos", "--eps", "1e-12", "--getfem-res", "1e-12", "--tol", "1e-9", "--bin", BIN])
+        .output()
+        .expect("run/peer/getfem_compare (/usr/bin/python3 with python3-getfem, python3-siconos: run/install-deps)");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    for (friction, code, rows) in [("tresca", "GetFEM", 1), ("tresca", "tresca-feti", 2), ("coulomb", "GetFEM", 1), ("coulomb", "tresca-feti", 2), ("coulomb", "Siconos", 1)] {
+        let n = out.lines().filter(|l| l.split_whitespace().take(3).eq(["5", friction, code])).count();
+        assert_eq!(n, rows, "{friction} {code}: {out}");
+    }
+    assert!(out.contains("agree") && !out.contains("NOT CONVERGED"), "{out}");
+    // and it tells a disagreement: at the default tolerances the solutions differ by about 1e-8
+    let o = Command::new(&script).args(["--n", "4", "--ranks", "1", "--friction", "tresca", "--tol", "1e-13", "--bin", BIN]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("DISAGREE"), "{out}");
+}
