@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use tresca_feti::comm::{Comm, MpiComm};
+use tresca_feti::comm::{Comm, MpiComm, SerialComm};
 use tresca_feti::pipeline;
 
 #[derive(Parser)]
@@ -449,11 +449,30 @@ fn main() -> ExitCode {
             }
         };
     }
-    let Some(universe) = mpi::initialize() else {
-        eprintln!("error: MPI could not be initialized");
-        return ExitCode::FAILURE;
-    };
-    let comm = MpiComm::new(universe.world());
+    // one process not started by an MPI launcher runs without MPI: OpenMPI's singleton start
+    // (forking orted) alone costs about 0.3 s
+    if launched_by_mpi() {
+        let Some(universe) = mpi::initialize() else {
+            eprintln!("error: MPI could not be initialized");
+            return ExitCode::FAILURE;
+        };
+        run(&MpiComm::new(universe.world()), cli.cmd)
+    } else {
+        run(&SerialComm, cli.cmd)
+    }
+}
+
+/// Whether this process was started by an MPI launcher — mpirun/mpiexec of Open MPI or MPICH,
+/// srun (PMI/PMIx, or a step of several tasks), Cray's aprun — by their environment variables,
+/// or `TRESCA_FETI_MPI=1` asks for MPI anyway.
+fn launched_by_mpi() -> bool {
+    let set = |v: &str| std::env::var_os(v).is_some();
+    let several_tasks = std::env::var("SLURM_NTASKS").ok().and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n > 1) && set("SLURM_PROCID");
+    std::env::var("TRESCA_FETI_MPI").is_ok_and(|v| v == "1") || several_tasks || ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK", "MPI_LOCALNRANKS", "ALPS_APP_PE"].iter().any(|v| set(v))
+}
+
+/// Runs one command on `comm`; rank 0 prints its error line.
+fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
     // SIGINT/SIGTERM: the temporary result files are removed, one line says so (rank 0)
     if let Err(e) = tresca_feti::output::tmpfiles::remove_on_signal(comm.is_root()) {
         if comm.is_root() {
@@ -465,7 +484,7 @@ fn main() -> ExitCode {
         // one rank per core: faer must not start threads of its own
         faer::set_global_parallelism(faer::Par::Seq);
     }
-    let result = match cli.cmd {
+    let result = match cmd {
         Cmd::Solve { scene, mut set, out, quiet, export_fclib, max_memory } => {
             if let Some(b) = max_memory {
                 pipeline::memory::set_limit(b);
@@ -473,7 +492,7 @@ fn main() -> ExitCode {
             if let Some(p) = export_fclib {
                 set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
             }
-            pipeline::run_solve(&comm, &scene, &set, out, quiet)
+            pipeline::run_solve(comm, &scene, &set, out, quiet)
         }
         .map(|s| {
             if comm.is_root() {
@@ -482,17 +501,17 @@ fn main() -> ExitCode {
         }),
         Cmd::Table1 { scene, set, sizes, eps, solvers, csv, no_error } => {
             let args = tresca_feti::studies::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
-            table1(&comm, &args)
+            table1(comm, &args)
         }
         Cmd::WorkPrecision { scene, set, sizes, subdomains, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
             let args = tresca_feti::studies::work_precision::Args { scene, sets: set, sizes, subdomains, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
-            work_precision(&comm, &args)
+            work_precision(comm, &args)
         }
-        Cmd::Stability { dir, set, out, kkt_factor } => stability(&comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
+        Cmd::Stability { dir, set, out, kkt_factor } => stability(comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
         Cmd::BenchCoarse { scene, set, subdomains, pieces, repeat } => {
             let args = tresca_feti::studies::coarse_cost::Args { scene, sets: set, subdomains, pieces, repeat };
-            bench_coarse(&comm, &args)
+            bench_coarse(comm, &args)
         }
         Cmd::Check { scene, set, ranks, max_memory } => {
             if let Some(b) = max_memory {
@@ -501,7 +520,7 @@ fn main() -> ExitCode {
             // validation is cheap and deterministic: every rank does it, rank 0 prints
             let r = match ranks {
                 Some(0) => Err(tresca_feti::Error::scene("--ranks", "must be at least 1")),
-                _ => comm.agree(pipeline::run_check(&comm, &scene, &set, ranks.unwrap_or(comm.size()))),
+                _ => comm.agree(pipeline::run_check(comm, &scene, &set, ranks.unwrap_or(comm.size()))),
             };
             r.map(|text| {
                 if comm.is_root() {

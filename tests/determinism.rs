@@ -95,3 +95,20 @@ fn the_same_run_twice_gives_bitwise_identical_output() {
         }
     }
 }
+
+/// A process not started by an MPI launcher runs without MPI (no singleton start of Open MPI's
+/// orted): the same result file, bitwise, as `mpirun -n 1`, TFETI and the monolithic dual alike.
+#[test]
+fn a_plain_run_equals_mpirun_with_one_rank_bitwise() {
+    let dir = tmpdir("plain-vs-mpirun");
+    let scene = root().join("run/seed.toml");
+    for (name, extra) in [("tfeti", "decomposition.subdomains=4"), ("mono", "decomposition.subdomains=1")] {
+        let (_, mpi) = solve(&dir, &format!("{name}-mpirun"), 1, &["mesh.n=8", extra]);
+        let out = dir.join(format!("{name}-plain.h5"));
+        let o = common::run(&["solve", scene.to_str().unwrap(), "--set", "mesh.n=8", "--set", extra, "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let plain = fields(&out);
+        assert_eq!(f64_field(&plain, "displacement"), f64_field(&mpi, "displacement"), "{name}: u differs");
+        assert_eq!(i32_field(&plain, "contact_status"), i32_field(&mpi, "contact_status"), "{name}: status differs");
+    }
+}
