@@ -16,13 +16,12 @@ import json
 import math
 import os
 import sys
-import tempfile
 
 import h5py
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hertz3d import E, NU, R, ROOT, HERE, flat_nodes, solve  # noqa: E402
+from hertz3d import E, NU, R, ROOT, HERE, flat_nodes, solve_levels  # noqa: E402
 
 MU = 0.3
 
@@ -84,14 +83,7 @@ def main():
     ap.add_argument("--set", action="append", default=[], help="extra scene overrides")
     args = ap.parse_args()
     scene = os.path.join(HERE, "cattaneo_mindlin3d.toml")
-    paths = args.results
-    if not paths:
-        d = args.keep or tempfile.mkdtemp(prefix="cm3d-")
-        os.makedirs(d, exist_ok=True)
-        for n in map(int, args.levels.split(",")):
-            out = os.path.join(d, f"cm3d-{args.cap}-{n}.h5")
-            solve(args.bin, scene, level_sets(n, args.cap) + args.set, out)
-            paths.append(out)
+    paths = args.results or solve_levels(args.bin, scene, args.levels, lambda n: level_sets(n, args.cap) + args.set, f"cm3d-{args.cap}", args.keep)
     print(f"Cattaneo–Mindlin 3D, cap {args.cap} on flat hex8 (non-matching, mortar), μ = {MU}, R = {R}, E = {E}, ν = {NU}")
     print(f"{'h':>8} {'P':>8} {'Q/μP':>6} {'a':>7} {'c':>7} {'c/h':>5} {'stick x':>17} {'(half-c)/h':>10} {'centre/h':>8} {'stick y':>8} {'(y-c)/h':>7} "
           f"{'p err':>6} {'q err':>6} {'Δp/p0':>6} {'stick/slip/open':>15}")

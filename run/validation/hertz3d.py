@@ -54,6 +54,19 @@ def solve(binary, scene, sets, out):
         sys.exit(f"solve failed ({' '.join(cmd)}):\n{r.stdout}\n{r.stderr}")
 
 
+def solve_levels(binary, scene, levels, sets_of, name, keep=None):
+    """Solves `scene` at each level n of `levels` ("17,25") with the overrides sets_of(n) into
+    KEEP (default: a temporary folder) as NAME-n.h5; returns the result paths."""
+    d = keep or tempfile.mkdtemp(prefix=f"{name}-")
+    os.makedirs(d, exist_ok=True)
+    paths = []
+    for n in map(int, levels.split(",")):
+        out = os.path.join(d, f"{name}-{n}.h5")
+        solve(binary, scene, sets_of(n), out)
+        paths.append(out)
+    return paths
+
+
 def read(path):
     """(coordinates, status, pressure, traction, report) of the last step."""
     f = h5py.File(path, "r")
@@ -130,14 +143,7 @@ def main():
     ap.add_argument("--keep", help="directory for the result files (default: a temporary one)")
     args = ap.parse_args()
     scene = os.path.join(HERE, "hertz3d.toml")
-    paths = args.results
-    if not paths:
-        d = args.keep or tempfile.mkdtemp(prefix="hertz3d-")
-        os.makedirs(d, exist_ok=True)
-        for n in map(int, args.levels.split(",")):
-            out = os.path.join(d, f"hertz3d-{args.cap}-{args.friction}-{n}.h5")
-            solve(args.bin, scene, level_sets(n, args.cap, args.friction, args.mu), out)
-            paths.append(out)
+    paths = args.results or solve_levels(args.bin, scene, args.levels, lambda n: level_sets(n, args.cap, args.friction, args.mu), f"hertz3d-{args.cap}-{args.friction}", args.keep)
     results = [analyse(p) for p in paths]
     table(results, f"Hertz 3D, cap {args.cap} on flat hex8 (non-matching, mortar), friction {args.friction}, R = {R}, E = {E}, ν = {NU}")
     if args.friction == "coulomb":

@@ -125,15 +125,18 @@ mod tests {
     use crate::qp::sets::{Disc, TangentSet};
     use crate::qp::{kkt, Method, Qp, Replicated, Silent};
 
+    /// m pairs, A random SPD, pressing loads (b_ν > 0) with tangential pushes, Λ with zero discs.
+    fn problem(m: usize, mut seed: u64) -> (Dense, Vec<f64>, Lambda) {
+        let n = 3 * m;
+        let a = Dense::random(n, 1.0, &mut seed);
+        let b: Vec<f64> = (0..n).map(|i| if i < m { 2.0 + lcg(&mut seed) } else { 3.0 * lcg(&mut seed) }).collect();
+        (a, b, Lambda::new(m, Some(vec![TangentSet::Disc(Disc::new(0.0)); m])))
+    }
+
     #[test]
     fn the_fixed_point_is_a_tresca_solution_with_its_own_bounds() {
-        let m = 10;
+        let (m, (a, b, set)) = (10, problem(10, 7));
         let n = 3 * m;
-        let mut seed = 7u64;
-        let a = Dense::random(n, 1.0, &mut seed);
-        // pressing loads (b_ν > 0) with tangential pushes
-        let b: Vec<f64> = (0..n).map(|i| if i < m { 2.0 + lcg(&mut seed) } else { 3.0 * lcg(&mut seed) }).collect();
-        let set = Lambda::new(m, Some(vec![TangentSet::Disc(Disc::new(0.0)); m]));
         let mu = vec![Coefficient::Isotropic(0.3); m];
         let p = crate::qp::Params::new(Method::Tssn).with_eps(1e-10);
         let (sol, fixed, info) = solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| {
@@ -174,12 +177,8 @@ mod tests {
     /// On orthotropic cones (ellipses cut at λν) too: the lagged bounds reach the fixed point's λ.
     #[test]
     fn lagged_bounds_reach_the_fixed_point_on_orthotropic_cones() {
-        let m = 10;
+        let (m, (a, b, set)) = (10, problem(10, 9));
         let n = 3 * m;
-        let mut seed = 9u64;
-        let a = Dense::random(n, 1.0, &mut seed);
-        let b: Vec<f64> = (0..n).map(|i| if i < m { 2.0 + lcg(&mut seed) } else { 3.0 * lcg(&mut seed) }).collect();
-        let set = Lambda::new(m, Some(vec![TangentSet::Disc(Disc::new(0.0)); m]));
         let mu = vec![Coefficient::Orthotropic(0.4, 0.1); m];
         let mut p = crate::qp::Params::new(Method::Tssn).with_eps(1e-10);
         let (sol, ..) = solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent)).unwrap();

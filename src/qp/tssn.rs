@@ -230,7 +230,7 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
         drv.info.preconditioner_applications += cg.applications;
         err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
         if mu.is_some() {
-            settle_bounds(sp, &mut frozen, &at, &x, &r, (err, best, c.eps), &drv.st, &mut z);
+            settle_bounds(sp, &mut frozen, &at, set.layout.m, &x, &r, (err, best, c.eps), &drv.st, &mut z);
             best = best.min(err);
         }
         let step = drv.newton(StepKind::Tangent, err, tol, q0, &sys.sets, cg.iterations);
@@ -252,10 +252,9 @@ const RECUT: f64 = 0.01;
 /// forth under lagged bounds (the error then cycles); a rise by [`LAG_JUMP`] over the best
 /// freezes Λ(x), and frozen bounds are re-cut at x once the error over them is at most
 /// [`RECUT`] times the relative change of λν since their cut, or at most ε — the fixed point's
-/// rule, without its restarts. `work` is workspace.
+/// rule, without its restarts. `m`: the pairs (normal components first); `work` is workspace.
 #[allow(clippy::too_many_arguments)]
-fn settle_bounds<'s, S: Space>(sp: &S, frozen: &mut Option<(Lambda, Vec<f64>)>, at: &impl Fn(&[f64]) -> Cow<'s, Lambda>, x: &[f64], r: &[f64], (err, best, eps): (f64, f64, f64), st: &Setup, work: &mut [f64]) {
-    let m = at(x).layout.m;
+fn settle_bounds<'s, S: Space>(sp: &S, frozen: &mut Option<(Lambda, Vec<f64>)>, at: &impl Fn(&[f64]) -> Cow<'s, Lambda>, m: usize, x: &[f64], r: &[f64], (err, best, eps): (f64, f64, f64), st: &Setup, work: &mut [f64]) {
     // the normal part of a vector, as a whole vector of the space (the fixed point's measure)
     let normals = |v: &[f64]| -> Vec<f64> { v.iter().enumerate().map(|(i, a)| if i < m { *a } else { 0.0 }).collect() };
     match frozen {
