@@ -323,6 +323,22 @@ impl<'c, C: Comm> Distribution<'c, C> {
         partial.iter().sum()
     }
 
+    /// [`Distribution::dot`] of several pairs in one reduction (each the same value `dot` gives).
+    pub fn dots(&self, pairs: &[(&[f64], &[f64])], out: &mut [f64]) {
+        let s = self.subdomains;
+        let mut partial = vec![0.0; s * pairs.len()];
+        for (j, (x, y)) in pairs.iter().enumerate() {
+            let p = &mut partial[j * s..(j + 1) * s];
+            for ((&c, a), b) in self.chunk.iter().zip(x.iter()).zip(y.iter()) {
+                p[c] += a * b;
+            }
+        }
+        Clock::time(&self.clock.reduce, || self.comm.sum_f64(&mut partial));
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = partial[j * s..(j + 1) * s].iter().sum();
+        }
+    }
+
     /// The owned components of a vector over all rows.
     pub fn restrict(&self, global: &[f64]) -> Vec<f64> {
         self.owned.iter().map(|&r| global[r]).collect()
@@ -344,6 +360,10 @@ impl<'c, C: Comm> Distribution<'c, C> {
 impl<C: Comm> Space for Distribution<'_, C> {
     fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
         Distribution::dot(self, x, y)
+    }
+
+    fn dots(&self, pairs: &[(&[f64], &[f64])], out: &mut [f64]) {
+        Distribution::dots(self, pairs, out)
     }
 
     fn max(&self, v: f64) -> f64 {

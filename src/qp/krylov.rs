@@ -1,7 +1,9 @@
 //! The Krylov kernels of the inner solves: one masked, preconditioned CG (`pcg`) for every
 //! symmetric inner system (GIMSSN's CGMfeas, IMSSN/MSSN, TSSN, plain CG) and one BiCGSTAB
 //! (`Bicgstab`, right-preconditioned where a preconditioner is given) for SSN's unsymmetric
-//! Newton systems.
+//! Newton systems. [`Recycle`] keeps the directions of earlier inner solves, which `pcg` then
+//! deflates (its directions kept S-orthogonal to them) when the system has not changed its
+//! structure.
 
 use super::driver::positive_curvature;
 use super::operator::{CoarseProjector, Operator, Preconditioner, Space};
@@ -111,6 +113,118 @@ fn project(system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, v: &m
     }
 }
 
+/// The directions of earlier inner solves and their A-products (as the solve formed them:
+/// `apply_kernel` under a coarse space), kept for deflation — Krylov recycling across Newton
+/// steps. The caller empties it when the system's structure (which components move) changes;
+/// within one structure the subspace and C move only with the sliding pairs' tangents and cᵢ,
+/// so the stored products are those of the new system up to that drift, which only slows
+/// the deflation (the iteration's own products are exact). The oldest go first past `cap`.
+pub(crate) struct Recycle {
+    cap: usize,
+    w: std::collections::VecDeque<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Recycle {
+    pub fn new(cap: usize) -> Self {
+        Recycle { cap, w: Default::default() }
+    }
+    pub fn clear(&mut self) {
+        self.w.clear();
+    }
+    fn push(&mut self, d: Vec<f64>, ad: Vec<f64>) {
+        if self.cap == 0 {
+            return;
+        }
+        if self.w.len() == self.cap {
+            self.w.pop_front();
+        }
+        self.w.push_back((d, ad));
+    }
+}
+
+/// The deflation space of one solve: U (the kept directions brought into the system's subspace),
+/// A U (stored), S U, and the pseudo-inverse of E = UᵀSU.
+struct Deflation {
+    u: Vec<Vec<f64>>,
+    au: Vec<Vec<f64>>,
+    su: Vec<Vec<f64>>,
+    /// E⁺ = Q diag(1/θ) Qᵀ over E's eigenpairs with θ > 1e-10 θ_max, row-major k × k.
+    einv: Vec<f64>,
+}
+
+impl Deflation {
+    fn new<S: Space>(sp: &S, bank: &Recycle, system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, work: &mut [f64]) -> Option<Deflation> {
+        let k = bank.w.len();
+        if k == 0 {
+            return None;
+        }
+        let n = work.len();
+        let (mut u, mut au, mut su) = (Vec::with_capacity(k), Vec::with_capacity(k), Vec::with_capacity(k));
+        let drift_max: f64 = std::env::var("TF_DRIFT").ok().and_then(|v| v.parse().ok()).unwrap_or(1e-2);
+        for (w, aw) in &bank.w {
+            let mut v = vec![0.0; n];
+            system.apply(w, None, &mut v);
+            project(system, coarse, &mut v, work);
+            let dv: Vec<f64> = v.iter().zip(w).map(|(a, b)| a - b).collect();
+            if sp.norm(&dv) > drift_max * sp.norm(w) {
+                continue;
+            }
+            let mut sv = vec![0.0; n];
+            system.apply(aw, Some(&v), &mut sv);
+            project(system, coarse, &mut sv, work);
+            u.push(v);
+            au.push(aw.clone());
+            su.push(sv);
+        }
+        let k = u.len();
+        if k == 0 {
+            return None;
+        }
+        let mut pairs = Vec::with_capacity(k * (k + 1) / 2);
+        for i in 0..k {
+            for j in 0..=i {
+                pairs.push((&u[i][..], &su[j][..]));
+            }
+        }
+        let mut e = vec![0.0; pairs.len()];
+        sp.dots(&pairs, &mut e);
+        let mut m = faer::Mat::<f64>::zeros(k, k);
+        let mut at = 0;
+        for i in 0..k {
+            for j in 0..=i {
+                m[(i, j)] = e[at];
+                m[(j, i)] = e[at];
+                at += 1;
+            }
+        }
+        let eig = m.self_adjoint_eigen(faer::Side::Lower).ok()?;
+        let (theta, q) = (eig.S(), eig.U());
+        let top = (0..k).map(|i| theta[i]).fold(0.0, f64::max);
+        if !(top > 0.0 && top.is_finite()) {
+            return None;
+        }
+        let mut einv = vec![0.0; k * k];
+        for l in (0..k).filter(|&l| theta[l] > 1e-10 * top) {
+            for i in 0..k {
+                for j in 0..k {
+                    einv[i * k + j] += q[(i, l)] * q[(j, l)] / theta[l];
+                }
+            }
+        }
+        Some(Deflation { u, au, su, einv })
+    }
+
+    /// c = E⁺ Vᵀ y for V = U (`by_u`) or S U.
+    fn coefficients<S: Space>(&self, sp: &S, y: &[f64], by_u: bool) -> Vec<f64> {
+        let k = self.u.len();
+        let v = if by_u { &self.u } else { &self.su };
+        let pairs: Vec<(&[f64], &[f64])> = v.iter().map(|v| (&v[..], y)).collect();
+        let mut t = vec![0.0; k];
+        sp.dots(&pairs, &mut t);
+        (0..k).map(|i| (0..k).map(|j| self.einv[i * k + j] * t[j]).sum()).collect()
+    }
+}
+
 /// What one [`pcg`] did.
 pub(crate) struct PcgInfo {
     pub iterations: usize,
@@ -121,7 +235,10 @@ pub(crate) struct PcgInfo {
 /// CG on the inner system from x with g = r(x) = A x − b: the system's residual h = Π g (+ C σ,
 /// σ = 0 at the start), stopped at ‖h‖ ≤ `threshold(‖h₀‖)` or after `max_iter` iterations (one
 /// A-product each). x and g (by the recurrence) are updated in place; `each(‖h‖)` is called
-/// after every iteration.
+/// after every iteration. With a `bank` (standard coefficients only) its directions deflate the
+/// solve — the start is corrected over them (x −= U c, UᵀS U c = Uᵀh) and every direction is
+/// kept S-orthogonal to them (deflated PCG, Saad et al. 2000) — and this solve's directions are
+/// added to it.
 pub(crate) fn pcg<A: Operator>(
     qp: &Qp<'_, A>,
     opts: &Pcg<'_>,
@@ -129,6 +246,7 @@ pub(crate) fn pcg<A: Operator>(
     g: &mut [f64],
     threshold: impl FnOnce(f64) -> f64,
     mut each: impl FnMut(f64),
+    mut bank: Option<&mut Recycle>,
 ) -> Result<PcgInfo, QpError> {
     let a = qp.a;
     let sp = a.space();
@@ -151,6 +269,42 @@ pub(crate) fn pcg<A: Operator>(
     let mut hz = sp.dot(&h, &h);
     let mut hnorm = hz.sqrt();
     let threshold = threshold(hnorm);
+    // projected: the directions lie in Ker G, so A d = F d + Gᵀ(…) (`apply_kernel`), whose Gᵀ
+    // part the projection of md removes; the gradient's recurrence sums F d and is mapped to
+    // A's once at the end (`finish_kernel`)
+    let g0 = if opts.coarse.is_some() { g.to_vec() } else { vec![] };
+    debug_assert!(bank.is_none() || opts.coefficients == Coefficients::Standard);
+    let deflation = match (&bank, hnorm > threshold) {
+        (Some(b), true) => {
+            let mut scratch = vec![0.0; n];
+            Deflation::new(sp, b, opts.system, opts.coarse, &mut scratch)
+        }
+        _ => None,
+    };
+    if let Some(df) = &deflation {
+        // the start's Galerkin correction over U
+        let c = df.coefficients(sp, &h, true);
+        for (j, cj) in c.iter().enumerate() {
+            for i in 0..n {
+                x[i] -= cj * df.u[j][i];
+                g[i] -= cj * df.au[j][i];
+                h[i] -= cj * df.su[j][i];
+            }
+        }
+        hz = sp.dot(&h, &h);
+        hnorm = hz.sqrt();
+    }
+    // d = z − U E⁺ (SU)ᵀ z
+    let deflate = |z: &[f64], d: &mut [f64]| {
+        if let Some(df) = &deflation {
+            let mu = df.coefficients(sp, z, false);
+            for (j, mj) in mu.iter().enumerate() {
+                for i in 0..n {
+                    d[i] -= mj * df.u[j][i];
+                }
+            }
+        }
+    };
     if preconditioned {
         apply_m(&h, &mut z);
         hz = sp.dot(&h, &z);
@@ -158,10 +312,9 @@ pub(crate) fn pcg<A: Operator>(
         z.copy_from_slice(&h);
     }
     d.copy_from_slice(&z);
-    // projected: the directions lie in Ker G, so A d = F d + Gᵀ(…) (`apply_kernel`), whose Gᵀ
-    // part the projection of md removes; the gradient's recurrence sums F d and is mapped to
-    // A's once at the end (`finish_kernel`)
-    let g0 = if opts.coarse.is_some() { g.to_vec() } else { vec![] };
+    deflate(&z, &mut d);
+    let h_start = hnorm;
+    let mut kept: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     let mut it = 0;
     while hnorm > threshold && it < opts.max_iter {
         if opts.coarse.is_some() {
@@ -172,6 +325,9 @@ pub(crate) fn pcg<A: Operator>(
         opts.system.apply(&ad, Some(&d), &mut md);
         project(opts.system, opts.coarse, &mut md, &mut work);
         let dmd = positive_curvature(sp.dot(&d, &md), "the curvature dᵀSd", opts.outer)?;
+        if bank.is_some() {
+            kept.push((d.clone(), ad.clone()));
+        }
         it += 1;
         let alpha = match opts.coefficients {
             Coefficients::Standard => hz / dmd,
@@ -212,6 +368,7 @@ pub(crate) fn pcg<A: Operator>(
                 for i in 0..n {
                     d[i] = z[i] + beta * d[i];
                 }
+                deflate(&z, &mut d);
             }
             Coefficients::Conjugated => {
                 let beta = sp.dot(&h, &md) / dmd;
@@ -222,6 +379,11 @@ pub(crate) fn pcg<A: Operator>(
             }
         }
         each(hnorm);
+        if deflation.is_some() && hnorm > 2.0 * h_start {
+            // stale deflation (the tangents moved more than the drift test saw): the iteration
+            // is no longer a CG; stop here and let the Newton step go on from x
+            break;
+        }
     }
     if opts.coarse.is_some() && it > 0 {
         // g = g₀ − Σ α A d = g₀ − P̃(g₀ − g)
@@ -234,6 +396,11 @@ pub(crate) fn pcg<A: Operator>(
     if preconditioned {
         // the last residual's preconditioning counts too (as it always did: one per iteration + 1)
         debug_assert_eq!(applications, it + 1);
+    }
+    if let Some(b) = bank.as_deref_mut() {
+        for (d, ad) in kept {
+            b.push(d, ad);
+        }
     }
     Ok(PcgInfo { iterations: it, applications })
 }

@@ -13,6 +13,9 @@ use std::ops::Range;
 pub trait Space {
     /// Inner product of two dual vectors.
     fn dot(&self, x: &[f64], y: &[f64]) -> f64;
+    /// The inner products of several pairs in one reduction: `out[j] = dot(pairs[j])`, each
+    /// equal to what [`Space::dot`] returns for it.
+    fn dots(&self, pairs: &[(&[f64], &[f64])], out: &mut [f64]);
     /// The maximum over the ranks of a value each rank computed from its own components.
     fn max(&self, v: f64) -> f64;
     /// The sum over the ranks of a count each rank made on its own components.
@@ -37,6 +40,11 @@ pub struct Replicated;
 impl Space for Replicated {
     fn dot(&self, x: &[f64], y: &[f64]) -> f64 {
         x.iter().zip(y).map(|(a, b)| a * b).sum()
+    }
+    fn dots(&self, pairs: &[(&[f64], &[f64])], out: &mut [f64]) {
+        for (o, (x, y)) in out.iter_mut().zip(pairs) {
+            *o = self.dot(x, y);
+        }
     }
     fn max(&self, v: f64) -> f64 {
         v

@@ -186,12 +186,16 @@ pub struct Tssn {
     /// this many starts in a row (1: at every rise, the monotone rule); 0, the default: never
     /// (chosen on the benchmark set, README).
     pub patience: usize,
+    /// Krylov recycling: while a Newton step's system has the same structure as the last one's
+    /// (the same components free, the same pairs sliding), its CG is deflated by up to this
+    /// many directions of the earlier steps' solves. 0: off.
+    pub recycle: usize,
 }
 
 impl Default for Tssn {
     fn default() -> Self {
         let Inexact { rtol, inner_floor, .. } = Inexact::default();
-        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0 }
+        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0, recycle: 0 }
     }
 }
 

@@ -46,7 +46,7 @@ use std::borrow::Cow;
 use super::cone::{cut, Coefficient};
 use super::driver::{err_of, Driver, Monitor, Setup, SIGMA_SAFETY};
 use super::gimssn;
-use super::krylov::{pcg, Coefficients, InnerSystem, Pcg};
+use super::krylov::{pcg, Coefficients, InnerSystem, Pcg, Recycle};
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{Common, Tssn};
@@ -163,6 +163,10 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
     // Λ(λ) with the normals it was cut at
     let mut best = err;
     let mut frozen: Option<(Lambda, Vec<f64>)> = None;
+    // Krylov recycling: the kept directions, valid for the structure `moving` (free components
+    // and sliding pairs' first components) of the system they came from
+    let mut bank = (p.recycle > 0).then(|| Recycle::new(p.recycle));
+    let mut moving: Vec<bool> = vec![];
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
         if drv.met(err) {
@@ -226,7 +230,18 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
             outer: k,
         };
         let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
-        let cg = pcg(qp, &opts, &mut x, &mut r, threshold, |_| {})?;
+        if let Some(b) = bank.as_mut() {
+            let mut now = sys.sets.free.clone();
+            for s in &sys.slides {
+                now[s.k] = true;
+            }
+            let changed = if moving.len() == now.len() { now.iter().zip(&moving).filter(|(a, b)| a != b).count() } else { now.len() };
+            if sp.count(changed) > 0 {
+                b.clear();
+            }
+            moving = now;
+        }
+        let cg = pcg(qp, &opts, &mut x, &mut r, threshold, |_| {}, bank.as_mut())?;
         drv.info.preconditioner_applications += cg.applications;
         err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
         if mu.is_some() {
@@ -413,5 +428,60 @@ pub(crate) mod tests {
             assert!(k.worst() <= 1e-7, "KKT {k:?}");
         }
         assert!(fired > 0, "the safeguard never fired at ρ = 300/σ");
+    }
+}
+
+#[cfg(test)]
+mod recycle_tests {
+    use super::tests::{lcg, Dense};
+    use super::*;
+    use crate::qp::krylov::{pcg, Coefficients, Pcg, Recycle, Whole};
+    use crate::qp::{solve, Method, MethodParams, Params, Replicated, Silent};
+
+    /// CG restarted every 8 iterations on one SPD system: with the bank the restarts lose
+    /// nothing (each restart is deflated by the directions before it, so the iteration goes on
+    /// as one CG), without it each restart starts the Krylov space afresh.
+    #[test]
+    fn recycled_restarts_continue_the_cg() {
+        let mut seed = 3;
+        let a = Dense::random(120, 1e-3, &mut seed);
+        let b: Vec<f64> = (0..120).map(|_| lcg(&mut seed)).collect();
+        let set = Lambda::new(0, None);
+        let qp = Qp::new(&a, &b, &set);
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0 };
+        let bnorm = Replicated.norm(&b);
+        let restarts = |mut bank: Option<Recycle>| {
+            let (mut x, mut g) = (vec![0.0; 120], b.iter().map(|v| -v).collect::<Vec<f64>>());
+            for k in 1..=60 {
+                pcg(&qp, &opts, &mut x, &mut g, |_| 1e-10 * bnorm, |_| {}, bank.as_mut()).expect("SPD");
+                a.apply(&x, &mut g);
+                g.iter_mut().zip(&b).for_each(|(gi, bi)| *gi -= bi);
+                if Replicated.norm(&g) <= 1e-8 * bnorm {
+                    return k;
+                }
+            }
+            61
+        };
+        let (plain, recycled) = (restarts(None), restarts(Some(Recycle::new(200))));
+        assert!(recycled * 2 <= plain, "recycled restarts {recycled}, plain {plain}");
+    }
+
+    #[test]
+    fn tssn_with_recycling_reaches_the_same_solution() {
+        let mut seed = 7;
+        let a = Dense::random(36, 1.0, &mut seed);
+        let b: Vec<f64> = (0..36).map(|i| if i < 12 { 2.0 + lcg(&mut seed) } else { 3.0 * lcg(&mut seed) }).collect();
+        let tangent = (0..12).map(|_| crate::qp::sets::TangentSet::Disc(crate::qp::sets::Disc::new(0.5 + 0.3 * lcg(&mut seed).abs()))).collect();
+        let set = Lambda::new(12, Some(tangent));
+        let qp = Qp::new(&a, &b, &set);
+        let zero = vec![0.0; 36];
+        let mut p = Params::new(Method::Tssn).with_eps(1e-11);
+        let plain = solve(&qp, &zero, &p, &mut Silent).expect("TSSN converges");
+        if let MethodParams::Tssn(t) = &mut p.method {
+            t.recycle = 30;
+        }
+        let recycled = solve(&qp, &zero, &p, &mut Silent).expect("TSSN with recycling converges");
+        let d = plain.lambda.iter().zip(&recycled.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-8, "recycling changed λ by {d:e}");
     }
 }
