@@ -411,13 +411,36 @@ impl Preconditioner {
     }
 }
 
+/// How the A-products use the factors (`solver.precision`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Precision {
+    /// The factors are also kept in single precision, and the inner CG iterations use them
+    /// where their measured error is within what the iteration allows (TFETI).
+    #[default]
+    Mixed,
+    /// Double precision only.
+    Double,
+}
+
+impl Precision {
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::Mixed => "mixed",
+            Precision::Double => "double",
+        }
+    }
+}
+
 /// The `[solver]` table: `method`, the settings every method reads ([`qp::Common`]), the
 /// method's own ([`qp::MethodParams`]: a key the method does not read is an error) and the
-/// FETI preconditioner. Defaults live with the solvers' parameter structs.
+/// FETI preconditioner and the products' precision. Defaults live with the solvers' parameter
+/// structs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolverSettings {
     pub params: qp::Params,
     pub preconditioner: Preconditioner,
+    pub precision: Precision,
     /// `method` absent (or `"auto"`): the method is chosen for the dual the scene is solved on
     /// (`pipeline::resolve_method`); `params` holds the default method's defaults until then.
     pub auto: bool,
@@ -425,7 +448,7 @@ pub struct SolverSettings {
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        SolverSettings { params: qp::Params::default(), preconditioner: Preconditioner::Auto, auto: true }
+        SolverSettings { params: qp::Params::default(), preconditioner: Preconditioner::Auto, precision: Precision::default(), auto: true }
     }
 }
 
@@ -452,6 +475,7 @@ impl SolverSettings {
             _ => Method::default(),
         };
         let preconditioner = t.remove("preconditioner").map_or(Ok(Preconditioner::Auto), |v| value("preconditioner", v))?;
+        let precision = t.remove("precision").map_or(Ok(Precision::default()), |v| value("precision", v))?;
         let common_keys = Self::common_keys();
         let (common, own): (toml::Table, toml::Table) = t.into_iter().partition(|(k, _)| common_keys.contains(k));
         if let (true, Some(key)) = (auto, own.keys().next()) {
@@ -478,7 +502,7 @@ impl SolverSettings {
         })?;
         let params = qp::Params { common, method: own };
         params.validate().map_err(|e| Error::scene(format!("solver.{}", e.key), e.msg))?;
-        Ok(SolverSettings { params, preconditioner, auto })
+        Ok(SolverSettings { params, preconditioner, precision, auto })
     }
 
     /// The keys of [`qp::Common`].
@@ -496,6 +520,9 @@ impl SolverSettings {
         }
         if self.preconditioner != Preconditioner::Auto {
             t.insert("preconditioner".into(), self.preconditioner.name().into());
+        }
+        if self.precision != Precision::default() {
+            t.insert("precision".into(), self.precision.name().into());
         }
         t
     }

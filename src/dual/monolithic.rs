@@ -36,6 +36,10 @@ pub struct MonolithicDual<'c, C: Comm> {
     /// c without the last step's jump.
     c0: Vec<f64>,
     counter: ProductCounter,
+    /// Mixed precision, as [`crate::feti::dual::TfetiDual`]: η of the single-precision
+    /// factors and whether the products use them now.
+    single: Option<f64>,
+    single_now: std::cell::Cell<bool>,
 }
 
 /// The rows of B (free part) for the body with DOF map `dofs`, and the shift of c by the
@@ -85,7 +89,7 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
                 BodyBlock { local, b }
             })
             .collect();
-        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default() };
+        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default(), single: None, single_now: Default::default() };
         dual.set_c(contact, None);
         let rhs = dual.rhs();
         (dual, rhs)
@@ -216,15 +220,53 @@ impl<C: Comm> Operator for MonolithicDual<'_, C> {
 
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
-        let mut z = self.scatter(x);
-        for (blk, zb) in self.blocks.iter().zip(&mut z) {
-            blk.local.chol.solve_in_place(zb);
-        }
-        self.gather(&z, y);
+        self.apply_as(x, y, self.single_now.get());
     }
 
     fn products(&self) -> usize {
         self.counter.get()
+    }
+
+    /// Products with single-precision factors while their measured error η is within `rel`.
+    fn allow_error(&self, rel: f64) {
+        self.single_now.set(self.single.is_some_and(|eta| eta <= rel));
+    }
+}
+
+impl<C: Comm> MonolithicDual<'_, C> {
+    /// y = B K⁻¹ Bᵀ x (not counted), with the single-precision factors when `single`.
+    fn apply_as(&self, x: &[f64], y: &mut [f64], single: bool) {
+        let mut z = self.scatter(x);
+        for (blk, zb) in self.blocks.iter().zip(&mut z) {
+            if single {
+                blk.local.chol.solve_in_place_single(zb);
+            } else {
+                blk.local.chol.solve_in_place(zb);
+            }
+        }
+        self.gather(&z, y);
+    }
+
+    /// Keeps single-precision copies of the local factors and measures η = ‖Ãv − Av‖/‖Av‖ on
+    /// a fixed vector (two uncounted products). Returns η.
+    pub fn keep_single(&mut self) -> f64 {
+        for blk in &mut self.blocks {
+            blk.local.chol.keep_single();
+        }
+        let v: Vec<f64> = (0..self.layout.dim()).map(crate::feti::dual::probe).collect();
+        let (mut ad, mut as_) = (vec![0.0; v.len()], vec![0.0; v.len()]);
+        self.apply_as(&v, &mut ad, false);
+        self.apply_as(&v, &mut as_, true);
+        let norm = |a: &[f64]| a.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let d: Vec<f64> = ad.iter().zip(&as_).map(|(a, b)| a - b).collect();
+        let eta = norm(&d) / norm(&ad).max(f64::MIN_POSITIVE);
+        self.single = Some(eta);
+        eta
+    }
+
+    /// η of [`MonolithicDual::keep_single`], when single-precision factors are kept.
+    pub fn single_error(&self) -> Option<f64> {
+        self.single
     }
 }
 

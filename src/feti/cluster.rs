@@ -500,11 +500,26 @@ impl ClusterSystem {
         self.pinv_corners(x);
     }
 
+    /// x ← K_c⁺ x, the members' solves in single precision when `single` (and their factors
+    /// keep a copy): [`ClusterSystem::keep_single`].
+    pub fn pinv_in_place_as(&self, x: &mut [f64], single: bool) {
+        self.pinv_corners_as(x, single);
+    }
+
+    /// Keeps single-precision copies of the members' factors; returns their bytes.
+    pub fn keep_single(&mut self) -> usize {
+        self.subs.iter_mut().map(|s| s.keep_single()).sum()
+    }
+
     /// x ← K_c⁺ x; returns the corner forces μ (empty without corners). The time outside the
     /// members' K_s⁺ solves adds to [`ClusterSystem::corner_s`].
     pub fn pinv_corners(&self, x: &mut [f64]) -> Vec<f64> {
+        self.pinv_corners_as(x, false)
+    }
+
+    fn pinv_corners_as(&self, x: &mut [f64], single: bool) -> Vec<f64> {
         let Some(h) = &self.hybrid else {
-            self.subs[0].pinv_in_place(x);
+            self.subs[0].pinv_in_place_as(x, single);
             return vec![];
         };
         let t0 = std::time::Instant::now();
@@ -521,7 +536,7 @@ impl ClusterSystem {
             let nds = xs.len();
             gemv(&mut rhs[h.nc + h.roff[m]..h.nc + h.roff[m + 1]], &s.r[..nds * s.kdim], nds, xs, -h.t, false, true);
             let t1 = std::time::Instant::now();
-            s.pinv_in_place(xs);
+            s.pinv_in_place_as(xs, single);
             solves += t1.elapsed().as_secs_f64();
             for &(i, dof, v) in &h.entries[m] {
                 rhs[i] += v * xs[dof];

@@ -55,6 +55,11 @@ pub struct TfetiDual<'c, C: Comm> {
     /// H-TFETI: the null space W of F (the B_c rows as combinations of B's rows), owned
     /// indices, orthonormal; products, preconditioner and b̃ are kept orthogonal to it.
     null: Vec<Vec<(usize, f64)>>,
+    /// Mixed precision: the measured relative error η of a product with the single-precision
+    /// factors ([`TfetiDual::keep_single`]), and whether the products use them now
+    /// ([`Operator::allow_error`]).
+    single: Option<f64>,
+    single_now: std::cell::Cell<bool>,
 }
 
 impl<'c, C: Comm> TfetiDual<'c, C> {
@@ -74,7 +79,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let c = dist.restrict(&cons.c);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None, null: vec![] };
+        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None, null: vec![], single: None, single_now: Default::default() };
         let b = dual.rhs();
         (dual, b)
     }
@@ -295,19 +300,40 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         self.dist.assemble(&v, y);
     }
 
-    /// z_s ← K_s⁺ z_s for each local subdomain.
-    fn pinv_all(&self, z: &mut [Vec<f64>]) {
+    /// z_s ← K_s⁺ z_s for each local subdomain (in single precision when `single`).
+    fn pinv_all(&self, z: &mut [Vec<f64>], single: bool) {
         Clock::time(&self.dist.clock.pinv, || {
             for (s, zs) in self.pieces.iter().zip(z) {
-                s.sys.pinv_in_place(zs);
+                s.sys.pinv_in_place_as(zs, single);
             }
         });
+    }
+
+    /// Keeps single-precision copies of the local factors and measures η, the relative error
+    /// ‖F̃v − Fv‖/‖Fv‖ of F with them on a fixed vector (the same on every rank count; two
+    /// uncounted products). Returns η and this rank's bytes of the copies.
+    pub fn keep_single(&mut self) -> (f64, usize) {
+        let bytes = self.pieces.iter_mut().map(|p| p.sys.keep_single()).sum();
+        let v: Vec<f64> = (0..self.layout.dim()).map(|i| probe(qp::Space::global_index(&self.dist, i))).collect();
+        let (mut fd, mut fs) = (vec![0.0; v.len()], vec![0.0; v.len()]);
+        let wl = self.dist.ghosted(&v);
+        self.apply_f_local_as(&wl, &mut fd, false);
+        self.apply_f_local_as(&wl, &mut fs, true);
+        let d: Vec<f64> = fd.iter().zip(&fs).map(|(a, b)| a - b).collect();
+        let eta = self.dist.dot(&d, &d).sqrt() / self.dist.dot(&fd, &fd).sqrt().max(f64::MIN_POSITIVE);
+        self.single = Some(eta);
+        (eta, bytes)
+    }
+
+    /// η of [`TfetiDual::keep_single`], when single-precision factors are kept.
+    pub fn single_error(&self) -> Option<f64> {
+        self.single
     }
 
     /// K_s⁺(f_s − B_sᵀλ) for each local subdomain (λ on the local rows).
     fn pinv_of_rhs(&self, lambda_local: &[f64]) -> Vec<Vec<f64>> {
         let mut z = self.rhs_of(lambda_local);
-        self.pinv_all(&mut z);
+        self.pinv_all(&mut z, false);
         z
     }
 
@@ -322,8 +348,12 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// y = F w (owned) from w on the local rows (not counted).
     fn apply_f_local(&self, wl: &[f64], y: &mut [f64]) {
+        self.apply_f_local_as(wl, y, false);
+    }
+
+    fn apply_f_local_as(&self, wl: &[f64], y: &mut [f64], single: bool) {
         let mut z = self.scatter(wl);
-        self.pinv_all(&mut z);
+        self.pinv_all(&mut z, single);
         self.gather(&z, y);
     }
 
@@ -346,6 +376,15 @@ impl<C: Comm> DualProblem for TfetiDual<'_, C> {
     }
 }
 
+/// A fixed probe vector's component at global index i (pseudo-random in [−1, 1]).
+pub(crate) fn probe(i: usize) -> f64 {
+    let mut z = (i as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
 impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     type Space = Distribution<'c, C>;
     fn space(&self) -> &Distribution<'c, C> {
@@ -361,7 +400,7 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
         Clock::time(&self.dist.clock.apply, || {
             let mut wl = self.dist.ghosted(x);
             self.coarse.project_t_local(&self.dist, &mut wl);
-            self.apply_f_local(&wl, y);
+            self.apply_f_local_as(&wl, y, self.single_now.get());
             self.coarse.project(&self.dist, y);
             self.deflate(y);
         });
@@ -375,9 +414,14 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     fn apply_kernel(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
         Clock::time(&self.dist.clock.apply, || {
-            self.apply_f(x, y);
+            self.apply_f_local_as(&self.dist.ghosted(x), y, self.single_now.get());
             self.deflate(y);
         });
+    }
+
+    /// Products with single-precision factors while their measured error η is within `rel`.
+    fn allow_error(&self, rel: f64) {
+        self.single_now.set(self.single.is_some_and(|eta| eta <= rel));
     }
 
     /// y ← P̃ y.

@@ -310,13 +310,28 @@ impl SubdomainSystem {
 
     /// x ← K_s⁺ x.
     pub fn pinv_in_place(&self, x: &mut [f64]) {
+        self.pinv_in_place_as(x, false);
+    }
+
+    /// x ← K_s⁺ x, with the single-precision copy of the factor when `single` and one is kept.
+    pub fn pinv_in_place_as(&self, x: &mut [f64], single: bool) {
         for &d in &self.zeroed {
             x[d] = 0.0;
         }
-        self.chol.solve_in_place(x);
+        if single {
+            self.chol.solve_in_place_single(x);
+        } else {
+            self.chol.solve_in_place(x);
+        }
         for &d in &self.zeroed {
             x[d] = 0.0;
         }
+    }
+
+    /// Keeps a single-precision copy of the factor; returns its bytes.
+    pub fn keep_single(&mut self) -> usize {
+        self.chol.keep_single();
+        self.chol.single_bytes()
     }
 
     /// X ← K_s⁺ X for the `ncols` columns of `x` (column-major).

@@ -1,7 +1,8 @@
 //! Sparse Cholesky LLᵀ of a symmetric positive definite [`SymCsc`] (faer, supernodal or
 //! simplicial as faer decides), with a caller-supplied fill-reducing permutation (METIS nested
 //! dissection by default, see [`super::ordering`]) or faer's AMD. The symbolic analysis can be
-//! kept ([`Symbolic`]) and reused for matrices of the same pattern.
+//! kept ([`Symbolic`]) and reused for matrices of the same pattern. A factor can keep a
+//! single-precision copy of L for fast, less accurate solves ([`Cholesky::keep_single`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -31,6 +32,8 @@ pub struct Symbolic(std::sync::Arc<SymbolicCholesky<usize>>);
 pub struct Cholesky {
     symbolic: Symbolic,
     values: Vec<f64>,
+    /// L rounded to f32, when kept.
+    single: Option<Vec<f32>>,
 }
 
 fn fail(r: String) -> Error {
@@ -98,7 +101,7 @@ impl Cholesky {
         if values.iter().any(|v| !v.is_finite()) {
             return Err(fail("factor contains NaN or infinity".into()));
         }
-        Ok(Cholesky { symbolic, values })
+        Ok(Cholesky { symbolic, values, single: None })
     }
 
     pub fn n(&self) -> usize {
@@ -108,6 +111,33 @@ impl Cholesky {
     /// Number of stored entries of L.
     pub fn nnz_l(&self) -> usize {
         self.values.len()
+    }
+
+    /// Keeps a copy of L in single precision (half the bytes of L more) for
+    /// [`Cholesky::solve_in_place_single`].
+    pub fn keep_single(&mut self) {
+        self.single = Some(self.values.iter().map(|&v| v as f32).collect());
+    }
+
+    /// Bytes of the single-precision copy (0 when none is kept).
+    pub fn single_bytes(&self) -> usize {
+        self.single.as_ref().map_or(0, |v| v.len() * std::mem::size_of::<f32>())
+    }
+
+    /// Solves A x = b in place with the single-precision copy of L (b rounded to f32, the
+    /// solution widened back); with no copy kept, in double precision.
+    pub fn solve_in_place_single(&self, b: &mut [f64]) {
+        let Some(single) = &self.single else {
+            return self.solve_in_place(b);
+        };
+        let n = self.n();
+        assert_eq!(b.len(), n);
+        let par = Par::Seq;
+        let mut bs: Vec<f32> = b.iter().map(|&v| v as f32).collect();
+        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f32>(1, par));
+        let rhs = MatMut::from_column_major_slice_mut(&mut bs, n, 1);
+        LltRef::new(&self.symbolic.0, single).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+        b.iter_mut().zip(&bs).for_each(|(a, &v)| *a = v as f64);
     }
 
     /// Solves A x = b in place.
@@ -169,6 +199,26 @@ pub(crate) mod tests {
                 assert!((y[i] - x[i]).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn single_precision_solves_agree_to_single_precision() {
+        let a = laplace(30);
+        let mut c = Cholesky::factorize(&a, Ordering::Amd).unwrap();
+        let b: Vec<f64> = (0..a.n).map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5).collect();
+        let mut x = b.clone();
+        c.solve_in_place(&mut x);
+        let mut y = b.clone();
+        c.solve_in_place_single(&mut y);
+        assert_eq!(x, y, "without a copy the single solve is the double one");
+        c.keep_single();
+        assert_eq!(c.single_bytes(), 4 * c.nnz_l());
+        let mut y = b.clone();
+        c.solve_in_place_single(&mut y);
+        let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let d: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a - b).collect();
+        let rel = norm(&d) / norm(&x);
+        assert!(rel > 1e-12 && rel < 1e-4, "single against double: {rel:e}");
     }
 
     #[test]

@@ -15,6 +15,8 @@
 //!   subdomain) × [`SHARE_PER_DOF`] (K's lower triangle, 41 entries per row, its vectors);
 //! - `factors`: [`FACTOR_PER_NNZ`] × nnz(L) of the rank, nnz(L) the plan's count when the plan
 //!   priced the decomposition, else the nested-dissection estimate [`nd_nnz_l`];
+//! - `single-precision factors` (contact, `solver.precision = "mixed"`): [`SINGLE_PER_NNZ`]
+//!   × the same nnz(L);
 //! - `dual`: [`ROW_BYTES`] per dual row (contact, gluing, Dirichlet: B, the solvers' vectors,
 //!   the coarse problem and preconditioner) and [`GATHER_PER_NODE`] per node of the whole mesh
 //!   (rank 0 gathers u and the stresses).
@@ -33,7 +35,7 @@ use crate::comm::Comm;
 use crate::error::{human_bytes, Error, Result};
 use crate::mesh::{Cell, CellKind, Facet};
 use crate::model::Model;
-use crate::scene::{DecompositionSettings, LoadedScene};
+use crate::scene::{DecompositionSettings, LoadedScene, Precision};
 
 use super::plan::Candidate;
 
@@ -59,6 +61,9 @@ pub const SHARE_PER_DOF: f64 = 700.0;
 /// Per entry of L counted by the plan: 8 B stored × the supernodal excess (1.2–1.3) and the
 /// factorization's workspace.
 pub const FACTOR_PER_NNZ: f64 = 12.0;
+/// Per entry of L, the single-precision copy of a contact solve's factors
+/// (`solver.precision = "mixed"`): 4 B × the supernodal excess.
+pub const SINGLE_PER_NNZ: f64 = 5.0;
 /// Per dual row.
 pub const ROW_BYTES: f64 = 1000.0;
 /// Per node of the whole mesh on rank 0 (the gathered u and stresses).
@@ -293,7 +298,7 @@ fn decomposition_words(parts: &[f64], tfeti: bool) -> String {
 /// What a run needs once the model is built and the decomposition fixed: [`before_mesh`]'s
 /// parts with the factors of the plan's chosen candidate (`chosen`, when the plan priced it) or
 /// of [`nd_nnz_l`], and the dual.
-pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings, chosen: Option<&Candidate>, ranks: usize) -> Estimate {
+pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings, chosen: Option<&Candidate>, ranks: usize, precision: Precision) -> Estimate {
     let (parts, tfeti) = pieces(dec, &count.body_dofs);
     let p = ranks.max(1) as f64;
     let mut e = Estimate { parts: common(count, &parts, tfeti, ranks), basis: String::new() };
@@ -308,6 +313,9 @@ pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings,
         }
     };
     e.parts.push(("factors", FACTOR_PER_NNZ * nnz));
+    if precision == Precision::Mixed && model.pairs.is_some() {
+        e.parts.push(("single-precision factors", SINGLE_PER_NNZ * nnz));
+    }
     e.parts.push(("dual", ROW_BYTES * rows / if tfeti { p } else { 1.0 } + GATHER_PER_NODE * count.nodes));
     e.basis = match chosen {
         Some(c) => format!("{}, the plan's nnz(L)", c.label()),
@@ -394,7 +402,7 @@ pub fn check_before_mesh<C: Comm>(comm: &C, ls: &LoadedScene) -> Result<()> {
 pub fn check_after_plan<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, plan: Option<&[Candidate]>) -> Result<()> {
     let count = MeshCount::of_model(ls, model);
     let chosen = plan.and_then(super::plan::cheapest);
-    check(comm, &count.key, &after_plan(&count, model, &ls.scene.decomposition, chosen, comm.size()))
+    check(comm, &count.key, &after_plan(&count, model, &ls.scene.decomposition, chosen, comm.size(), ls.scene.solver.precision))
 }
 
 /// Refuses a run whose estimate (per rank) times the ranks on this host exceeds what is

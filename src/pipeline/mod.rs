@@ -139,6 +139,8 @@ pub struct Solution {
     pub local: LocalFields,
     /// This rank's rows of the mesh (every rank): its pieces' part, what it writes to the file.
     pub local_mesh: LocalMesh,
+    /// η of the dual operator's single-precision factors (`solver.precision = "mixed"`).
+    pub single_precision_error: Option<f64>,
 }
 
 /// The rows of the mesh one rank holds, parallel to [`LocalFields`]' nodes and cells: the
@@ -264,7 +266,13 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
-    let (mut dual, mut b) = t.phase(comm, "dual", || Ok(MonolithicDual::new(comm, contact, bodies)))?;
+    let (mut dual, mut b) = t.phase(comm, "dual", || {
+        let (mut dual, b) = MonolithicDual::new(comm, contact, bodies);
+        if s.precision == crate::scene::Precision::Mixed {
+            dual.keep_single();
+        }
+        Ok((dual, b))
+    })?;
     let set = contact.constraint_set();
     let name = s.params.method().name();
     let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
@@ -320,7 +328,8 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         }
         let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
         let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
-        let solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
+        let mut solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
+        solution.single_precision_error = dual.single_error();
         // the status cannot be sharper than the solution: classify at the solver's tolerance
         let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
         let sigma = sol.info.sigma_est;
@@ -683,6 +692,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         decomposition_plan: None,
         load_path: outcome.filter(|o| !o.steps.is_empty()).map(|o| o.steps.iter().map(|s| s.report.clone()).collect()),
         output_verified_values: None,
+        single_precision_error: sol.single_precision_error,
     }
 }
 
@@ -774,7 +784,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     } else {
         None
     };
-    let needs = memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks);
+    let needs = memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks, ls.scene.solver.precision);
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let mesh = &model.mesh;

@@ -42,6 +42,10 @@ pub struct Report {
     /// Values read back and checked (`output.verify`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_verified_values: Option<u64>,
+    /// `solver.precision = "mixed"`: η, the relative error of the dual operator's product with
+    /// the single-precision factors (measured once on a probe vector).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub single_precision_error: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

@@ -21,7 +21,7 @@ use crate::feti::{assign_ranks, eliminated, subdomain_loads};
 use crate::model::Model;
 use crate::qp::{self, Lambda, Operator, Qp, Space};
 use crate::contact::state::contact_state;
-use crate::scene::{CoarseSolve, LoadedScene, Projector};
+use crate::scene::{CoarseSolve, LoadedScene, Precision, Projector};
 
 /// Figures of one subdomain: those of every piece, and its interface.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -228,12 +228,17 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
     })?;
     drop((halo, loads));
     let (coarse_dim, nnz_c) = (coarse.dim(), coarse.nnz_c);
+    let s = &super::solver_for(ls, model);
     let (mut dual, b) = t.phase(comm, "dual", || {
         let (mut dual, mut b) = TfetiDual::new(dist, &cons, pieces, coarse);
         dual.set_null(&clusters.null, &mut b);
+        // the inner solves of a contact solve use them; the plain CG of a scene without
+        // contact does not (measured slower: README, performance)
+        if s.precision == Precision::Mixed && contact.is_some() {
+            dual.keep_single();
+        }
         Ok((dual, b))
     })?;
-    let s = &super::solver_for(ls, model);
     if let Some(m) = super::preconditioner(s.params.method(), s.preconditioner, super::DualKind::of(ls, model))? {
         t.phase(comm, "preconditioner", || dual.set_preconditioner(m, &cons, weights.clone()))?;
     }
@@ -446,6 +451,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
         let feasibility = rec.feasibility;
         let distribution = DistributionStats::new(&dual);
         let mut solution = finish_subdomains(comm, model, &share, &dual, &rec.u, &rec.rhs, t)?;
+        solution.single_precision_error = dual.single_error();
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
         [f.contact_rows, f.gluing_rows, f.dirichlet_rows, f.tie_rows] = rows;

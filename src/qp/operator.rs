@@ -79,6 +79,11 @@ pub trait Operator {
     /// y ← the A-products' sum from the sum y of [`Operator::apply_kernel`] results (TFETI: P̃ y).
     /// Default: nothing to do.
     fn finish_kernel(&self, _y: &mut [f64]) {}
+    /// The products that follow may have a relative error up to `rel` (0: exact, the
+    /// default state); an operator with a cheaper, less accurate product (single-precision
+    /// factors) uses it where its error is within `rel`. Called with values all ranks share.
+    /// Default: exact products always.
+    fn allow_error(&self, _rel: f64) {}
 }
 
 /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]

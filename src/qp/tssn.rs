@@ -228,6 +228,7 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
             feasible: false,
             max_iter: c.max_inner,
             outer: k,
+            relax: true,
         };
         let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
         if let Some(b) = bank.as_mut() {
@@ -448,7 +449,7 @@ mod recycle_tests {
         let b: Vec<f64> = (0..120).map(|_| lcg(&mut seed)).collect();
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0 };
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: false };
         let bnorm = Replicated.norm(&b);
         let restarts = |mut bank: Option<Recycle>| {
             let (mut x, mut g) = (vec![0.0; 120], b.iter().map(|v| -v).collect::<Vec<f64>>());

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 use serde::de::{self, DeserializeSeed, Deserializer, EnumAccess, IntoDeserializer, MapAccess, SeqAccess, VariantAccess, Visitor};
 use serde::Deserialize;
 
-use super::{Friction, Preconditioner, Scene};
+use super::{Friction, Precision, Preconditioner, Scene};
 use crate::qp;
 
 /// One key: its dotted path (array-of-tables entries without an index: `body.box.min`).
@@ -38,6 +38,7 @@ pub fn keys() -> Vec<Key> {
     methods.push("auto");
     solver.child("method").record(&methods);
     Preconditioner::deserialize(solver.child("preconditioner")).expect("an enumeration");
+    Precision::deserialize(solver.child("precision")).expect("an enumeration");
     qp::Common::deserialize(solver.clone()).expect("a struct");
     for m in qp::Method::ALL {
         let own = Found::default();
