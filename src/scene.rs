@@ -415,8 +415,8 @@ impl Preconditioner {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Precision {
-    /// The factors are also kept in single precision, and the inner CG iterations use them
-    /// where their measured error is within what the iteration allows (TFETI).
+    /// A contact solve keeps the factors also in single precision, and its inner CG iterations
+    /// use them where their measured error is within what the iteration allows.
     #[default]
     Mixed,
     /// Double precision only.

@@ -36,7 +36,7 @@ pub struct MonolithicDual<'c, C: Comm> {
     /// c without the last step's jump.
     c0: Vec<f64>,
     counter: ProductCounter,
-    /// Mixed precision, as [`crate::feti::dual::TfetiDual`]: η of the single-precision
+    /// Mixed precision, as the TFETI dual's: η of the single-precision
     /// factors and whether the products use them now.
     single: Option<f64>,
     single_now: std::cell::Cell<bool>,
@@ -228,8 +228,9 @@ impl<C: Comm> Operator for MonolithicDual<'_, C> {
     }
 
     /// Products with single-precision factors while their measured error η is within `rel`.
-    fn allow_error(&self, rel: f64) {
+    fn allow_error(&self, rel: f64) -> bool {
         self.single_now.set(self.single.is_some_and(|eta| eta <= rel));
+        self.single_now.get()
     }
 }
 
@@ -253,7 +254,7 @@ impl<C: Comm> MonolithicDual<'_, C> {
         for blk in &mut self.blocks {
             blk.local.chol.keep_single();
         }
-        let v: Vec<f64> = (0..self.layout.dim()).map(crate::feti::dual::probe).collect();
+        let v: Vec<f64> = (0..self.layout.dim()).map(crate::linalg::probe).collect();
         let (mut ad, mut as_) = (vec![0.0; v.len()], vec![0.0; v.len()]);
         self.apply_as(&v, &mut ad, false);
         self.apply_as(&v, &mut as_, true);

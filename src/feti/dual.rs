@@ -311,10 +311,12 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
 
     /// Keeps single-precision copies of the local factors and measures η, the relative error
     /// ‖F̃v − Fv‖/‖Fv‖ of F with them on a fixed vector (the same on every rank count; two
-    /// uncounted products). Returns η and this rank's bytes of the copies.
-    pub fn keep_single(&mut self) -> (f64, usize) {
-        let bytes = self.pieces.iter_mut().map(|p| p.sys.keep_single()).sum();
-        let v: Vec<f64> = (0..self.layout.dim()).map(|i| probe(qp::Space::global_index(&self.dist, i))).collect();
+    /// uncounted products). Returns η.
+    pub fn keep_single(&mut self) -> f64 {
+        self.pieces.iter_mut().for_each(|p| {
+            p.sys.keep_single();
+        });
+        let v: Vec<f64> = (0..self.layout.dim()).map(|i| crate::linalg::probe(qp::Space::global_index(&self.dist, i))).collect();
         let (mut fd, mut fs) = (vec![0.0; v.len()], vec![0.0; v.len()]);
         let wl = self.dist.ghosted(&v);
         self.apply_f_local_as(&wl, &mut fd, false);
@@ -322,7 +324,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let d: Vec<f64> = fd.iter().zip(&fs).map(|(a, b)| a - b).collect();
         let eta = self.dist.dot(&d, &d).sqrt() / self.dist.dot(&fd, &fd).sqrt().max(f64::MIN_POSITIVE);
         self.single = Some(eta);
-        (eta, bytes)
+        eta
     }
 
     /// η of [`TfetiDual::keep_single`], when single-precision factors are kept.
@@ -376,15 +378,6 @@ impl<C: Comm> DualProblem for TfetiDual<'_, C> {
     }
 }
 
-/// A fixed probe vector's component at global index i (pseudo-random in [−1, 1]).
-pub(crate) fn probe(i: usize) -> f64 {
-    let mut z = (i as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-}
-
 impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     type Space = Distribution<'c, C>;
     fn space(&self) -> &Distribution<'c, C> {
@@ -420,8 +413,9 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
     }
 
     /// Products with single-precision factors while their measured error η is within `rel`.
-    fn allow_error(&self, rel: f64) {
+    fn allow_error(&self, rel: f64) -> bool {
         self.single_now.set(self.single.is_some_and(|eta| eta <= rel));
+        self.single_now.get()
     }
 
     /// y ← P̃ y.

@@ -313,7 +313,7 @@ pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings,
         }
     };
     e.parts.push(("factors", FACTOR_PER_NNZ * nnz));
-    if precision == Precision::Mixed && model.pairs.is_some() {
+    if precision != Precision::Double && model.pairs.is_some() {
         e.parts.push(("single-precision factors", SINGLE_PER_NNZ * nnz));
     }
     e.parts.push(("dual", ROW_BYTES * rows / if tfeti { p } else { 1.0 } + GATHER_PER_NODE * count.nodes));

@@ -268,7 +268,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
     let (mut dual, mut b) = t.phase(comm, "dual", || {
         let (mut dual, b) = MonolithicDual::new(comm, contact, bodies);
-        if s.precision == crate::scene::Precision::Mixed {
+        if s.precision != crate::scene::Precision::Double {
             dual.keep_single();
         }
         Ok((dual, b))

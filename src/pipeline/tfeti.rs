@@ -234,7 +234,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         dual.set_null(&clusters.null, &mut b);
         // the inner solves of a contact solve use them; the plain CG of a scene without
         // contact does not (measured slower: README, performance)
-        if s.precision == Precision::Mixed && contact.is_some() {
+        if s.precision != Precision::Double && contact.is_some() {
             dual.keep_single();
         }
         Ok((dual, b))

@@ -102,9 +102,11 @@ pub(crate) struct Pcg<'a> {
     pub feasible: bool,
     pub max_iter: usize,
     pub outer: usize,
-    /// Inexact products allowed ([`RELAXATION`]): an inner solve of an outer iteration that
-    /// recomputes its residual exactly (not the plain CG, where the relaxation measured slower).
-    pub relax: bool,
+    /// Inexact products allowed ([`RELAXATION`]) with this estimate of the condition number κ
+    /// of the (preconditioned) system — from the last solve, [`PcgInfo::kappa`] — for an inner
+    /// solve of an outer iteration that recomputes its residual exactly; `None`: exact products
+    /// (the plain CG, where the relaxation measured slower).
+    pub relax: Option<f64>,
 }
 
 /// v ← Π(v − Gᵀ(GΠGᵀ)⁻¹Gv) for v in the subspace: the orthogonal projection onto Ker G ∩ W.
@@ -238,6 +240,33 @@ pub(crate) struct PcgInfo {
     pub iterations: usize,
     /// Applications of the preconditioner.
     pub applications: usize,
+    /// Iterations whose product was inexact ([`Operator::allow_error`]): the gradient's
+    /// recurrence carries their error.
+    pub inexact: usize,
+    /// λ_max/λ_min of the Lanczos tridiagonal of the solve (standard coefficients, ≥ 3
+    /// iterations): an estimate, from below, of the preconditioned system's condition number.
+    pub kappa: Option<f64>,
+}
+
+/// λ_max/λ_min of the Lanczos tridiagonal T of a PCG run with coefficients α_j, β_j:
+/// T_jj = 1/α_j + β_{j−1}/α_{j−1}, T_{j,j+1} = √β_j/α_j. None below 3 iterations.
+fn condition(alpha: &[f64], beta: &[f64]) -> Option<f64> {
+    let k = alpha.len();
+    if k < 3 {
+        return None;
+    }
+    let mut t = faer::Mat::<f64>::zeros(k, k);
+    for j in 0..k {
+        t[(j, j)] = 1.0 / alpha[j] + if j > 0 { beta[j - 1] / alpha[j - 1] } else { 0.0 };
+        if j + 1 < k && j < beta.len() {
+            let off = beta[j].sqrt() / alpha[j];
+            t[(j, j + 1)] = off;
+            t[(j + 1, j)] = off;
+        }
+    }
+    let ev = t.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
+    let (lo, hi) = ev.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
+    (lo > 0.0 && hi.is_finite()).then_some(hi / lo)
 }
 
 /// CG on the inner system from x with g = r(x) = A x − b: the system's residual h = Π g (+ C σ,
@@ -323,12 +352,17 @@ pub(crate) fn pcg<A: Operator>(
     deflate(&z, &mut d);
     let h_start = hnorm;
     let mut kept: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
-    let mut it = 0;
+    let (mut it, mut inexact) = (0, 0);
+    // the CG coefficients α_j, β_j: the Lanczos tridiagonal of the preconditioned system
+    let mut lanczos: (Vec<f64>, Vec<f64>) = (vec![], vec![]);
     while hnorm > threshold && it < opts.max_iter {
         // inexact Krylov: a product's error enters the iterate in proportion to the step, which
         // shrinks with ‖h‖, so the error allowed grows as ‖h‖ falls toward the threshold
-        if opts.relax {
-            a.allow_error(RELAXATION * threshold / hnorm);
+        if let Some(kappa) = opts.relax {
+            // a product's error η·‖A‖‖d‖ against the ‖A d‖ ≥ λ_min‖d‖ of the worst direction
+            if a.allow_error(RELAXATION * threshold / (hnorm * kappa)) {
+                inexact += 1;
+            }
         }
         if opts.coarse.is_some() {
             a.apply_kernel(&d, &mut ad);
@@ -346,6 +380,7 @@ pub(crate) fn pcg<A: Operator>(
             Coefficients::Standard => hz / dmd,
             Coefficients::Conjugated => sp.dot(&h, &d) / dmd,
         };
+        lanczos.0.push(alpha);
         if opts.feasible {
             let alpha_f = sp.min(qp.set.max_step(x, &d));
             if alpha > alpha_f {
@@ -377,6 +412,7 @@ pub(crate) fn pcg<A: Operator>(
                     v
                 };
                 let beta = hz_new / hz;
+                lanczos.1.push(beta);
                 hz = hz_new;
                 for i in 0..n {
                     d[i] = z[i] + beta * d[i];
@@ -416,7 +452,8 @@ pub(crate) fn pcg<A: Operator>(
             b.push(d, ad);
         }
     }
-    Ok(PcgInfo { iterations: it, applications })
+    let kappa = (opts.coefficients == Coefficients::Standard).then(|| condition(&lanczos.0, &lanczos.1)).flatten();
+    Ok(PcgInfo { iterations: it, applications, inexact, kappa })
 }
 
 /// BiCGSTAB workspace: the solution x of J x = rhs and A x, accumulated from the products.

@@ -169,6 +169,10 @@ pub struct Info {
     pub inner_iterations: usize,
     /// Applications of the preconditioner M (0 without one).
     pub preconditioner_applications: usize,
+    /// A-products of n_a the operator made inexactly ([`Operator::allow_error`]: single-precision
+    /// factors).
+    #[serde(default)]
+    pub inexact_products: usize,
     pub sigma_est: f64,
     pub rho: f64,
     /// Final ‖r̃_ρ(λ)‖/‖b‖ from a fresh product.
@@ -199,6 +203,7 @@ impl Info {
         self.n_a_power += later.n_a_power;
         self.inner_iterations += later.inner_iterations;
         self.preconditioner_applications += later.preconditioner_applications;
+        self.inexact_products += later.inexact_products;
         self.fixed_point_iterations += later.fixed_point_iterations;
         self.coulomb = later.coulomb.or(self.coulomb);
         self.history.extend(later.history.iter().cloned().map(|mut s| {

@@ -82,8 +82,10 @@ pub trait Operator {
     /// The products that follow may have a relative error up to `rel` (0: exact, the
     /// default state); an operator with a cheaper, less accurate product (single-precision
     /// factors) uses it where its error is within `rel`. Called with values all ranks share.
-    /// Default: exact products always.
-    fn allow_error(&self, _rel: f64) {}
+    /// Returns whether the products are now inexact. Default: exact products always.
+    fn allow_error(&self, _rel: f64) -> bool {
+        false
+    }
 }
 
 /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]

@@ -166,6 +166,9 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
     // Krylov recycling: the kept directions, valid for the structure `moving` (free components
     // and sliding pairs' first components) of the system they came from
     let mut bank = (p.recycle > 0).then(|| Recycle::new(p.recycle));
+    // the largest estimate of the Newton systems' condition number so far (Lanczos, from the
+    // inner CGs)
+    let mut kappa: Option<f64> = None;
     let mut moving: Vec<bool> = vec![];
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
@@ -228,7 +231,7 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
             feasible: false,
             max_iter: c.max_inner,
             outer: k,
-            relax: true,
+            relax: kappa,
         };
         let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
         if let Some(b) = bank.as_mut() {
@@ -244,11 +247,17 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
         }
         let cg = pcg(qp, &opts, &mut x, &mut r, threshold, |_| {}, bank.as_mut())?;
         drv.info.preconditioner_applications += cg.applications;
+        drv.info.inexact_products += cg.inexact;
         err = err_of(sp, &at(&x), &x, &r, &drv.st, &mut rt);
         if mu.is_some() {
             settle_bounds(sp, &mut frozen, &at, set.layout.m, &x, &r, (err, best, c.eps), &drv.st, &mut z);
             best = best.min(err);
         }
+        // the largest estimate so far: a short solve sees little of the spectrum
+        kappa = match (kappa, cg.kappa) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
         let step = drv.newton(StepKind::Tangent, err, tol, q0, &sys.sets, cg.iterations);
         drv.record(step);
     }
@@ -311,6 +320,14 @@ pub(crate) mod tests {
                     a[i * n + j] = (0..n).map(|k| q[k * n + i] * q[k * n + j]).sum::<f64>() + if i == j { shift } else { 0.0 };
                 }
             }
+            Dense { n, a, counter: ProductCounter::default() }
+        }
+
+        /// diag(d).
+        pub(crate) fn diagonal(d: &[f64]) -> Dense {
+            let n = d.len();
+            let mut a = vec![0.0; n * n];
+            d.iter().enumerate().for_each(|(i, v)| a[i * n + i] = *v);
             Dense { n, a, counter: ProductCounter::default() }
         }
     }
@@ -449,7 +466,7 @@ mod recycle_tests {
         let b: Vec<f64> = (0..120).map(|_| lcg(&mut seed)).collect();
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: false };
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: None };
         let bnorm = Replicated.norm(&b);
         let restarts = |mut bank: Option<Recycle>| {
             let (mut x, mut g) = (vec![0.0; 120], b.iter().map(|v| -v).collect::<Vec<f64>>());
@@ -465,6 +482,22 @@ mod recycle_tests {
         };
         let (plain, recycled) = (restarts(None), restarts(Some(Recycle::new(200))));
         assert!(recycled * 2 <= plain, "recycled restarts {recycled}, plain {plain}");
+    }
+
+    /// The Lanczos estimate of κ from the CG coefficients: from below, and close once the
+    /// CG has seen much of the spectrum (diag(1 … 1000) geometric, 30 iterations of 60: 731).
+    #[test]
+    fn the_inner_cg_estimates_the_condition_number() {
+        let d: Vec<f64> = (0..60).map(|i| 1000f64.powf(i as f64 / 59.0)).collect();
+        let a = Dense::diagonal(&d);
+        let b = vec![1.0; 60];
+        let set = Lambda::new(0, None);
+        let qp = Qp::new(&a, &b, &set);
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 30, outer: 0, relax: None };
+        let (mut x, mut g) = (vec![0.0; 60], vec![-1.0; 60]);
+        let info = pcg(&qp, &opts, &mut x, &mut g, |_| 0.0, |_| {}, None).expect("SPD");
+        let kappa = info.kappa.expect("30 iterations");
+        assert!(kappa <= 1000.0 * (1.0 + 1e-9) && kappa >= 500.0, "κ estimate {kappa}");
     }
 
     #[test]
