@@ -144,7 +144,7 @@ fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g
     };
     let coefficients = if m.is_some() { Coefficients::Standard } else { Coefficients::Conjugated };
     let system = Masked(free);
-    let opts = Pcg { system: &system, preconditioner: m.map(|m| (m, drv.st.rho)), coarse: coarse.as_deref(), coefficients, feasible, max_iter: max_inner, outer, relax: None };
+    let opts = Pcg { system: &system, preconditioner: m.map(|m| (m, drv.st.rho)), coarse: coarse.as_deref(), coefficients, feasible, max_iter: max_inner, outer, relax: None, lanczos: false };
     let info = pcg(qp, &opts, x, g, threshold, |_| {}, None)?;
     Ok((info.iterations, info.applications))
 }

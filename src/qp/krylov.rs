@@ -107,6 +107,8 @@ pub(crate) struct Pcg<'a> {
     /// solve of an outer iteration that recomputes its residual exactly; `None`: exact products
     /// (the plain CG, where the relaxation measured slower).
     pub relax: Option<f64>,
+    /// Estimate κ from the CG coefficients ([`PcgInfo::kappa`]; for `relax` of a later solve).
+    pub lanczos: bool,
 }
 
 /// v ← Π(v − Gᵀ(GΠGᵀ)⁻¹Gv) for v in the subspace: the orthogonal projection onto Ker G ∩ W.
@@ -147,6 +149,10 @@ impl Recycle {
     }
 }
 
+/// A kept direction w whose projection onto the new system's subspace moved by more than this
+/// fraction of ‖w‖ is not used: its stored product is too stale.
+const DRIFT_MAX: f64 = 1e-2;
+
 /// The deflation space of one solve: U (the kept directions brought into the system's subspace),
 /// A U (stored), S U, and the pseudo-inverse of E = UᵀSU.
 struct Deflation {
@@ -165,13 +171,12 @@ impl Deflation {
         }
         let n = work.len();
         let (mut u, mut au, mut su) = (Vec::with_capacity(k), Vec::with_capacity(k), Vec::with_capacity(k));
-        let drift_max: f64 = std::env::var("TF_DRIFT").ok().and_then(|v| v.parse().ok()).unwrap_or(1e-2);
         for (w, aw) in &bank.w {
             let mut v = vec![0.0; n];
             system.apply(w, None, &mut v);
             project(system, coarse, &mut v, work);
             let dv: Vec<f64> = v.iter().zip(w).map(|(a, b)| a - b).collect();
-            if sp.norm(&dv) > drift_max * sp.norm(w) {
+            if sp.norm(&dv) > DRIFT_MAX * sp.norm(w) {
                 continue;
             }
             let mut sv = vec![0.0; n];
@@ -243,10 +248,15 @@ pub(crate) struct PcgInfo {
     /// Iterations whose product was inexact ([`Operator::allow_error`]): the gradient's
     /// recurrence carries their error.
     pub inexact: usize,
-    /// λ_max/λ_min of the Lanczos tridiagonal of the solve (standard coefficients, ≥ 3
-    /// iterations): an estimate, from below, of the preconditioned system's condition number.
+    /// With `lanczos`: λ_max/λ_min of the Lanczos tridiagonal of the solve (standard
+    /// coefficients, ≥ 3 iterations): an estimate, from below, of the preconditioned system's
+    /// condition number.
     pub kappa: Option<f64>,
 }
+
+/// The Lanczos tridiagonal of the κ estimate takes at most this many of a solve's first
+/// coefficients (its eigenvalues cost O(k³); an estimate from below either way).
+const LANCZOS_MAX: usize = 200;
 
 /// λ_max/λ_min of the Lanczos tridiagonal T of a PCG run with coefficients α_j, β_j:
 /// T_jj = 1/α_j + β_{j−1}/α_{j−1}, T_{j,j+1} = √β_j/α_j. None below 3 iterations.
@@ -380,7 +390,9 @@ pub(crate) fn pcg<A: Operator>(
             Coefficients::Standard => hz / dmd,
             Coefficients::Conjugated => sp.dot(&h, &d) / dmd,
         };
-        lanczos.0.push(alpha);
+        if opts.lanczos && lanczos.0.len() < LANCZOS_MAX {
+            lanczos.0.push(alpha);
+        }
         if opts.feasible {
             let alpha_f = sp.min(qp.set.max_step(x, &d));
             if alpha > alpha_f {
@@ -412,7 +424,9 @@ pub(crate) fn pcg<A: Operator>(
                     v
                 };
                 let beta = hz_new / hz;
-                lanczos.1.push(beta);
+                if opts.lanczos && lanczos.1.len() < LANCZOS_MAX {
+                    lanczos.1.push(beta);
+                }
                 hz = hz_new;
                 for i in 0..n {
                     d[i] = z[i] + beta * d[i];
@@ -452,7 +466,7 @@ pub(crate) fn pcg<A: Operator>(
             b.push(d, ad);
         }
     }
-    let kappa = (opts.coefficients == Coefficients::Standard).then(|| condition(&lanczos.0, &lanczos.1)).flatten();
+    let kappa = (opts.lanczos && opts.coefficients == Coefficients::Standard).then(|| condition(&lanczos.0, &lanczos.1)).flatten();
     Ok(PcgInfo { iterations: it, applications, inexact, kappa })
 }
 

@@ -169,6 +169,9 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
     // the largest estimate of the Newton systems' condition number so far (Lanczos, from the
     // inner CGs)
     let mut kappa: Option<f64> = None;
+    // whether the operator has inexact products at all (else no κ is estimated)
+    let inexact_possible = a.allow_error(f64::INFINITY);
+    a.allow_error(0.0);
     let mut moving: Vec<bool> = vec![];
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
@@ -232,6 +235,7 @@ pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambd
             max_iter: c.max_inner,
             outer: k,
             relax: kappa,
+            lanczos: inexact_possible,
         };
         let threshold = |h0: f64| (tol * bnorm).min(p.rtol * h0).max(p.inner_floor * c.eps * bnorm);
         if let Some(b) = bank.as_mut() {
@@ -466,7 +470,7 @@ mod recycle_tests {
         let b: Vec<f64> = (0..120).map(|_| lcg(&mut seed)).collect();
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: None };
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: None, lanczos: false };
         let bnorm = Replicated.norm(&b);
         let restarts = |mut bank: Option<Recycle>| {
             let (mut x, mut g) = (vec![0.0; 120], b.iter().map(|v| -v).collect::<Vec<f64>>());
@@ -493,7 +497,7 @@ mod recycle_tests {
         let b = vec![1.0; 60];
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 30, outer: 0, relax: None };
+        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 30, outer: 0, relax: None, lanczos: true };
         let (mut x, mut g) = (vec![0.0; 60], vec![-1.0; 60]);
         let info = pcg(&qp, &opts, &mut x, &mut g, |_| 0.0, |_| {}, None).expect("SPD");
         let kappa = info.kappa.expect("30 iterations");
