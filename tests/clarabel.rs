@@ -27,7 +27,7 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
     all.extend(sets.iter().map(|s| s.to_string()));
     let model = model::build(&scene::load(&path, &all).unwrap()).unwrap();
     let contact = model.pairs.as_ref().unwrap();
-    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = contact.constraint_set();
     let layout = dual.layout;

@@ -24,7 +24,7 @@ fn seed(n: usize, sets: &[&str]) -> Model {
 fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let model = seed(8, &[]);
     let contact = model.pairs.as_ref().unwrap();
-    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = contact.constraint_set();
     let params = Params::new(Method::Gimssn).with_eps(1e-10);
@@ -97,7 +97,7 @@ fn solve_u(n: usize, sets: &[&str], eps: f64) -> Vec<[f64; 3]> {
 fn solve_u_with(n: usize, sets: &[&str], eps: f64, method: Method) -> (Vec<[f64; 3]>, kkt::Kkt) {
     let model = seed(n, sets);
     let contact = model.pairs.as_ref().unwrap();
-    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = contact.constraint_set();
     let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &Params::new(method).with_eps(eps), &mut Silent).unwrap();
@@ -230,7 +230,7 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     // the same solution (a Tresca solve from zero, not warm-started)
     let model = seed(6, &["contact.pair.0.friction={type=\"coulomb\", mu=0.3}"]);
     let contact = model.pairs.as_ref().unwrap();
-    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+    let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
     let (dual, b) = MonolithicDual::new(&SerialComm, contact, bodies);
     let set = contact.constraint_set();
     let mut params = Params::new(Method::Tssn).with_eps(1e-11);

@@ -374,7 +374,7 @@ mod tests {
         let sets = ["mesh.n=5".to_string(), "dirichlet.1.value=[1e-5, -2e-5, 3e-6]".to_string(), format!("contact.pair.0.friction={friction}")];
         let ls = scene::load(&path, &sets).unwrap();
         let model = crate::model::build(&ls).unwrap();
-        let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+        let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
         (ls, model, bodies)
     }
 

@@ -17,12 +17,56 @@ pub struct LocalBody {
     pub dofs: DofMap,
     pub sys: BodySystem,
     pub chol: Cholesky,
+    /// The free DOFs the factor orders last, in its order (empty: none): the contact DOFs,
+    /// whose block of K⁻¹ is then the inverse of the factor's trailing block's LLᵀ.
+    pub trailing: Vec<usize>,
 }
 
 /// One body on this rank with the entries (row of B, free DOF, coefficient) of B acting on it.
 pub struct BodyBlock {
     pub local: LocalBody,
     pub b: Vec<(usize, usize, f64)>,
+    /// The explicit product, when the factor orders B's DOFs last.
+    pub dense: Option<Trailing>,
+}
+
+/// B K⁻¹ Bᵀ of one body through its factor's trailing block L_bb (B's DOFs ordered last):
+/// (K⁻¹)_bb = L_bb⁻ᵀ L_bb⁻¹, so a product is B_b L_bb⁻ᵀ L_bb⁻¹ B_bᵀ — two dense triangular solves
+/// of the contact DOFs' size instead of the solves with the whole factor.
+pub struct Trailing {
+    l: faer::Mat<f64>,
+    /// (row of B, position in the block, coefficient).
+    b: Vec<(usize, usize, f64)>,
+}
+
+impl Trailing {
+    /// From a factor whose last DOFs are `trailing` (in order) and B's entries `b` on the body,
+    /// if every entry falls in them.
+    fn new(local: &LocalBody, b: &[(usize, usize, f64)]) -> Option<Trailing> {
+        if local.trailing.is_empty() {
+            return None;
+        }
+        let mut pos = vec![usize::MAX; local.dofs.nfree];
+        for (p, &d) in local.trailing.iter().enumerate() {
+            pos[d] = p;
+        }
+        let b: Option<Vec<_>> = b.iter().map(|&(r, j, c)| (pos[j] != usize::MAX).then(|| (r, pos[j], c))).collect();
+        Some(Trailing { l: local.chol.trailing_block(local.trailing.len()), b: b? })
+    }
+
+    /// y += B_b L_bb⁻ᵀ L_bb⁻¹ B_bᵀ x.
+    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+        let mut z = faer::Mat::<f64>::zeros(self.l.nrows(), 1);
+        for &(r, p, c) in &self.b {
+            z[(p, 0)] += c * x[r];
+        }
+        solve_lower_triangular_in_place(self.l.as_ref(), z.as_mut(), faer::Par::Seq);
+        solve_upper_triangular_in_place(self.l.transpose(), z.as_mut(), faer::Par::Seq);
+        for &(r, p, c) in &self.b {
+            y[r] += c * z[(p, 0)];
+        }
+    }
 }
 
 /// A = B K⁻¹ Bᵀ over the bodies of all ranks.
@@ -86,7 +130,8 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
             .into_iter()
             .map(|local| {
                 let (b, _) = body_rows(contact, layout, &local.dofs);
-                BodyBlock { local, b }
+                let dense = Trailing::new(&local, &b);
+                BodyBlock { local, b, dense }
             })
             .collect();
         let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default(), single: None, single_now: Default::default() };
@@ -237,6 +282,14 @@ impl<C: Comm> Operator for MonolithicDual<'_, C> {
 impl<C: Comm> MonolithicDual<'_, C> {
     /// y = B K⁻¹ Bᵀ x (not counted), with the single-precision factors when `single`.
     fn apply_as(&self, x: &[f64], y: &mut [f64], single: bool) {
+        if self.explicit() {
+            y.fill(0.0);
+            for blk in &self.blocks {
+                blk.dense.as_ref().expect("dense").apply_add(x, y);
+            }
+            self.comm.sum_f64(y);
+            return;
+        }
         let mut z = self.scatter(x);
         for (blk, zb) in self.blocks.iter().zip(&mut z) {
             if single {
@@ -249,8 +302,12 @@ impl<C: Comm> MonolithicDual<'_, C> {
     }
 
     /// Keeps single-precision copies of the local factors and measures η = ‖Ãv − Av‖/‖Av‖ on
-    /// a fixed vector (two uncounted products). Returns η.
-    pub fn keep_single(&mut self) -> f64 {
+    /// a fixed vector (two uncounted products). Returns η; none when the products are explicit
+    /// ([`Trailing`]: nothing to save).
+    pub fn keep_single(&mut self) -> Option<f64> {
+        if self.explicit() {
+            return None;
+        }
         for blk in &mut self.blocks {
             blk.local.chol.keep_single();
         }
@@ -262,7 +319,12 @@ impl<C: Comm> MonolithicDual<'_, C> {
         let d: Vec<f64> = ad.iter().zip(&as_).map(|(a, b)| a - b).collect();
         let eta = norm(&d) / norm(&ad).max(f64::MIN_POSITIVE);
         self.single = Some(eta);
-        eta
+        Some(eta)
+    }
+
+    /// Whether every product goes through the bodies' trailing blocks ([`Trailing`]).
+    pub fn explicit(&self) -> bool {
+        self.blocks.iter().all(|blk| blk.dense.is_some())
     }
 
     /// η of [`MonolithicDual::keep_single`], when single-precision factors are kept.
@@ -293,8 +355,34 @@ mod tests {
         }
         let ls = scene::load(&path, &sets).unwrap();
         let model = crate::model::build(&ls).unwrap();
-        let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, &mut Timings::default()).unwrap();
+        let bodies = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, true, &mut Timings::default()).unwrap();
         (model, bodies)
+    }
+
+    #[test]
+    fn explicit_products_are_the_solves_with_the_whole_factor() {
+        // contact nodes ordered last: B L_bb⁻ᵀ L_bb⁻¹ Bᵀ against B K⁻¹ Bᵀ by whole solves
+        for friction in [true, false] {
+            let (model, bodies) = seed(friction);
+            let contact = model.pairs.as_ref().unwrap();
+            let sparse = assemble_and_factorize(&SerialComm, &model, OrderingKind::Metis, false, &mut Timings::default()).unwrap();
+            let (de, b1) = MonolithicDual::new(&SerialComm, contact, bodies);
+            let (sp, b2) = MonolithicDual::new(&SerialComm, contact, sparse);
+            assert!(de.explicit() && !sp.explicit());
+            let n = de.dim();
+            let x: Vec<f64> = (0..n).map(crate::linalg::probe).collect();
+            let (mut y1, mut y2) = (vec![0.0; n], vec![0.0; n]);
+            de.apply(&x, &mut y1);
+            sp.apply(&x, &mut y2);
+            let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+            let d: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a - b).collect();
+            assert!(norm(&d) <= 1e-12 * norm(&y2), "explicit and whole-factor products differ by {:e} of {:e}", norm(&d), norm(&y2));
+            let db: Vec<f64> = b1.iter().zip(&b2).map(|(a, b)| a - b).collect();
+            assert!(norm(&db) <= 1e-12 * norm(&b2));
+            // no single-precision copies where the products are explicit
+            let mut de = de;
+            assert!(de.keep_single().is_none() && de.single_error().is_none());
+        }
     }
 
     #[test]

@@ -48,6 +48,25 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
     Ok(perm.into_iter().map(|v| v as usize).collect())
 }
 
+/// Nested dissection of the nodes not marked `last`, followed by the `last` ones (ascending):
+/// their block of the factor is then its trailing one ([`super::cholesky::Cholesky::trailing_block`]).
+pub fn nested_dissection_last(xadj: &[usize], adjncy: &[usize], last: &[bool]) -> Result<Vec<usize>> {
+    let n = xadj.len().saturating_sub(1);
+    let mut sub = vec![usize::MAX; n];
+    let kept: Vec<usize> = (0..n).filter(|&v| !last[v]).collect();
+    for (i, &v) in kept.iter().enumerate() {
+        sub[v] = i;
+    }
+    let (mut sx, mut sa) = (vec![0usize], vec![]);
+    for &v in &kept {
+        sa.extend(adjncy[xadj[v]..xadj[v + 1]].iter().filter_map(|&w| (sub[w] != usize::MAX).then_some(sub[w])));
+        sx.push(sa.len());
+    }
+    let mut perm: Vec<usize> = nested_dissection(&sx, &sa)?.into_iter().map(|i| kept[i]).collect();
+    perm.extend((0..n).filter(|&v| last[v]));
+    Ok(perm)
+}
+
 /// Expands a node permutation to DOFs: the DOFs of node `perm[0]` first, then `perm[1]`, …
 /// `dof_of(node)` lists the DOF indices of a node (constrained DOFs omitted).
 pub fn expand_to_dofs(node_perm: &[usize], ndof: usize, dof_of: impl Fn(usize) -> [Option<usize>; 3]) -> Vec<usize> {

@@ -9,7 +9,7 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Mat, Par, Side};
 
@@ -177,32 +177,7 @@ fn dense_schur(k: &SymCsc, interior: &[usize], boundary: &[usize]) -> Result<Mat
     let mut mem = MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default())).map_err(|_| fail("out of memory".into()))?;
     sym.factorize_numeric_llt(&mut values, kh.as_faer(), Side::Lower, LltRegularization::default(), par, MemStack::new(&mut mem), Default::default())
         .map_err(|e| fail(format!("K + αI_b is not positive definite ({e:?}); is the piece held by its boundary DOFs?")))?;
-    let SymbolicCholeskyRaw::Supernodal(sn) = sym.raw() else {
-        return Err(fail("faer did not build a supernodal factor".into()));
-    };
-    let mut l = Mat::<f64>::zeros(nb, nb);
-    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-    let (rptr, vptr, rows) = (sn.col_ptr_for_row_idx(), sn.col_ptr_for_val(), sn.row_idx());
-    for s in 0..sn.n_supernodes() {
-        let (b0, e0) = (begin[s], end[s]);
-        if e0 <= ni {
-            continue;
-        }
-        let ncols = e0 - b0;
-        let pattern = &rows[rptr[s]..rptr[s + 1]];
-        let nrows = ncols + pattern.len();
-        let block = &values[vptr[s]..vptr[s + 1]];
-        for jc in 0..ncols {
-            let c = b0 + jc;
-            if c < ni {
-                continue;
-            }
-            for r in jc..nrows {
-                let row = if r < ncols { b0 + r } else { pattern[r - ncols] };
-                l[(row - ni, c - ni)] = block[r + jc * nrows];
-            }
-        }
-    }
+    let l = super::cholesky::trailing_block(&sym, &values, nb);
     let mut s = &l * l.transpose();
     for i in 0..nb {
         s[(i, i)] -= alpha;

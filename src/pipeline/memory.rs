@@ -15,8 +15,10 @@
 //!   subdomain) × [`SHARE_PER_DOF`] (K's lower triangle, 41 entries per row, its vectors);
 //! - `factors`: [`FACTOR_PER_NNZ`] × nnz(L) of the rank, nnz(L) the plan's count when the plan
 //!   priced the decomposition, else the nested-dissection estimate [`nd_nnz_l`];
-//! - `single-precision factors` (contact, `solver.precision = "mixed"`): [`SINGLE_PER_NNZ`]
-//!   × the same nnz(L);
+//! - `single-precision factors` (contact on TFETI, `solver.precision = "mixed"`):
+//!   [`SINGLE_PER_NNZ`] × the same nnz(L);
+//! - `contact blocks` (contact on the monolithic dual): the trailing blocks of the factors,
+//!   8 bytes × (3 × contact nodes of a body)² per body of the rank;
 //! - `dual`: [`ROW_BYTES`] per dual row (contact, gluing, Dirichlet: B, the solvers' vectors,
 //!   the coarse problem and preconditioner) and [`GATHER_PER_NODE`] per node of the whole mesh
 //!   (rank 0 gathers u and the stresses).
@@ -313,7 +315,15 @@ pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings,
         }
     };
     e.parts.push(("factors", FACTOR_PER_NNZ * nnz));
-    if precision != Precision::Double && model.pairs.is_some() {
+    if model.pairs.is_some() && !tfeti {
+        // the explicit products' trailing blocks (3 DOFs per contact node, a square f64 matrix)
+        let mut per = vec![0.0; ranks.max(1)];
+        for b in 0..model.mesh.bodies.len() {
+            let n = 3.0 * super::contact_nodes(model, b).iter().filter(|&&l| l).count() as f64;
+            per[super::owner(b, ranks.max(1))] += 8.0 * n * n;
+        }
+        e.parts.push(("contact blocks", per.into_iter().fold(0.0, f64::max)));
+    } else if precision != Precision::Double && model.pairs.is_some() {
         e.parts.push(("single-precision factors", SINGLE_PER_NNZ * nnz));
     }
     e.parts.push(("dual", ROW_BYTES * rows / if tfeti { p } else { 1.0 } + GATHER_PER_NODE * count.nodes));

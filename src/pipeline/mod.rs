@@ -27,7 +27,7 @@ use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
-use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
+use crate::linalg::ordering::{expand_to_dofs, nested_dissection, nested_dissection_last};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
@@ -178,8 +178,27 @@ pub fn owner(b: usize, size: usize) -> usize {
     b % size
 }
 
+/// The nodes of body `b` that the contact rows touch (by the body's local node index; empty
+/// without contact).
+pub fn contact_nodes(model: &Model, b: usize) -> Vec<bool> {
+    let Some(c) = &model.pairs else { return vec![] };
+    let nodes = &model.mesh.bodies[b].nodes;
+    let mut last = vec![false; nodes.len()];
+    for i in 0..c.len() {
+        for &(v, _) in c.row(i) {
+            if nodes.contains(&v) {
+                last[v - nodes.start] = true;
+            }
+        }
+    }
+    last
+}
+
 /// Assembles and factorizes the bodies this rank owns (phases `assemble`, `factorize`).
-pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Vec<LocalBody>> {
+///
+/// With `contact_last`, the nodes the contact rows touch are ordered last (METIS ordering only):
+/// the factor's trailing block then holds (K⁻¹) on them ([`LocalBody::trailing`]).
+pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, contact_last: bool, t: &mut Timings) -> Result<Vec<LocalBody>> {
     let mesh = &model.mesh;
     let mine: Vec<usize> = (0..mesh.bodies.len()).filter(|&b| owner(b, comm.size()) == comm.rank()).collect();
     let systems = t.phase(comm, "assemble", || {
@@ -198,17 +217,27 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
             .into_iter()
             .map(|(b, dofs, sys)| {
                 let body = &mesh.bodies[b];
+                let last = if contact_last { contact_nodes(model, b) } else { vec![] };
+                let mut trailing = vec![];
                 let ord = match ordering {
                     OrderingKind::Metis => {
                         let (xadj, adj) = &sys.graph;
-                        let node_perm = nested_dissection(xadj, adj)?;
-                        Ordering::Custom(expand_to_dofs(&node_perm, dofs.nfree, |v| dofs.node_dofs(body.nodes.start + v)))
+                        let dofs_of = |v: usize| dofs.node_dofs(body.nodes.start + v);
+                        let node_perm = if last.iter().any(|&l| l) {
+                            let perm = nested_dissection_last(xadj, adj, &last)?;
+                            let first_last = perm.iter().position(|&v| last[v]).unwrap_or(perm.len());
+                            trailing = expand_to_dofs(&perm[first_last..], dofs.nfree, dofs_of);
+                            perm
+                        } else {
+                            nested_dissection(xadj, adj)?
+                        };
+                        Ordering::Custom(expand_to_dofs(&node_perm, dofs.nfree, dofs_of))
                     }
                     OrderingKind::Amd => Ordering::Amd,
                 };
                 let chol = Cholesky::factorize(&sys.k, ord)
                     .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))?;
-                Ok(LocalBody { body: b, dofs, sys, chol })
+                Ok(LocalBody { body: b, dofs, sys, chol, trailing })
             })
             .collect::<Result<Vec<_>>>()
     })
@@ -217,7 +246,7 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
 /// Assembles, factorizes and solves this rank's bodies, computes their stresses and gathers
 /// everything on rank 0.
 pub fn solve_elastic<C: Comm>(comm: &C, model: &Model, ordering: OrderingKind, t: &mut Timings) -> Result<Solution> {
-    let bodies = assemble_and_factorize(comm, model, ordering, t)?;
+    let bodies = assemble_and_factorize(comm, model, ordering, false, t)?;
     let u = t.phase(comm, "solve", || {
         Ok(bodies
             .iter()
@@ -264,7 +293,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         return Err(Error::scene("decomposition", format!("body \"{}\" is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)", model.mesh.bodies[b].name)));
     }
     let s = &solver_for(ls, model);
-    let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, t)?;
+    let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, true, t)?;
     preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
     let (mut dual, mut b) = t.phase(comm, "dual", || {
         let (mut dual, b) = MonolithicDual::new(comm, contact, bodies);

@@ -7,7 +7,10 @@
 //! Time of a candidate = setup + (nA + σ-estimate products) · t_A with
 //! - t_A = [`SECONDS_PER_NNZ`] · nnz(L) of the busiest rank (the forward and backward solves
 //!   run at the memory bandwidth) + [`SECONDS_PER_ROW`] · dual rows per rank (the Krylov
-//!   vectors, B, the exchange and the coarse projection of TFETI);
+//!   vectors, B, the exchange and the coarse projection of TFETI); for the monolithic dual with
+//!   contact, whose products use the trailing blocks of factors that order the contact nodes
+//!   last, [`SECONDS_PER_DENSE`] · Σ (contact DOFs of a body)² of the busiest rank instead of
+//!   the nnz(L) term;
 //! - setup = [`SECONDS_PER_FLOP`] · Σ (column count)² + [`SECONDS_PER_DOF`] · DOFs of the
 //!   busiest rank (numeric factorization; assembly, ordering, kernels and rows of B);
 //! - nA with contact: [`PRODUCTS_PER_DIGIT`] · log10(1/ε) for the monolithic dual,
@@ -23,13 +26,16 @@ use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
 use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
-use crate::linalg::ordering::{fill, nested_dissection, Fill};
+use crate::linalg::ordering::{fill, nested_dissection, nested_dissection_last, Fill};
 use crate::model::Model;
 use crate::qp::Common;
 use crate::scene::DecompositionSettings;
 
 /// Seconds per entry of L per A-product (forward and backward solve).
 pub const SECONDS_PER_NNZ: f64 = 1.05e-9;
+/// Seconds per (contact DOFs of a body)² per A-product on the monolithic dual with contact: its
+/// two dense triangular solves with the factor's trailing block.
+pub const SECONDS_PER_DENSE: f64 = 3.5e-10;
 /// Seconds per dual row per A-product, outside the solves.
 pub const SECONDS_PER_ROW: f64 = 0.5e-6;
 /// Seconds per unit of Σ (column count)² in the numeric factorization.
@@ -160,10 +166,26 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
             let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
             let (xadj, adj) = node_graph(&mesh.cells, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
-            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
+            // with contact the contact nodes are ordered last (the explicit products)
+            let last = super::contact_nodes(model, b);
+            let perm = if last.iter().any(|&l| l) { nested_dissection_last(&xadj, &adj, &last)? } else { nested_dissection(&xadj, &adj)? };
+            Ok(fill(&xadj, &adj, &perm, &free))
         })?;
         let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
-        out.push(candidate(vec![1; nb], None, &f, &|b| super::owner(b, ranks), &|b| body_dofs[b] as f64, (0, 0), n_a));
+        let mut mono = candidate(vec![1; nb], None, &f, &|b| super::owner(b, ranks), &|b| body_dofs[b] as f64, (0, 0), n_a);
+        if contact.is_some() {
+            // a product: two dense triangular solves with each body's trailing block
+            let mut dense = vec![0.0; ranks];
+            for b in 0..nb {
+                let last = super::contact_nodes(model, b);
+                let dofs = DofMap::new(mesh.bodies[b].nodes.clone(), &by_body[b]);
+                let n = (0..last.len()).filter(|&l| last[l]).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count()).sum::<usize>() as f64;
+                dense[super::owner(b, ranks)] += n * n;
+            }
+            mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
+            mono.time = mono.t_factor + n_a * mono.t_product;
+        }
+        out.push(mono);
     }
     let mut counts: Vec<usize> = SUBDOMAIN_COUNTS.to_vec();
     if dec.tfeti {
@@ -314,7 +336,7 @@ mod tests {
         let cands = price(&SerialComm, &model, &dec, &Common::default(), 1).unwrap();
         let mono = &cands[0];
         assert!(!mono.tfeti);
-        let bodies = super::super::assemble_and_factorize(&SerialComm, &model, crate::scene::OrderingKind::Metis, &mut Default::default()).unwrap();
+        let bodies = super::super::assemble_and_factorize(&SerialComm, &model, crate::scene::OrderingKind::Metis, true, &mut Default::default()).unwrap();
         let stored: usize = bodies.iter().map(|b| b.chol.nnz_l()).sum();
         let ratio = stored as f64 / mono.nnz_l;
         assert!((1.0..1.5).contains(&ratio), "stored {stored} against counted {}", mono.nnz_l);

@@ -194,7 +194,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut each: impl FnMut(&Cell), mut prog
             return Err(Error::scene("contact.pair.friction", "table1 times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)"));
         }
         let mut t = Timings::default();
-        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
+        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, true, &mut t)?;
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);
         let set = contact.constraint_set();
         let qp = Qp::new(&dual, &b, &set);

@@ -215,7 +215,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
             return Err(Error::scene("--solvers", "clarabel solves the Tresca SOCP: leave it out for a Coulomb scene"));
         }
         let mut t = Timings::default();
-        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, &mut t)?;
+        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, true, &mut t)?;
         let factorize_s: f64 = t.phases.iter().map(|p| p.1).sum();
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);
         let set = contact.constraint_set();
