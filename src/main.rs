@@ -601,7 +601,10 @@ fn print_summary(s: &pipeline::Summary) {
         // plain CG (TFETI without contact) solves A x = b: no KKT conditions beyond its residual
         let kkt = if r.contact.is_some() { format!(", KKT residual {:.1e}", sv.kkt_worst) } else { String::new() };
         let fp = if i.fixed_point_iterations > 0 { format!("{} Coulomb fixed-point steps, ", i.fixed_point_iterations) } else { String::new() };
-        let mixed = r.single_precision_error.map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
+        let mut mixed = r.single_precision_error.map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
+        if let Some(n) = r.explicit_products {
+            mixed += &format!(", explicit products (trailing blocks of {n} contact DOFs)");
+        }
         println!(
             "solver {}: {fp}{} outer iterations, nA = {} (+{} for σ_max), {} inner iterations, ‖r̃_ρ‖/‖b‖ = {:.2e} (ε = {:.0e}){kkt}{mixed}",
             sv.method, i.iterations, i.n_a, i.n_a_power, i.inner_iterations, i.err, sv.eps

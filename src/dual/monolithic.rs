@@ -84,6 +84,8 @@ pub struct MonolithicDual<'c, C: Comm> {
     /// factors and whether the products use them now.
     single: Option<f64>,
     single_now: std::cell::Cell<bool>,
+    /// With explicit products ([`Trailing`]) on every rank: the contact DOFs of all blocks.
+    explicit: Option<usize>,
 }
 
 /// The rows of B (free part) for the body with DOF map `dofs`, and the shift of c by the
@@ -133,8 +135,21 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
                 let dense = Trailing::new(&local, &b);
                 BodyBlock { local, b, dense }
             })
-            .collect();
-        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default(), single: None, single_now: Default::default() };
+            .collect::<Vec<BodyBlock>>();
+        // explicit products only where every rank's bodies have their blocks (a decision all
+        // ranks share: the products' reductions must match)
+        let mut blocks: Vec<BodyBlock> = blocks;
+        let mut v = [if blocks.iter().all(|blk| blk.dense.is_some()) { 0.0 } else { 1.0 }];
+        comm.max_f64(&mut v);
+        let mut dofs = [blocks.iter().filter_map(|blk| blk.dense.as_ref()).map(|d| d.l.nrows() as f64).sum::<f64>()];
+        comm.sum_f64(&mut dofs);
+        let explicit = if v[0] == 0.0 {
+            Some(dofs[0] as usize)
+        } else {
+            blocks.iter_mut().for_each(|blk| blk.dense = None);
+            None
+        };
+        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default(), single: None, single_now: Default::default(), explicit };
         dual.set_c(contact, None);
         let rhs = dual.rhs();
         (dual, rhs)
@@ -322,9 +337,15 @@ impl<C: Comm> MonolithicDual<'_, C> {
         Some(eta)
     }
 
-    /// Whether every product goes through the bodies' trailing blocks ([`Trailing`]).
+    /// Whether every product goes through the bodies' trailing blocks ([`Trailing`]), the same
+    /// on every rank.
     pub fn explicit(&self) -> bool {
-        self.blocks.iter().all(|blk| blk.dense.is_some())
+        self.explicit.is_some()
+    }
+
+    /// The contact DOFs of all trailing blocks, with explicit products.
+    pub fn explicit_dofs(&self) -> Option<usize> {
+        self.explicit
     }
 
     /// η of [`MonolithicDual::keep_single`], when single-precision factors are kept.

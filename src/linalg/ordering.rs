@@ -67,6 +67,26 @@ pub fn nested_dissection_last(xadj: &[usize], adjncy: &[usize], last: &[bool]) -
     Ok(perm)
 }
 
+/// A factor that orders the `last` nodes last may hold at most this multiple of the entries of
+/// one ordered by nested dissection alone ([`order_last_if_cheap`]).
+pub const LAST_GROWTH: f64 = 1.5;
+
+/// The `last` nodes ordered last ([`nested_dissection_last`]) when that factor holds at most
+/// [`LAST_GROWTH`] × the entries of plain nested dissection's (both counted, `free` DOFs per
+/// node), else plain nested dissection; returns the order and whether it puts `last` last.
+pub fn order_last_if_cheap(xadj: &[usize], adjncy: &[usize], last: &[bool], free: &[u8]) -> Result<(Vec<usize>, bool)> {
+    let plain = nested_dissection(xadj, adjncy)?;
+    if !last.iter().any(|&l| l) {
+        return Ok((plain, false));
+    }
+    let ordered = nested_dissection_last(xadj, adjncy, last)?;
+    if fill(xadj, adjncy, &ordered, free).nnz_l <= LAST_GROWTH * fill(xadj, adjncy, &plain, free).nnz_l {
+        Ok((ordered, true))
+    } else {
+        Ok((plain, false))
+    }
+}
+
 /// Expands a node permutation to DOFs: the DOFs of node `perm[0]` first, then `perm[1]`, …
 /// `dof_of(node)` lists the DOF indices of a node (constrained DOFs omitted).
 pub fn expand_to_dofs(node_perm: &[usize], ndof: usize, dof_of: impl Fn(usize) -> [Option<usize>; 3]) -> Vec<usize> {

@@ -17,8 +17,8 @@
 //!   priced the decomposition, else the nested-dissection estimate [`nd_nnz_l`];
 //! - `single-precision factors` (contact on TFETI, `solver.precision = "mixed"`):
 //!   [`SINGLE_PER_NNZ`] × the same nnz(L);
-//! - `contact blocks` (contact on the monolithic dual): the trailing blocks of the factors,
-//!   8 bytes × (3 × contact nodes of a body)² per body of the rank;
+//! - `contact blocks` (contact on the monolithic dual with explicit products): the trailing
+//!   blocks of the factors, 8 bytes × (3 × contact nodes of a body)² per body of the rank;
 //! - `dual`: [`ROW_BYTES`] per dual row (contact, gluing, Dirichlet: B, the solvers' vectors,
 //!   the coarse problem and preconditioner) and [`GATHER_PER_NODE`] per node of the whole mesh
 //!   (rank 0 gathers u and the stresses).
@@ -315,14 +315,19 @@ pub fn after_plan(count: &MeshCount, model: &Model, dec: &DecompositionSettings,
         }
     };
     e.parts.push(("factors", FACTOR_PER_NNZ * nnz));
+    // the explicit products' trailing blocks (3 DOFs per contact node, a square f64 matrix):
+    // where the plan chose them, or — unplanned — where their lower half fits in the factor
+    let mut blocks = vec![0.0; ranks.max(1)];
     if model.pairs.is_some() && !tfeti {
-        // the explicit products' trailing blocks (3 DOFs per contact node, a square f64 matrix)
-        let mut per = vec![0.0; ranks.max(1)];
         for b in 0..model.mesh.bodies.len() {
             let n = 3.0 * super::contact_nodes(model, b).iter().filter(|&&l| l).count() as f64;
-            per[super::owner(b, ranks.max(1))] += 8.0 * n * n;
+            blocks[super::owner(b, ranks.max(1))] += 8.0 * n * n;
         }
-        e.parts.push(("contact blocks", per.into_iter().fold(0.0, f64::max)));
+    }
+    let blocks = blocks.into_iter().fold(0.0, f64::max);
+    let explicit = blocks > 0.0 && chosen.map_or(blocks / 16.0 <= nnz, |c| c.explicit);
+    if explicit {
+        e.parts.push(("contact blocks", blocks));
     } else if precision != Precision::Double && model.pairs.is_some() {
         e.parts.push(("single-precision factors", SINGLE_PER_NNZ * nnz));
     }

@@ -27,7 +27,7 @@ use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
-use crate::linalg::ordering::{expand_to_dofs, nested_dissection, nested_dissection_last};
+use crate::linalg::ordering::{expand_to_dofs, order_last_if_cheap};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
@@ -141,6 +141,8 @@ pub struct Solution {
     pub local_mesh: LocalMesh,
     /// η of the dual operator's single-precision factors (`solver.precision = "mixed"`).
     pub single_precision_error: Option<f64>,
+    /// The monolithic dual's explicit products: the contact DOFs of the factors' trailing blocks.
+    pub explicit_products: Option<usize>,
 }
 
 /// The rows of the mesh one rank holds, parallel to [`LocalFields`]' nodes and cells: the
@@ -223,14 +225,12 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
                     OrderingKind::Metis => {
                         let (xadj, adj) = &sys.graph;
                         let dofs_of = |v: usize| dofs.node_dofs(body.nodes.start + v);
-                        let node_perm = if last.iter().any(|&l| l) {
-                            let perm = nested_dissection_last(xadj, adj, &last)?;
-                            let first_last = perm.iter().position(|&v| last[v]).unwrap_or(perm.len());
-                            trailing = expand_to_dofs(&perm[first_last..], dofs.nfree, dofs_of);
-                            perm
-                        } else {
-                            nested_dissection(xadj, adj)?
-                        };
+                        let free: Vec<u8> = (0..body.nodes.len()).map(|l| dofs_of(l).iter().flatten().count() as u8).collect();
+                        let (node_perm, explicit) = order_last_if_cheap(xadj, adj, &last, &free)?;
+                        if explicit {
+                            let first_last = node_perm.iter().position(|&v| last[v]).unwrap_or(node_perm.len());
+                            trailing = expand_to_dofs(&node_perm[first_last..], dofs.nfree, dofs_of);
+                        }
                         Ordering::Custom(expand_to_dofs(&node_perm, dofs.nfree, dofs_of))
                     }
                     OrderingKind::Amd => Ordering::Amd,
@@ -359,6 +359,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
         let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
         let mut solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
         solution.single_precision_error = dual.single_error();
+        solution.explicit_products = dual.explicit_dofs();
         // the status cannot be sharper than the solution: classify at the solver's tolerance
         let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
         let sigma = sol.info.sigma_est;
@@ -722,6 +723,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         load_path: outcome.filter(|o| !o.steps.is_empty()).map(|o| o.steps.iter().map(|s| s.report.clone()).collect()),
         output_verified_values: None,
         single_precision_error: sol.single_precision_error,
+        explicit_products: sol.explicit_products,
     }
 }
 

@@ -26,7 +26,7 @@ use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
 use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
-use crate::linalg::ordering::{fill, nested_dissection, nested_dissection_last, Fill};
+use crate::linalg::ordering::{fill, nested_dissection, order_last_if_cheap, Fill};
 use crate::model::Model;
 use crate::qp::Common;
 use crate::scene::DecompositionSettings;
@@ -78,6 +78,10 @@ pub struct Candidate {
     pub t_product: f64,
     pub t_factor: f64,
     pub time: f64,
+    /// The monolithic dual's products through the factors' trailing blocks (contact nodes
+    /// ordered last where that costs little fill: [`order_last_if_cheap`]).
+    #[serde(default)]
+    pub explicit: bool,
 }
 
 impl Candidate {
@@ -154,6 +158,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             t_product: 0.0,
             t_factor: SECONDS_PER_FLOP * max(&flops) + SECONDS_PER_DOF * max(&dofs),
             time: 0.0,
+            explicit: false,
         };
         c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
         c.time = c.t_factor + n_a * c.t_product;
@@ -167,13 +172,19 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
             let (xadj, adj) = node_graph(&mesh.cells, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
             // with contact the contact nodes are ordered last (the explicit products)
-            let last = super::contact_nodes(model, b);
-            let perm = if last.iter().any(|&l| l) { nested_dissection_last(&xadj, &adj, &last)? } else { nested_dissection(&xadj, &adj)? };
-            Ok(fill(&xadj, &adj, &perm, &free))
+            let (perm, explicit) = order_last_if_cheap(&xadj, &adj, &super::contact_nodes(model, b), &free)?;
+            let mut x = fill(&xadj, &adj, &perm, &free);
+            // the explicit products are marked by a negative flop count (restored below)
+            if explicit {
+                x.flops = -x.flops;
+            }
+            Ok(x)
         })?;
+        let explicit: Vec<bool> = f.iter().map(|x| x.flops < 0.0).collect();
+        let f: Vec<Fill> = f.into_iter().map(|x| Fill { flops: x.flops.abs(), ..x }).collect();
         let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
         let mut mono = candidate(vec![1; nb], None, &f, &|b| super::owner(b, ranks), &|b| body_dofs[b] as f64, (0, 0), n_a);
-        if contact.is_some() {
+        if contact.is_some() && explicit.iter().all(|&e| e) {
             // a product: two dense triangular solves with each body's trailing block
             let mut dense = vec![0.0; ranks];
             for b in 0..nb {
@@ -184,6 +195,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             }
             mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
             mono.time = mono.t_factor + n_a * mono.t_product;
+            mono.explicit = true;
         }
         out.push(mono);
     }
@@ -267,6 +279,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             t_product: x[5],
             t_factor: x[6],
             time: x[7],
+            explicit: false,
         });
     }
     Ok(out)

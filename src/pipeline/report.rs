@@ -46,6 +46,10 @@ pub struct Report {
     /// the single-precision factors (measured once on a probe vector).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub single_precision_error: Option<f64>,
+    /// The monolithic dual's products through the factors' trailing blocks (contact nodes
+    /// ordered last): the contact DOFs of all blocks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub explicit_products: Option<usize>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
