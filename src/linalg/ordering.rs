@@ -69,7 +69,7 @@ pub fn nested_dissection_last(xadj: &[usize], adjncy: &[usize], last: &[bool]) -
 
 /// A factor that orders the `last` nodes last may hold at most this multiple of the entries of
 /// one ordered by nested dissection alone ([`order_last_if_cheap`]).
-pub const LAST_GROWTH: f64 = 1.5;
+pub const LAST_GROWTH: f64 = 2.0;
 
 /// The `last` nodes ordered last ([`nested_dissection_last`]) when that factor holds at most
 /// [`LAST_GROWTH`] × the entries of plain nested dissection's (both counted, `free` DOFs per
