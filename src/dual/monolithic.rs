@@ -128,7 +128,7 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
     /// The operator over this rank's factorized bodies, and b = B K⁻¹ f − c.
     pub fn new(comm: &'c C, contact: &Contact, bodies: Vec<LocalBody>) -> (Self, Vec<f64>) {
         let layout = Layout::contact(contact.len(), contact.has_friction());
-        let blocks = bodies
+        let mut blocks = bodies
             .into_iter()
             .map(|local| {
                 let (b, _) = body_rows(contact, layout, &local.dofs);
@@ -138,7 +138,6 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
             .collect::<Vec<BodyBlock>>();
         // explicit products only where every rank's bodies have their blocks (a decision all
         // ranks share: the products' reductions must match)
-        let mut blocks: Vec<BodyBlock> = blocks;
         let mut v = [if blocks.iter().all(|blk| blk.dense.is_some()) { 0.0 } else { 1.0 }];
         comm.max_f64(&mut v);
         let mut dofs = [blocks.iter().filter_map(|blk| blk.dense.as_ref()).map(|d| d.l.nrows() as f64).sum::<f64>()];

@@ -138,38 +138,33 @@ impl Cholesky {
         let Some(single) = &self.single else {
             return self.solve_in_place(b);
         };
-        let n = self.n();
-        assert_eq!(b.len(), n);
-        let par = Par::Seq;
         let mut bs: Vec<f32> = b.iter().map(|&v| v as f32).collect();
-        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f32>(1, par));
-        let rhs = MatMut::from_column_major_slice_mut(&mut bs, n, 1);
-        LltRef::new(&self.symbolic.0, single).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+        llt_solve(&self.symbolic.0, single, &mut bs, 1);
         b.iter_mut().zip(&bs).for_each(|(a, &v)| *a = v as f64);
     }
 
     /// Solves A x = b in place.
     pub fn solve_in_place(&self, b: &mut [f64]) {
-        let n = self.n();
-        assert_eq!(b.len(), n);
-        let par = Par::Seq;
-        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f64>(1, par));
-        let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
-        LltRef::new(&self.symbolic.0, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+        self.solve_many_in_place(b, 1)
     }
 
     /// Solves A X = B in place for the `ncols` columns of `b` (column-major, n × ncols).
     pub fn solve_many_in_place(&self, b: &mut [f64], ncols: usize) {
-        let n = self.n();
-        assert_eq!(b.len(), n * ncols);
-        if ncols == 0 {
-            return;
+        if ncols > 0 {
+            llt_solve(&self.symbolic.0, &self.values, b, ncols);
         }
-        let par = Par::Seq;
-        let mut mem = MemBuffer::new(self.symbolic.0.solve_in_place_scratch::<f64>(ncols, par));
-        let rhs = MatMut::from_column_major_slice_mut(b, n, ncols);
-        LltRef::new(&self.symbolic.0, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
     }
+}
+
+/// X ← (LLᵀ)⁻¹X for the `ncols` columns of `b` (column-major), L's values in `values` (f64, or
+/// the single-precision copy), sequential.
+fn llt_solve<T: faer::traits::ComplexField>(sym: &SymbolicCholesky<usize>, values: &[T], b: &mut [T], ncols: usize) {
+    let n = sym.nrows();
+    assert_eq!(b.len(), n * ncols);
+    let par = Par::Seq;
+    let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<T>(ncols, par));
+    let rhs = MatMut::from_column_major_slice_mut(b, n, ncols);
+    LltRef::new(sym, values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
 }
 
 #[cfg(test)]
