@@ -452,6 +452,10 @@ fn main() -> ExitCode {
     // one process not started by an MPI launcher runs without MPI: OpenMPI's singleton start
     // (forking orted) alone costs about 0.3 s
     if launched_by_mpi() {
+        if let Some((key, value)) = single_host_pml(|v| std::env::var(v).ok()) {
+            // before MPI_Init, which reads it; no other thread runs yet
+            std::env::set_var(key, value);
+        }
         let Some(universe) = mpi::initialize() else {
             eprintln!("error: MPI could not be initialized");
             return ExitCode::FAILURE;
@@ -469,6 +473,17 @@ fn launched_by_mpi() -> bool {
     let set = |v: &str| std::env::var_os(v).is_some();
     let several_tasks = std::env::var("SLURM_NTASKS").ok().and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n > 1) && set("SLURM_PROCID");
     std::env::var("TRESCA_FETI_MPI").is_ok_and(|v| v == "1") || several_tasks || ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK", "MPI_LOCALNRANKS", "ALPS_APP_PE"].iter().any(|v| set(v))
+}
+
+/// Open MPI's point-to-point layer for a run whose ranks all share one host, unless the user
+/// chose one (`OMPI_MCA_pml`): `ob1` (shared memory through the `vader` transport). Open MPI's
+/// default there, UCX, probes the network devices in `MPI_Init` — about 0.2 s of every run
+/// on 2 ranks (docs/performance.md, "Start-up"). Every rank sees the same sizes, so all choose
+/// alike; across hosts nothing changes.
+fn single_host_pml(var: impl Fn(&str) -> Option<String>) -> Option<(&'static str, &'static str)> {
+    let size = |v: &str| var(v).and_then(|s| s.parse::<usize>().ok());
+    let one_host = matches!((size("OMPI_COMM_WORLD_SIZE"), size("OMPI_COMM_WORLD_LOCAL_SIZE")), (Some(n), Some(l)) if n == l);
+    (one_host && var("OMPI_MCA_pml").is_none()).then_some(("OMPI_MCA_pml", "ob1"))
 }
 
 /// Runs one command on `comm`; rank 0 prints its error line.
@@ -633,5 +648,23 @@ fn print_summary(s: &pipeline::Summary) {
     println!("wrote {}", files.join(", "));
     if let Some(n) = r.output_verified_values {
         println!("read back: {n} values on {} ranks match the fields in memory", r.ranks);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::single_host_pml;
+
+    fn env<'a>(pairs: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
+        move |v| pairs.iter().find(|(k, _)| *k == v).map(|(_, x)| x.to_string())
+    }
+
+    #[test]
+    fn ob1_only_on_one_host_and_only_when_the_user_chose_no_pml() {
+        assert_eq!(single_host_pml(env(&[("OMPI_COMM_WORLD_SIZE", "2"), ("OMPI_COMM_WORLD_LOCAL_SIZE", "2")])), Some(("OMPI_MCA_pml", "ob1")));
+        // ranks on two hosts, the user's own choice, no Open MPI launcher: left alone
+        assert_eq!(single_host_pml(env(&[("OMPI_COMM_WORLD_SIZE", "4"), ("OMPI_COMM_WORLD_LOCAL_SIZE", "2")])), None);
+        assert_eq!(single_host_pml(env(&[("OMPI_COMM_WORLD_SIZE", "2"), ("OMPI_COMM_WORLD_LOCAL_SIZE", "2"), ("OMPI_MCA_pml", "ucx")])), None);
+        assert_eq!(single_host_pml(env(&[("PMI_SIZE", "2")])), None);
     }
 }

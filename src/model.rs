@@ -3,6 +3,7 @@
 //! uses is checked here, with the scene key in the error.
 
 use std::collections::HashMap;
+use std::sync::OnceLock;
 
 use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact, SlipBound, Tied};
@@ -10,6 +11,7 @@ use crate::qp::cone::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::add_traction;
 use crate::fem::material::Lame;
+use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
 use crate::scene::{Component, LoadedScene, Scene};
 
@@ -37,6 +39,9 @@ pub struct Model {
     /// Bodies whose Dirichlet conditions leave a rigid motion free that contact holds: solved
     /// by TFETI with the orthogonal projector (SMALSE-M), Gλ = e over every row.
     pub floating: Vec<usize>,
+    /// Each body's node order for its factor, computed once: `[plain, contact nodes last]`
+    /// (`pipeline::body_order`; the plan counts its fill, the factorization uses it).
+    pub orders: Vec<[OnceLock<NodeOrder>; 2]>,
 }
 
 /// Nodes and elements of the whole mesh.
@@ -420,7 +425,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         by_kind[k.code()] = n;
     }
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating })
+    let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, orders })
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound

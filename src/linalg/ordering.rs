@@ -71,19 +71,32 @@ pub fn nested_dissection_last(xadj: &[usize], adjncy: &[usize], last: &[bool]) -
 /// one ordered by nested dissection alone ([`order_last_if_cheap`]).
 pub const LAST_GROWTH: f64 = 2.0;
 
+/// A node order for a factor and the fill it gives ([`order_last_if_cheap`]).
+#[derive(Clone, Debug)]
+pub struct NodeOrder {
+    /// `perm[new] = old`.
+    pub perm: Vec<usize>,
+    /// Whether the `last` nodes come last.
+    pub last: bool,
+    /// The fill of `perm`.
+    pub fill: Fill,
+}
+
 /// The `last` nodes ordered last ([`nested_dissection_last`]) when that factor holds at most
 /// [`LAST_GROWTH`] × the entries of plain nested dissection's (both counted, `free` DOFs per
-/// node), else plain nested dissection; returns the order and whether it puts `last` last.
-pub fn order_last_if_cheap(xadj: &[usize], adjncy: &[usize], last: &[bool], free: &[u8]) -> Result<(Vec<usize>, bool)> {
+/// node), else plain nested dissection.
+pub fn order_last_if_cheap(xadj: &[usize], adjncy: &[usize], last: &[bool], free: &[u8]) -> Result<NodeOrder> {
     let plain = nested_dissection(xadj, adjncy)?;
+    let plain_fill = fill(xadj, adjncy, &plain, free);
     if !last.iter().any(|&l| l) {
-        return Ok((plain, false));
+        return Ok(NodeOrder { perm: plain, last: false, fill: plain_fill });
     }
     let ordered = nested_dissection_last(xadj, adjncy, last)?;
-    if fill(xadj, adjncy, &ordered, free).nnz_l <= LAST_GROWTH * fill(xadj, adjncy, &plain, free).nnz_l {
-        Ok((ordered, true))
+    let ordered_fill = fill(xadj, adjncy, &ordered, free);
+    if ordered_fill.nnz_l <= LAST_GROWTH * plain_fill.nnz_l {
+        Ok(NodeOrder { perm: ordered, last: true, fill: ordered_fill })
     } else {
-        Ok((plain, false))
+        Ok(NodeOrder { perm: plain, last: false, fill: plain_fill })
     }
 }
 

@@ -27,7 +27,7 @@ use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
-use crate::linalg::ordering::{expand_to_dofs, order_last_if_cheap};
+use crate::linalg::ordering::{expand_to_dofs, order_last_if_cheap, NodeOrder};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::dual::monolithic::MonolithicDual;
@@ -196,6 +196,22 @@ pub fn contact_nodes(model: &Model, b: usize) -> Vec<bool> {
     last
 }
 
+/// Body `b`'s node order for its factor: METIS nested dissection, with `contact_last` the
+/// contact nodes ([`contact_nodes`]) last where that costs little fill ([`order_last_if_cheap`]).
+/// Computed once per process — the plan counts its fill, the factorization of the same rank
+/// (body b is priced and factorized by rank b mod size) uses it; `graph` is the body's node
+/// graph and `free` its free DOFs per node, asked for only the first time.
+pub fn body_order<'m>(model: &'m Model, b: usize, contact_last: bool, graph: impl FnOnce() -> ((Vec<usize>, Vec<usize>), Vec<u8>)) -> Result<&'m NodeOrder> {
+    let memo = &model.orders[b][contact_last as usize];
+    if let Some(o) = memo.get() {
+        return Ok(o);
+    }
+    let ((xadj, adj), free) = graph();
+    let last = if contact_last { contact_nodes(model, b) } else { vec![] };
+    let o = order_last_if_cheap(&xadj, &adj, &last, &free)?;
+    Ok(memo.get_or_init(|| o))
+}
+
 /// Assembles and factorizes the bodies this rank owns (phases `assemble`, `factorize`).
 ///
 /// With `contact_last`, the nodes the contact rows touch are ordered last (METIS ordering only):
@@ -219,19 +235,18 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
             .into_iter()
             .map(|(b, dofs, sys)| {
                 let body = &mesh.bodies[b];
-                let last = if contact_last { contact_nodes(model, b) } else { vec![] };
                 let mut trailing = vec![];
                 let ord = match ordering {
                     OrderingKind::Metis => {
-                        let (xadj, adj) = &sys.graph;
                         let dofs_of = |v: usize| dofs.node_dofs(body.nodes.start + v);
-                        let free: Vec<u8> = (0..body.nodes.len()).map(|l| dofs_of(l).iter().flatten().count() as u8).collect();
-                        let (node_perm, explicit) = order_last_if_cheap(xadj, adj, &last, &free)?;
-                        if explicit {
-                            let first_last = node_perm.iter().position(|&v| last[v]).unwrap_or(node_perm.len());
-                            trailing = expand_to_dofs(&node_perm[first_last..], dofs.nfree, dofs_of);
+                        let free = || (0..body.nodes.len()).map(|l| dofs_of(l).iter().flatten().count() as u8).collect();
+                        let order = body_order(model, b, contact_last, || (sys.graph.clone(), free()))?;
+                        if order.last {
+                            let last = contact_nodes(model, b);
+                            let first_last = order.perm.iter().position(|&v| last[v]).unwrap_or(order.perm.len());
+                            trailing = expand_to_dofs(&order.perm[first_last..], dofs.nfree, dofs_of);
                         }
-                        Ordering::Custom(expand_to_dofs(&node_perm, dofs.nfree, dofs_of))
+                        Ordering::Custom(expand_to_dofs(&order.perm, dofs.nfree, dofs_of))
                     }
                     OrderingKind::Amd => Ordering::Amd,
                 };

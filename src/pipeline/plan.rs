@@ -26,7 +26,7 @@ use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
 use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
-use crate::linalg::ordering::{fill, nested_dissection, order_last_if_cheap, Fill};
+use crate::linalg::ordering::{fill, nested_dissection, Fill};
 use crate::model::Model;
 use crate::qp::Common;
 use crate::scene::DecompositionSettings;
@@ -169,14 +169,17 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         let by_body = crate::model::constraints_by_body(mesh, &model.constraints);
         let f = fills(nb, &|b| {
             let body = &mesh.bodies[b];
-            let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
-            let free: Vec<u8> = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
-            let (xadj, adj) = node_graph(&mesh.cells, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start);
-            // with contact the contact nodes are ordered last (the explicit products)
-            let (perm, explicit) = order_last_if_cheap(&xadj, &adj, &super::contact_nodes(model, b), &free)?;
-            let mut x = fill(&xadj, &adj, &perm, &free);
+            let graph = || {
+                let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
+                let free = (0..body.nodes.len()).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count() as u8).collect();
+                (node_graph(&mesh.cells, body.elems.clone(), body.nodes.len(), |v| v - body.nodes.start), free)
+            };
+            // with contact the contact nodes are ordered last (the explicit products); the
+            // order is kept for the factorization
+            let order = super::body_order(model, b, contact.is_some(), graph)?;
+            let mut x = order.fill;
             // the explicit products are marked by a negative flop count (restored below)
-            if explicit {
+            if order.last {
                 x.flops = -x.flops;
             }
             Ok(x)
