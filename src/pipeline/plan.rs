@@ -53,8 +53,10 @@ pub const TFETI_GROWTH: f64 = 0.04;
 pub const CG_PRODUCTS_PER_DIGIT: f64 = 8.0;
 /// Candidates with fewer DOFs per subdomain are not priced.
 pub const MIN_SUBDOMAIN_DOFS: usize = 1000;
-/// Most subdomains whose fill is counted per candidate (the others scaled from them).
+/// Most subdomains whose fill is counted per candidate (the others scaled from them) …
 pub const SAMPLED: usize = 16;
+/// … and the most nodes they may hold together (at least one subdomain is counted).
+pub const SAMPLED_NODES: usize = 20_000;
 /// Subdomain counts priced (on the largest body; the others in proportion).
 pub const SUBDOMAIN_COUNTS: [usize; 8] = [2, 4, 8, 16, 32, 64, 128, 256];
 
@@ -208,7 +210,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         counts.insert(0, 1);
     }
     // the TFETI candidates (target DOFs, parts): each priced whole — its partition, B, fills —
-    // by one rank (candidate j by rank j % workers), the figures summed (x + 0 is exact), so
+    // by one rank (balanced below), the figures summed (x + 0 is exact), so
     // every rank gets the same table and none repeats another's partitions
     let specs: Vec<(usize, usize, Vec<usize>)> = counts
         .into_iter()
@@ -216,19 +218,31 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         .map(|(s, target)| (s, target, body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect::<Vec<usize>>()))
         .filter(|(s, target, parts)| !((*s > 1 && *target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len())))
         .collect();
+    // each candidate priced by one rank, the ranks balanced by the work of its pricing: the
+    // partition (~ nodes · log2 S) and the nested dissections of the sample (~ its nodes)
+    let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
+    let work: Vec<f64> = specs
+        .iter()
+        .map(|(s, _, parts)| {
+            let ns: usize = parts.iter().sum();
+            let per = total_nodes as f64 / ns as f64;
+            total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per * sample_size(ns, per) as f64
+        })
+        .collect();
+    let pricer = balance(&work, workers);
     const FIGURES: usize = 8;
     let mut figures = vec![0.0; FIGURES * specs.len()];
     let mut failed = Ok(());
-    for (j, (s, target, parts)) in specs.iter().enumerate().filter(|(j, _)| j % workers == me) {
+    for (j, (s, target, parts)) in specs.iter().enumerate().filter(|(j, _)| pricer[*j] == me) {
         let priced = (|| -> Result<Candidate> {
             let d = decompose_each(mesh, parts)?;
             let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
             let cons = constraints::build(&d, &model.constraints, contact, &model.ties, dec.gluing, &elim);
-            // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED), the
-            // others scaled from it by their node count (nested dissection of 3-D pieces:
-            // nnz(L) ~ n^4/3, work ~ n²)
+            // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED, at most
+            // SAMPLED_NODES nodes), the others scaled from it by their node count (nested
+            // dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²)
             let ns = d.subdomains.len();
-            let stride = ns.div_ceil((ns / 4).clamp(2, SAMPLED).min(ns));
+            let stride = ns.div_ceil(sample_size(ns, total_nodes as f64 / ns as f64));
             let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
             let counted = sampled
                 .iter()
@@ -289,6 +303,25 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
     Ok(out)
 }
 
+/// Subdomains whose fill a candidate counts: a quarter of its `ns`, 2 to [`SAMPLED`], at most
+/// [`SAMPLED_NODES`] nodes at `per` nodes each, at least one.
+fn sample_size(ns: usize, per: f64) -> usize {
+    let by_nodes = ((SAMPLED_NODES as f64 / per) as usize).max(1);
+    (ns / 4).clamp(2, SAMPLED).min(by_nodes).min(ns).max(1)
+}
+
+/// Jobs of the given work to `workers` ranks, the largest first to the least loaded rank (LPT).
+fn balance(work: &[f64], workers: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..work.len()).collect();
+    order.sort_by(|&a, &b| work[b].total_cmp(&work[a]).then(a.cmp(&b)));
+    let (mut load, mut owner) = (vec![0.0f64; workers.max(1)], vec![0; work.len()]);
+    for j in order {
+        let r = (0..load.len()).min_by(|&a, &b| load[a].total_cmp(&load[b]).then(a.cmp(&b))).expect("one rank");
+        (owner[j], load[r]) = (r, load[r] + work[j]);
+    }
+    owner
+}
+
 fn max(v: &[f64]) -> f64 {
     v.iter().copied().fold(0.0, f64::max)
 }
@@ -344,6 +377,19 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
 mod tests {
     use super::*;
     use crate::comm::SerialComm;
+
+    #[test]
+    fn the_pricing_is_balanced_and_its_samples_bounded() {
+        // LPT: the largest job alone, the others filling the second rank; every job placed once
+        assert_eq!(balance(&[1.13, 0.55, 0.70, 0.53, 0.70, 0.55, 0.64], 2), vec![0, 1, 1, 1, 1, 0, 0]);
+        assert_eq!(balance(&[3.0, 1.0], 1), vec![0, 0]);
+        // a quarter of the subdomains, 2 to SAMPLED, at most SAMPLED_NODES nodes, at least one
+        assert_eq!(sample_size(4, 6912.0), 2);
+        assert_eq!(sample_size(4, 37_000.0), 1);
+        assert_eq!(sample_size(256, 600.0), SAMPLED);
+        assert_eq!(sample_size(64, 4_600.0), 4);
+        assert_eq!(sample_size(1, 100.0), 1);
+    }
 
     #[test]
     fn the_counted_fill_is_what_the_factors_store() {
