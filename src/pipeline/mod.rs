@@ -201,7 +201,7 @@ pub fn contact_nodes(model: &Model, b: usize) -> Vec<bool> {
 /// Computed once per process — the plan counts its fill, the factorization of the same rank
 /// (body b is priced and factorized by rank b mod size) uses it; `graph` is the body's node
 /// graph and `free` its free DOFs per node, asked for only the first time.
-pub fn body_order<'m>(model: &'m Model, b: usize, contact_last: bool, graph: impl FnOnce() -> ((Vec<usize>, Vec<usize>), Vec<u8>)) -> Result<&'m NodeOrder> {
+pub fn body_order(model: &Model, b: usize, contact_last: bool, graph: impl FnOnce() -> ((Vec<usize>, Vec<usize>), Vec<u8>)) -> Result<&NodeOrder> {
     let memo = &model.orders[b][contact_last as usize];
     if let Some(o) = memo.get() {
         return Ok(o);
