@@ -476,10 +476,10 @@ fn launched_by_mpi() -> bool {
 }
 
 /// Open MPI's point-to-point layer for a run whose ranks all share one host, unless the user
-/// chose one (`OMPI_MCA_pml`): `ob1` (shared memory through the `vader` transport). Open MPI's
-/// default there, UCX, probes the network devices in `MPI_Init` — about 0.2 s of every run
-/// on 2 ranks (docs/performance.md, "Start-up"). Every rank sees the same sizes, so all choose
-/// alike; across hosts nothing changes.
+/// chose one (`OMPI_MCA_pml`): `ob1` (shared memory through the `vader` transport). Open MPI
+/// otherwise tries UCX first, whose probe of the network devices in `MPI_Init` cost about 0.2 s
+/// of every run on 2 ranks (docs/performance.md, "Start-up"). Every rank sees the same sizes,
+/// so all choose alike; across hosts nothing changes.
 fn single_host_pml(var: impl Fn(&str) -> Option<String>) -> Option<(&'static str, &'static str)> {
     let size = |v: &str| var(v).and_then(|s| s.parse::<usize>().ok());
     let one_host = matches!((size("OMPI_COMM_WORLD_SIZE"), size("OMPI_COMM_WORLD_LOCAL_SIZE")), (Some(n), Some(l)) if n == l);
