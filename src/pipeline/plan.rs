@@ -221,13 +221,12 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
     // each candidate priced by one rank, the ranks balanced by the work of its pricing: the
     // partition (~ nodes · log2 S) and the nested dissections of the sample (~ its nodes)
     let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
+    let per: Vec<f64> = specs.iter().map(|(_, _, parts)| total_nodes as f64 / parts.iter().sum::<usize>() as f64).collect();
+    let samples: Vec<usize> = specs.iter().zip(&per).map(|((_, _, parts), &p)| sample_size(parts.iter().sum(), p)).collect();
     let work: Vec<f64> = specs
         .iter()
-        .map(|(s, _, parts)| {
-            let ns: usize = parts.iter().sum();
-            let per = total_nodes as f64 / ns as f64;
-            total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per * sample_size(ns, per) as f64
-        })
+        .enumerate()
+        .map(|(j, (s, _, _))| total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per[j] * samples[j] as f64)
         .collect();
     let pricer = balance(&work, workers);
     const FIGURES: usize = 8;
@@ -242,7 +241,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             // SAMPLED_NODES nodes), the others scaled from it by their node count (nested
             // dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²)
             let ns = d.subdomains.len();
-            let stride = ns.div_ceil(sample_size(ns, total_nodes as f64 / ns as f64));
+            let stride = ns.div_ceil(samples[j].min(ns));
             let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
             let counted = sampled
                 .iter()
