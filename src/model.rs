@@ -36,9 +36,12 @@ pub struct Model {
     pub ties: Tied,
     /// The load path; `constraints` and `loads` are its last step.
     pub path: LoadPath,
-    /// Bodies whose Dirichlet conditions leave a rigid motion free that contact holds: solved
-    /// by TFETI with the orthogonal projector (SMALSE-M), Gλ = e over every row.
-    pub floating: Vec<usize>,
+    /// Bodies, or groups of bodies joined by ties, whose Dirichlet conditions leave a rigid
+    /// motion of the group free that contact holds (each group ascending): solved by TFETI with
+    /// the orthogonal projector (SMALSE-M), Gλ = e over every row.
+    pub floating: Vec<Vec<usize>>,
+    /// Every group of bodies joined by `[[tie]]` (two bodies or more), each ascending.
+    pub tied_groups: Vec<Vec<usize>>,
     /// Each body's node order for its factor, computed once: `[plain, contact nodes last]`
     /// (`pipeline::body_order`; the plan counts its fill, the factorization uses it).
     pub orders: Vec<[OnceLock<NodeOrder>; 2]>,
@@ -331,6 +334,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for &(v, c, _) in &constraints {
         body_constraints[body_of(v)].push((v, c));
     }
+    // touched by contact
     let mut body_touches = vec![false; mesh.bodies.len()];
     if contact_active {
         for &(s, m) in &contact {
@@ -338,18 +342,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             body_touches[mesh.faces[m].body] = true;
         }
     }
-    // tied nodes hold every rigid motion they take part in, in all three directions
-    let mut body_tied: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
-    for row in &ties.coupling {
-        for &(v, _) in row {
-            body_tied[body_of(v)].push(v);
-        }
-    }
-    for (b, v) in body_tied.iter_mut().enumerate() {
-        v.sort_unstable();
-        v.dedup();
-        body_touches[b] |= !v.is_empty();
-    }
+    // bodies joined by ties move as one in the question of what holds them
+    let groups = tie_groups(mesh.bodies.len(), tie_faces.iter().map(|&(s, m)| (mesh.faces[s].body, mesh.faces[m].body)));
     let mut body_pairs: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
     if let Some(c) = &pairs {
         for i in 0..c.len() {
@@ -361,44 +355,50 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             }
         }
     }
-    let mut floating = Vec::new();
-    for (b, body) in mesh.bodies.iter().enumerate() {
+    for body in &mesh.bodies {
         let ne = body.elems.len();
         let parts = scene.decomposition.parts(3 * body.nodes.len());
         if parts > ne {
             let key = if scene.decomposition.target_dofs.is_some() { "decomposition.target_dofs" } else { "decomposition.subdomains" };
             return Err(Error::scene(key, format!("{parts} subdomains per body exceed the {ne} elements of body \"{}\"", body.name)));
         }
-        let held = !body_constraints[b].is_empty();
-        let touches = body_touches[b];
+    }
+    let mut floating = Vec::new();
+    for group in &groups {
+        let name = hold::group_name(&mesh, group);
+        let held = group.iter().any(|&b| !body_constraints[b].is_empty());
+        let touches = group.iter().any(|&b| body_touches[b]);
         if !held && !touches {
-            return Err(Error::scene(
-                "dirichlet",
-                format!("body \"{}\" floats: it has no Dirichlet condition{}", body.name, if contact_active { " and no contact" } else { " (contact is off)" }),
-            ));
+            let what = if group.len() == 1 { "floats: it has no Dirichlet condition" } else { "float: none of them has a Dirichlet condition" };
+            return Err(Error::scene("dirichlet", format!("{name} {what}{}", if contact_active { " and no contact" } else { " (contact is off)" })));
         }
         let axis = |c: usize| {
             let mut dir = [0.0; 3];
             dir[c] = 1.0;
             dir
         };
-        let dirichlet = body_constraints[b].iter().map(|&(v, c)| (v, axis(c))).chain(body_tied[b].iter().flat_map(|&v| (0..3).map(move |c| (v, axis(c)))));
-        let free = free_motions(&mesh, b, dirichlet.clone());
+        let dirichlet = group.iter().flat_map(|&b| body_constraints[b].iter().map(|&(v, c)| (v, axis(c))));
+        let free = free_motions(&mesh, group, dirichlet.clone());
         if free.is_empty() {
             continue;
         }
+        let its = if group.len() == 1 { "its" } else { "the group's" };
         let Some(c) = pairs.as_ref().filter(|_| touches) else {
-            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by no Dirichlet condition", body.name, free.join(", "))));
+            return Err(Error::scene("dirichlet", format!("{name}: {its} rigid motions {} are held by no Dirichlet condition", free.join(", "))));
         };
-        // the pairs' directions at the body's contact nodes: the normal, and each tangent along
+        // the pairs' directions at the group's contact nodes: the normal, and each tangent along
         // which friction can carry a force (a slip bound g or coefficient μ > 0: a zero bound
         // holds no sliding, like no friction at all)
+        let inside = |v: &usize| group.iter().any(|&b| mesh.bodies[b].nodes.contains(v));
         let mut rows = Vec::new();
         let mut zero_bound = false;
-        for &i in &body_pairs[b] {
+        let mut seen: Vec<usize> = group.iter().flat_map(|&b| body_pairs[b].iter().copied()).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        for i in seen {
             let holds = tangential_hold(c, i);
             zero_bound |= holds != [true, true] && (c.bound[i] != SlipBound::None || c.coulomb[i] != Coefficient::Fixed);
-            for v in c.row(i).iter().map(|&(v, _)| v).filter(|v| body.nodes.contains(v)) {
+            for v in c.row(i).iter().map(|&(v, _)| v).filter(inside) {
                 rows.push((v, c.normal[i]));
                 for (t, hold) in [(c.t1[i], holds[0]), (c.t2[i], holds[1])] {
                     if hold {
@@ -407,7 +407,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                 }
             }
         }
-        let unheld = free_motions(&mesh, b, dirichlet.chain(rows));
+        let unheld = free_motions(&mesh, group, dirichlet.chain(rows));
         if !unheld.is_empty() {
             let hint = if zero_bound {
                 " (a zero slip bound or friction coefficient does not hold a sliding motion)"
@@ -416,9 +416,9 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             } else {
                 " (frictionless contact does not hold a sliding motion)"
             };
-            return Err(Error::scene("dirichlet", format!("body \"{}\": its rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", body.name, unheld.join(", "))));
+            return Err(Error::scene("dirichlet", format!("{name}: {its} rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", unheld.join(", "))));
         }
-        floating.push(b);
+        floating.push(group.clone());
     }
     let mut by_kind = [0; 4];
     for (k, n) in mesh.cell_counts() {
@@ -426,7 +426,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     }
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
     let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, orders })
+    let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, orders })
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound
@@ -442,12 +443,77 @@ fn tangential_hold(c: &Contact, i: usize) -> [bool; 2] {
     }
 }
 
-/// The rigid motions of body `b` that the `rows` (node, direction) leave free, in words
-/// ([`rigid::free_modes`]).
-fn free_motions(mesh: &Mesh, b: usize, rows: impl Iterator<Item = (usize, [f64; 3])>) -> Vec<String> {
-    match rigid::free_modes(mesh, b, rows) {
+/// The bodies joined by ties (`links`: the bodies of each tie's two faces), as groups: each
+/// ascending, the groups in the order of their first body; an untied body is a group of one.
+fn tie_groups(bodies: usize, links: impl Iterator<Item = (usize, usize)>) -> Vec<Vec<usize>> {
+    let mut root: Vec<usize> = (0..bodies).collect();
+    fn find(root: &mut [usize], mut b: usize) -> usize {
+        while root[b] != b {
+            root[b] = root[root[b]];
+            b = root[b];
+        }
+        b
+    }
+    for (a, b) in links {
+        let (ra, rb) = (find(&mut root, a), find(&mut root, b));
+        root[ra.max(rb)] = ra.min(rb);
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut at = vec![usize::MAX; bodies];
+    for b in 0..bodies {
+        let r = find(&mut root, b);
+        if at[r] == usize::MAX {
+            at[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[at[r]].push(b);
+    }
+    groups
+}
+
+/// The rigid motions of the bodies `group` (one body, or a tied group moving as one) that the
+/// `rows` (node, direction) leave free, in words ([`rigid::free_modes`]).
+fn free_motions(mesh: &Mesh, group: &[usize], rows: impl Iterator<Item = (usize, [f64; 3])>) -> Vec<String> {
+    match rigid::free_modes(mesh, group, rows) {
         Some(modes) => modes.iter().map(rigid::describe).collect(),
         None => vec!["(eigen-decomposition failed)".into()],
+    }
+}
+
+impl Model {
+    /// What holds each tied group and each body held by contact alone, a line each for
+    /// `check`: `bodies "w", "u" (tied): held by contact alone (pairs 0): translation along x, …`,
+    /// or `… held by Dirichlet conditions on "lower"`.
+    pub fn holding(&self) -> Vec<String> {
+        let by_body = constraints_by_body(&self.mesh, &self.constraints);
+        let mut groups: Vec<&Vec<usize>> = self.tied_groups.iter().chain(self.floating.iter().filter(|g| g.len() == 1)).collect();
+        groups.sort();
+        groups
+            .into_iter()
+            .map(|g| {
+                let name = hold::group_name(&self.mesh, g);
+                if self.floating.contains(g) {
+                    let rows = g.iter().flat_map(|&b| by_body[b].iter()).map(|&(v, k, _)| {
+                        let mut dir = [0.0; 3];
+                        dir[k] = 1.0;
+                        (v, dir)
+                    });
+                    let free = free_motions(&self.mesh, g, rows);
+                    let pairs: Vec<String> = self
+                        .contact
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &(s, m))| g.contains(&self.mesh.faces[s].body) != g.contains(&self.mesh.faces[m].body))
+                        .map(|(i, _)| i.to_string())
+                        .collect();
+                    let free = if free.len() == 6 { "all six rigid motions".to_string() } else { free.join(", ") };
+                    format!("{name}: held by contact alone (pair {}) in {free}; solved by TFETI with the orthogonal projector (SMALSE-M)", pairs.join(", "))
+                } else {
+                    let held: Vec<String> = g.iter().filter(|&&b| !by_body[b].is_empty()).map(|&b| format!("\"{}\"", self.mesh.bodies[b].name)).collect();
+                    format!("{name}: held by Dirichlet conditions on {}", held.join(", "))
+                }
+            })
+            .collect()
     }
 }
 
@@ -461,13 +527,13 @@ impl Model {
         let free: Vec<FreeBody> = self
             .floating
             .iter()
-            .map(|&b| {
-                let rows = by_body[b].iter().map(|&(v, k, _)| {
+            .map(|group| {
+                let rows = group.iter().flat_map(|&b| by_body[b].iter()).map(|&(v, k, _)| {
                     let mut dir = [0.0; 3];
                     dir[k] = 1.0;
                     (v, dir)
                 });
-                FreeBody { body: b, modes: rigid::free_modes(&self.mesh, b, rows).unwrap_or_default() }
+                FreeBody { bodies: group.clone(), modes: rigid::free_modes(&self.mesh, group, rows).unwrap_or_default() }
             })
             .collect();
         for k in 1..=self.path.steps {

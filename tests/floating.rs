@@ -62,3 +62,65 @@ fn a_block_dragged_by_one_face_sticks_below_mu_n_and_slides_at_mu_n_above() {
         assert!((f[2] - 2.0).abs() <= 1e-8 && f[1].abs() <= 1e-8, "z and y balance the pressing load: {f:?}");
     }
 }
+
+/// A washer tied to a plate that friction alone holds on a clamped plate (the lap joint): the
+/// tied pair is one rigid group held by contact, solved on 1 and 2 subdomains per body and along
+/// a 3-step path with the contact force balancing the load on every step; `check` names the
+/// group and what holds it, and a pull beyond μN is refused naming the group. Before, tied
+/// nodes counted as fixed and the solve failed with "C = G_E G_Eᵀ is singular".
+#[test]
+fn a_tied_group_held_by_contact_alone_solves_and_balances_its_load() {
+    let scene = root().join("run/validation/tied_lap_joint.toml");
+    let dir = tmpdir("tied-group");
+    let one = solve(&scene, &[], &dir.join("s1.h5"));
+    let u1 = &one.solution.displacement;
+    for (s, sets) in [(1, vec![]), (2, vec!["decomposition.subdomains=2", "load.steps=3", "traction.1.factors=[0.0, 0.5, 1.0]", "traction.0.factors=[0.5, 1.0, 1.0]"])] {
+        let r = solve(&scene, &sets, &dir.join(format!("p{s}.h5")));
+        assert!(r.report.problem.contains("TFETI"), "{}", r.report.problem);
+        let c = r.report.contact.as_ref().unwrap();
+        let f = c.total_force_on_slave;
+        eprintln!("S = {s}: force on the plate ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}", f[0], f[1], f[2], c.stick, c.slip, r.report.solver.as_ref().unwrap().kkt_worst);
+        assert!((f[0] + 0.3).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "the contact force balances the load: {f:?}");
+        assert_eq!((c.stick, c.open), (25, 0), "T = 0.3 < μN = 0.6: every pair sticks");
+        if let Some(steps) = r.report.load_path.as_ref() {
+            for (k, (fx, fz)) in [(0.0, 1.0), (-0.15, 2.0), (-0.3, 2.0)].into_iter().enumerate() {
+                let f = steps[k].total_force_on_slave;
+                assert!((f[0] - fx).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - fz).abs() <= 1e-8, "step {}: {f:?}", k + 1);
+            }
+        }
+        let d = r.solution.displacement.iter().flatten().zip(u1.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-6 * max_abs(u1), "S = {s} differs from S = 1 by {:.1e} relative", d / max_abs(u1));
+    }
+    let o = common::run(&["check", scene.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("bodies \"washer\", \"upper\" (tied): held by contact alone (pair 0) in all six rigid motions"), "{out}");
+    let o = common::run(&["check", scene.to_str().unwrap(), "--set", "traction.1.p=[0.7, 0.0, 0.0]"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    for want in ["bodies \"washer\", \"upper\" (tied): no equilibrium exists", "translation along x", "the group would slide away"] {
+        assert!(err.contains(want), "`{want}` not in {err}");
+    }
+}
+
+/// Three bodies, one tie: the middle plate tied to the clamped base is held by Dirichlet
+/// conditions through it (the group), and the top block on it is held by contact alone.
+#[test]
+fn a_block_on_a_tied_stack_is_held_by_contact_and_the_tie_group_by_its_base() {
+    let base = std::fs::read_to_string(root().join("run/validation/tied_lap_joint.toml")).unwrap();
+    // washer → a block pressed onto "upper" by contact; "upper" tied to the clamped "lower"
+    let scene = base
+        .replace("[[tie]]\nslave = \"washer.zmin\"\nmaster = \"upper.zmax\"\n", "[[tie]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n")
+        .replace("[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.zmax\"\n", "[[contact.pair]]\nslave = \"washer.zmin\"\nmaster = \"upper.zmax\"\n")
+        .replace("face = \"upper.xmin\"\np = [0.3, 0.0, 0.0]", "face = \"washer.xmin\"\np = [0.3, 0.0, 0.0]");
+    let dir = tmpdir("tied-stack");
+    let path = dir.join("stack.toml");
+    std::fs::write(&path, &scene).unwrap();
+    let o = common::run(&["check", path.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("bodies \"upper\", \"lower\" (tied): held by Dirichlet conditions on \"lower\""), "{out}");
+    assert!(out.contains("body \"washer\": held by contact alone"), "{out}");
+    let r = solve(&path, &["contact.pair.0.discretization=\"mortar\""], &dir.join("r.h5"));
+    let f = r.report.contact.as_ref().unwrap().total_force_on_slave;
+    // N = 4 · 0.5, T = 0.3 · 0.15 (the washer's xmin face: 0.5 × 0.3)
+    assert!((f[0] + 0.045).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "{f:?}");
+}

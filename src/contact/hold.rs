@@ -10,8 +10,9 @@
 //! has no solution (the body would slide or spin away). One second-order cone problem
 //! (Clarabel) decides it: the distance min_{λ ∈ Λ} ‖e_f − G_f λ‖ from the load to what the
 //! contact can supply. Where it is not 0, e_f − G_f λ* is the unbalanced part of the load and
-//! its direction d the motion it drives: d is normal to G_f(Λ) at G_f λ*, so dᵀG_f λ* is the
-//! largest force the contact can supply along d, against the load's dᵀe_f.
+//! its direction d the motion it drives; the error names the natural motion (a translation or
+//! a rotation about an axis) that carries most of it, with the load's and G_f λ*'s components
+//! along it: what is applied and what contact and friction carry of it.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT, ZeroConeT};
@@ -21,38 +22,51 @@ use crate::error::{Error, Result};
 use crate::mesh::{rigid, Mesh};
 use crate::qp::cone::Coefficient;
 
-/// A body held by contact alone: its index and an orthonormal basis of the rigid motions its
-/// Dirichlet conditions leave free ([`rigid::free_modes`]).
+/// A body held by contact alone, or a group of bodies tied together (`[[tie]]`) that is: its
+/// bodies and an orthonormal basis of the rigid motions of the group as one that its Dirichlet
+/// conditions leave free ([`rigid::free_modes`]).
 pub struct FreeBody {
-    pub body: usize,
+    pub bodies: Vec<usize>,
     pub modes: Vec<[f64; 6]>,
 }
 
-/// What the contact cannot hold: the body, the motion, the load's component along it and the
-/// largest force the contact can supply there.
+/// What the contact cannot hold: the body (or tied group), the motion, and along the natural
+/// motion `natural` (0–2: translation along x, y, z; 3–5: rotation about them) that carries most
+/// of the unbalanced load, the applied load (a force, or a moment about the centroid) and what
+/// contact and friction carry of it at the equilibrium nearest to the load.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Unheld {
-    pub body: usize,
+    pub bodies: Vec<usize>,
     pub motion: String,
+    pub natural: usize,
     pub load: f64,
     pub supply: f64,
 }
 
 impl Unheld {
-    /// The one-line reason, naming the body.
+    /// The one-line reason, naming the body or the tied group.
     pub fn error(&self, mesh: &Mesh, step: Option<(usize, usize)>) -> Error {
         let at = step.map_or(String::new(), |(k, n)| format!(" at load step {k}/{n}"));
+        let (load, held) = (self.load, self.supply.max(0.0));
+        let axis = ["x", "y", "z"][self.natural % 3];
+        let what = if self.natural < 3 { format!("force along {axis}") } else { format!("moment about {axis} (through the centroid)") };
+        let carry = if held > 0.0 { format!("contact and friction carry at most {held:.3e} of it") } else { "contact and friction carry none of it".into() };
         Error::numerical(
-            format!("body \"{}\"", mesh.bodies[self.body].name),
+            group_name(mesh, &self.bodies),
             format!(
-                "no equilibrium exists{at}: contact and friction leave {:.3e} of the load unbalanced along its free motion ({}: the load {:.3e}, at most {:.3e} held); held by contact alone, the body would slide away",
-                self.load - self.supply.max(0.0),
+                "no equilibrium exists{at}: along the motion the load drives ({}) the applied {what} is {load:.3e}; {carry}, {:.3e} unbalanced; held by contact alone, {} would slide away",
                 self.motion,
-                self.load,
-                self.supply.max(0.0)
+                load - held,
+                if self.bodies.len() > 1 { "the group" } else { "the body" }
             ),
         )
     }
+}
+
+/// `body "a"`, or `bodies "a", "b" (tied)` for a group.
+pub fn group_name(mesh: &Mesh, bodies: &[usize]) -> String {
+    let names: Vec<String> = bodies.iter().map(|&b| format!("\"{}\"", mesh.bodies[b].name)).collect();
+    if names.len() == 1 { format!("body {}", names[0]) } else { format!("bodies {} (tied)", names.join(", ")) }
 }
 
 /// The equilibrium rows of the free bodies' motions: G_f (column per multiplier), e_f, and each
@@ -60,7 +74,7 @@ impl Unheld {
 struct Rows {
     g: Vec<Vec<(usize, f64)>>,
     e: Vec<f64>,
-    owner: Vec<(usize, [f64; 6])>,
+    owner: Vec<(Vec<usize>, [f64; 6])>,
 }
 
 /// Checks that λ ∈ Λ with G_f λ = e_f exists for the `free` bodies of `mesh` under `loads`
@@ -69,17 +83,17 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     let friction = contact.has_friction();
     let per = if friction { 3 } else { 1 };
     // the pairs touching a free body, and their multipliers' columns
-    let touches = |v: usize| free.iter().any(|fb| mesh.bodies[fb.body].nodes.contains(&v));
+    let touches = |v: usize| free.iter().any(|fb| fb.bodies.iter().any(|&b| mesh.bodies[b].nodes.contains(&v)));
     let pairs: Vec<usize> = (0..contact.len()).filter(|&i| contact.row(i).iter().any(|&(v, _)| touches(v))).collect();
     let n = per * pairs.len();
     let mut rows = Rows { g: vec![], e: vec![], owner: vec![] };
     for fb in free {
-        let frame = rigid::Frame::of(mesh, fb.body);
-        let nodes = mesh.bodies[fb.body].nodes.clone();
+        let frame = rigid::Frame::of(mesh, &fb.bodies);
+        let inside = |v: usize| fb.bodies.iter().any(|&b| mesh.bodies[b].nodes.contains(&v));
         for m in &fb.modes {
             let at = |x: [f64; 3], dir: [f64; 3]| frame.row(x, dir).iter().zip(m).map(|(a, b)| a * b).sum::<f64>();
             let mut e = 0.0;
-            for v in nodes.clone() {
+            for v in fb.bodies.iter().flat_map(|&b| mesh.bodies[b].nodes.clone()) {
                 for d in 0..3 {
                     let mut dir = [0.0; 3];
                     dir[d] = 1.0;
@@ -93,7 +107,7 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
                     // (B r)ᵢ = Σ c·r(node)·dir over the row's nodes (node-to-node: slave − master)
                     let mut x = 0.0;
                     for &(v, coef) in contact.row(i) {
-                        if nodes.contains(&v) {
+                        if inside(v) {
                             x += coef * at(mesh.nodes[v], dir);
                         }
                     }
@@ -104,7 +118,7 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
             }
             rows.g.push(g);
             rows.e.push(e);
-            rows.owner.push((fb.body, *m));
+            rows.owner.push((fb.bodies.clone(), *m));
         }
     }
     let scale = rows.e.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -116,27 +130,37 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     let Some(x) = nearest(&rows.g, &e, n, &cones) else { return Ok(None) };
     // the unbalanced part of the load, e − G λ*
     let gl: Vec<f64> = rows.g.iter().map(|row| row.iter().map(|&(j, v)| v * x[j]).sum()).collect();
-    let mut d: Vec<f64> = e.iter().zip(&gl).map(|(a, b)| a - b).collect();
+    let d: Vec<f64> = e.iter().zip(&gl).map(|(a, b)| a - b).collect();
     let dist = d.iter().map(|v| v * v).sum::<f64>().sqrt();
     let enorm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
     if !(dist > UNBALANCED * enorm) {
         return Ok(None);
     }
-    d.iter_mut().for_each(|v| *v /= dist);
-    let along = |v: &[f64]| d.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() * scale;
-    // the body that moves most along d, and its motion
-    let mut share: Vec<(usize, f64, [f64; 6])> = Vec::new();
-    for (j, &(b, m)) in rows.owner.iter().enumerate() {
-        match share.iter_mut().find(|s| s.0 == b) {
-            Some(s) => {
-                s.1 += d[j] * d[j];
-                (0..6).for_each(|q| s.2[q] += d[j] * m[q]);
+    // the body (or group) that moves most along d; its unbalanced, applied and carried
+    // generalized forces in the natural modes (force; moment / size), r = e − Gλ*
+    let mut share: Vec<(&[usize], f64, [[f64; 6]; 3])> = Vec::new();
+    for (j, (b, m)) in rows.owner.iter().enumerate() {
+        let i = match share.iter().position(|s| s.0 == b.as_slice()) {
+            Some(i) => i,
+            None => {
+                share.push((b, 0.0, [[0.0; 6]; 3]));
+                share.len() - 1
             }
-            None => share.push((b, d[j] * d[j], std::array::from_fn(|q| d[j] * m[q]))),
+        };
+        let s = &mut share[i];
+        s.1 += d[j] * d[j];
+        for q in 0..6 {
+            s.2[0][q] += d[j] * m[q];
+            s.2[1][q] += e[j] * m[q];
+            s.2[2][q] += gl[j] * m[q];
         }
     }
-    let (body, _, motion) = share.into_iter().fold((0, -1.0, [0.0; 6]), |a, s| if s.1 > a.1 { s } else { a });
-    Ok(Some(Unheld { body, motion: rigid::dominant(&motion), load: along(&e), supply: along(&gl) }))
+    let (bodies, _, [r, l, c]) = share.into_iter().fold((&[][..], -1.0, [[0.0; 6]; 3]), |a, s| if s.1 > a.1 { s } else { a });
+    // along the natural motion that is the unbalanced part's largest (moments in force × length)
+    let q = (0..6).fold(0, |a, q| if r[q].abs() > r[a].abs() { q } else { a });
+    let unit = scale * if q < 3 { 1.0 } else { rigid::Frame::of(mesh, bodies).size };
+    let sign = if l[q] != 0.0 { l[q].signum() } else { r[q].signum() };
+    Ok(Some(Unheld { bodies: bodies.to_vec(), motion: rigid::dominant(&r), natural: q, load: sign * l[q] * unit, supply: sign * c[q] * unit }))
 }
 
 /// A load the contact cannot meet closer than this (relative to ‖e_f‖) cannot be held.

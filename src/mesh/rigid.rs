@@ -1,7 +1,7 @@
-//! The rigid motions of one body: its frame (centroid, size), the six modes as 6-vectors
-//! (translations, then rotations about the centroid scaled by the body's size), the motions a
-//! set of constraint rows (node, direction) leaves free (the kernel of their Gram matrix), and
-//! a motion in words.
+//! The rigid motions of one body, or of a group of bodies tied together that move as one: its
+//! frame (centroid, size), the six modes as 6-vectors (translations, then rotations about the
+//! centroid scaled by the group's size), the motions a set of constraint rows (node, direction)
+//! leaves free (the kernel of their Gram matrix), and a motion in words.
 
 use super::Mesh;
 
@@ -13,12 +13,13 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// The frame of body `b` of `mesh` (centroid of its nodes, largest distance from it).
-    pub fn of(mesh: &Mesh, b: usize) -> Self {
-        let nodes = mesh.bodies[b].nodes.clone();
-        let n = nodes.len() as f64;
-        let c: [f64; 3] = std::array::from_fn(|d| nodes.clone().map(|v| mesh.nodes[v][d]).sum::<f64>() / n);
-        let size = nodes.clone().map(|v| (0..3).map(|d| (mesh.nodes[v][d] - c[d]).powi(2)).sum::<f64>()).fold(0.0, f64::max).sqrt().max(f64::MIN_POSITIVE);
+    /// The frame of the bodies `group` of `mesh` (centroid of their nodes, largest distance
+    /// from it).
+    pub fn of(mesh: &Mesh, group: &[usize]) -> Self {
+        let nodes = || group.iter().flat_map(|&b| mesh.bodies[b].nodes.clone());
+        let n = nodes().count() as f64;
+        let c: [f64; 3] = std::array::from_fn(|d| nodes().map(|v| mesh.nodes[v][d]).sum::<f64>() / n);
+        let size = nodes().map(|v| (0..3).map(|d| (mesh.nodes[v][d] - c[d]).powi(2)).sum::<f64>()).fold(0.0, f64::max).sqrt().max(f64::MIN_POSITIVE);
         Frame { centroid: c, size }
     }
 
@@ -37,11 +38,11 @@ impl Frame {
     }
 }
 
-/// The rigid motions of body `b` that the `rows` (node, direction) leave free: an orthonormal
-/// basis of the kernel of the 6 × 6 Gram matrix of their mode-space rows ([`Frame::row`]).
-/// `None` where the eigen-decomposition fails.
-pub fn free_modes(mesh: &Mesh, b: usize, rows: impl Iterator<Item = (usize, [f64; 3])>) -> Option<Vec<[f64; 6]>> {
-    let frame = Frame::of(mesh, b);
+/// The rigid motions of the bodies `group` (moving as one) that the `rows` (node, direction)
+/// leave free: an orthonormal basis of the kernel of the 6 × 6 Gram matrix of their mode-space
+/// rows ([`Frame::row`]). `None` where the eigen-decomposition fails.
+pub fn free_modes(mesh: &Mesh, group: &[usize], rows: impl Iterator<Item = (usize, [f64; 3])>) -> Option<Vec<[f64; 6]>> {
+    let frame = Frame::of(mesh, group);
     let mut gram = faer::Mat::<f64>::zeros(6, 6);
     for (v, dir) in rows {
         let r = frame.row(mesh.nodes[v], dir);

@@ -304,8 +304,8 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
 /// elasticity. The outcome is the last step's, with every step's record.
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
-    if let Some(&b) = model.floating.first() {
-        return Err(Error::scene("decomposition", format!("body \"{}\" is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)", model.mesh.bodies[b].name)));
+    if let Some(g) = model.floating.first() {
+        return Err(Error::scene("decomposition", format!("{} is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)", crate::contact::hold::group_name(&model.mesh, g))));
     }
     let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, true, t)?;
@@ -887,6 +887,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     if !model.ties.is_empty() {
         let _ = writeln!(s, "ties: {} mortar rows × 3 directions (equality multipliers of the TFETI dual)", model.ties.len());
+    }
+    for line in model.holding() {
+        let _ = writeln!(s, "{line}");
     }
     let dec = &ls.scene.decomposition;
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
