@@ -580,7 +580,8 @@ fn print_summary(s: &pipeline::Summary) {
     println!("tresca-feti {} — {} ({}), {} rank(s)", env!("CARGO_PKG_VERSION"), r.title, r.scene, r.ranks);
     println!("problem: {}", r.problem);
     let m = &r.mesh;
-    println!("mesh: {} nodes, {}, n = {} DOFs ({} free)", m.nodes, m.cells, m.dofs, m.free_dofs);
+    let copies = m.subdomain_dofs.map_or(String::new(), |s| format!("; {s} in the subdomains, interface nodes once per copy"));
+    println!("mesh: {} nodes, {}, n = {} DOFs ({} free{copies})", m.nodes, m.cells, m.dofs, m.free_dofs);
     if let Some(tf) = &r.tfeti {
         let nnz_l: f64 = tf.subdomains.iter().map(|x| x.piece.nnz_l as f64).sum();
         let mul = &tf.multipliers;
@@ -628,19 +629,28 @@ fn print_summary(s: &pipeline::Summary) {
             println!("{}", t.line());
         }
     }
+    let unit = |which| tresca_feti::pipeline::report::UnitsReport::suffix(r.units.as_ref(), which);
     if let Some(c) = &r.contact {
         let f = c.total_force_on_slave;
+        let bound = if c.stick + c.slip > 0 || c.contact == 0 { format!("; {} on the slip bound", c.on_slip_bound) } else { String::new() };
         println!(
-            "contact: {} pairs — {} open, {} stick, {} slip; {} on the slip bound; contact force on the slave body ({:.4e}, {:.4e}, {:.4e})",
-            c.pairs, c.open, c.stick, c.slip, c.on_slip_bound, f[0], f[1], f[2]
+            "contact: {} pairs — {}{bound}; contact force on the slave body ({:.4e}, {:.4e}, {:.4e}){}",
+            c.pairs,
+            tresca_feti::pipeline::report::counts(c.open, c.contact, c.stick, c.slip),
+            f[0],
+            f[1],
+            f[2],
+            unit(1)
         );
     }
     let res = &r.results;
     println!(
-        "max |u| = {:.4e} m (body {}), max von Mises = {:.4e} MPa",
+        "max |u| = {:.4e}{} (body {}), max von Mises = {:.4e}{}",
         res.max_displacement,
+        unit(0),
         res.max_displacement_body.as_deref().unwrap_or("?"),
-        res.max_von_mises
+        res.max_von_mises,
+        unit(2)
     );
     let phases: Vec<String> = r.timings.0.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
     println!("time [s]: {} | total {:.3}", phases.join(", "), r.timings.total());

@@ -18,6 +18,9 @@ pub mod keys;
 pub struct Scene {
     #[serde(default)]
     pub title: String,
+    /// The units the scene's numbers are in, for printing and the report only.
+    #[serde(default, skip_serializing_if = "Units::is_empty")]
+    pub units: Units,
     #[serde(default)]
     pub mesh: MeshSettings,
     #[serde(rename = "material")]
@@ -48,6 +51,48 @@ pub struct Scene {
     pub factorization: Factorization,
     #[serde(default)]
     pub output: OutputSettings,
+}
+
+/// The units of a scene's lengths and forces (stresses and E are force / length²), named only
+/// to print results with them: the solver is unit-free, every number is taken as given.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<String>,
+}
+
+impl Units {
+    pub fn is_empty(&self) -> bool {
+        self.length.is_none() && self.force.is_none()
+    }
+
+    /// The stress unit, force / length² ("N" and "mm": "MPa"; "kN" and "m": "kPa"), where both
+    /// are named.
+    pub fn stress(&self) -> Option<String> {
+        let (f, l) = (self.force.as_deref()?, self.length.as_deref()?);
+        let known = match (f, l) {
+            ("N", "m") => Some("Pa"),
+            ("kN", "m") => Some("kPa"),
+            ("MN", "m") | ("N", "mm") => Some("MPa"),
+            ("GN", "m") | ("kN", "mm") => Some("GPa"),
+            _ => None,
+        };
+        Some(known.map_or_else(|| format!("{f}/{l}²"), str::to_string))
+    }
+
+    fn validate(&self) -> Result<()> {
+        for (key, v) in [("units.length", &self.length), ("units.force", &self.force)] {
+            if let Some(v) = v {
+                if v.trim().is_empty() || v.chars().count() > 16 || v.chars().any(char::is_control) {
+                    return Err(Error::scene(key, format!("a unit's name of 1–16 printable characters, got {v:?}")));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -899,6 +944,7 @@ impl Scene {
                 Err(Error::scene(key, format!("must be finite, got {v:?}")))
             }
         };
+        self.units.validate()?;
         if self.mesh.n < 2 {
             return Err(Error::scene("mesh.n", format!("must be at least 2 nodes per edge, got {}", self.mesh.n)));
         }

@@ -268,3 +268,52 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
     let ds = us.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(ds > 1e-4 * m, "frictionless bounds give a different u ({:.1e})", ds / m);
 }
+
+/// What the output says matches what was solved: a frictionless seed is "frictionless contact"
+/// with its closed pairs "in contact" (status 4, neither stick nor slip) in the report and the
+/// result file; two pairs of different laws are named each; the iteration table's stick and slip
+/// columns count closed pairs only (a Tresca bound acts on open pairs too); DOF counts agree with
+/// `check` under TFETI; the scene's units are printed. Before: "contact with Tresca friction",
+/// status 3 (slip), slip counts over open pairs, "free DOFs" over the DOFs under TFETI, "m".
+#[test]
+fn the_report_names_the_law_the_states_and_the_units_as_solved() {
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+    let dir = std::env::temp_dir().join(format!("tresca-feti-contact-{}-truth", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |sets: &[&str], name: &str| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        tresca_feti::pipeline::run_solve(&SerialComm, &seed, &sets, Some(dir.join(name)), true).unwrap()
+    };
+    let free = run(&["mesh.n=6", "contact.pair.0.friction={type=\"none\"}"], "free.h5");
+    let c = free.report.contact.as_ref().unwrap();
+    assert_eq!(free.report.problem, "frictionless contact (monolithic dual)");
+    assert!(c.contact > 0 && c.stick == 0 && c.slip == 0 && c.open + c.contact == c.pairs, "{c:?}");
+    let f = tresca_feti::output::hdf5::read(&dir.join("free.h5")).unwrap();
+    let Some(tresca_feti::output::Values::I32(st)) = f.fields.iter().find(|x| x.name == "contact_status").map(|x| x.values.clone()) else { panic!("contact_status") };
+    assert_eq!(st.iter().filter(|&&s| s == tresca_feti::contact::state::CONTACT).count(), c.contact);
+    assert!(!st.contains(&tresca_feti::contact::state::SLIP));
+    // Tresca: stick + slip ≤ closed at every outer iteration, and the last step's slip ≤ closed
+    let tresca = run(&["mesh.n=6"], "tresca.h5");
+    let sv = tresca.report.solver.as_ref().unwrap();
+    assert!(sv.info.history.iter().all(|h| h.stick + h.slip <= h.normal_active), "{:?}", sv.info.history.iter().map(|h| (h.normal_active, h.stick, h.slip)).collect::<Vec<_>>());
+    assert!(sv.info.history.iter().any(|h| h.slip > 0));
+    assert_eq!(tresca.report.problem, "contact with Tresca friction (monolithic dual)");
+    // units from the scene, in the JSON and the summary
+    let u = tresca.report.units.as_ref().expect("the seed names its units");
+    assert_eq!((u.length.as_deref(), u.force.as_deref(), u.stress.as_deref()), (Some("m"), Some("MN"), Some("MPa")));
+    let mm = run(&["mesh.n=4", "units={length=\"mm\", force=\"N\"}"], "mm.h5");
+    assert_eq!(mm.report.units.as_ref().and_then(|u| u.stress.clone()).as_deref(), Some("MPa"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["solve", seed.to_str().unwrap(), "--quiet", "--set", "mesh.n=4", "--set", "units={length=\"mm\", force=\"N\"}", "--out", dir.join("p.h5").to_str().unwrap()]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(" mm (body ") && text.contains(") N\n") && text.contains(" MPa\n"), "{text}");
+    // TFETI DOF counts consistent with check
+    let two = run(&["mesh.n=4", "decomposition.subdomains=2"], "tfeti.h5");
+    let m = &two.report.mesh;
+    assert!(m.free_dofs < m.dofs && m.subdomain_dofs.is_some_and(|s| s > m.dofs), "{m:?}");
+    let check = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["check", seed.to_str().unwrap(), "--set", "mesh.n=4", "--set", "decomposition.subdomains=2"]).output().unwrap();
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(text.contains(&format!("({} free after Dirichlet elimination)", m.free_dofs)), "{text}");
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["check", seed.to_str().unwrap(), "--set", "units.length=\"\""]).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.lines().count() == 1 && err.contains("units.length"), "{err}");
+}

@@ -130,6 +130,31 @@ impl Contact {
         self.bound.iter().any(|b| *b != SlipBound::None) || self.is_coulomb()
     }
 
+    /// Whether pair `i` carries friction (a slip bound, or a Coulomb coefficient).
+    pub fn has_friction_at(&self, i: usize) -> bool {
+        self.bound[i] != SlipBound::None || self.coulomb[i] != Coefficient::Fixed
+    }
+
+    /// The friction law of each `[[contact.pair]]` entry that has pairs ("frictionless",
+    /// "Tresca", "orthotropic Tresca", "Coulomb", "orthotropic Coulomb"), in entry order.
+    pub fn laws(&self) -> Vec<(usize, &'static str)> {
+        let mut out: Vec<(usize, &'static str)> = Vec::new();
+        for i in 0..self.len() {
+            if out.last().is_some_and(|l| l.0 == self.entry[i]) {
+                continue;
+            }
+            let law = match (self.coulomb[i], self.bound[i]) {
+                (Coefficient::Isotropic(_), _) => "Coulomb",
+                (Coefficient::Orthotropic(..), _) => "orthotropic Coulomb",
+                (Coefficient::Fixed, SlipBound::None) => "frictionless",
+                (Coefficient::Fixed, SlipBound::Disc(_)) => "Tresca",
+                (Coefficient::Fixed, SlipBound::Ellipse(..)) => "orthotropic Tresca",
+            };
+            out.push((self.entry[i], law));
+        }
+        out
+    }
+
     /// Whether any pair follows Coulomb's law (the slip bounds depend on λν).
     pub fn is_coulomb(&self) -> bool {
         self.coulomb.iter().any(|c| *c != Coefficient::Fixed)

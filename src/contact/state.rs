@@ -1,5 +1,5 @@
 //! Recovery of the contact state from the dual solution: per pair the status (open / stick /
-//! slip), the normal and tangential tractions, the current gap and the slip, and the node fields
+//! slip, or in contact where the pair has no friction), the normal and tangential tractions, the current gap and the slip, and the node fields
 //! that carry them into the result file.
 //!
 //! With r = Aλ − b = −(Bu − c): the current gap is rν,ᵢ = dᵢ − (Nu)ᵢ ≥ 0 and the relative
@@ -15,6 +15,8 @@ use crate::qp::sets::ConvexSet;
 pub const OPEN: i32 = 1;
 pub const STICK: i32 = 2;
 pub const SLIP: i32 = 3;
+/// Closed, on a pair without friction (neither stick nor slip).
+pub const CONTACT: i32 = 4;
 
 /// The contact state of every pair.
 #[derive(Clone, Debug, Default)]
@@ -80,7 +82,9 @@ pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64],
         let closed = lambda[i] > tol * lmax;
         s.status.push(if !closed {
             OPEN
-        } else if on_bound || sliding || !set.layout.friction {
+        } else if !contact.has_friction_at(i) {
+            CONTACT
+        } else if on_bound || sliding {
             SLIP
         } else {
             STICK

@@ -34,7 +34,7 @@ use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::qp::params::CoulombSolve;
 use crate::qp::{self, Method, Operator, Qp, Space};
-use crate::contact::state::{contact_fields, contact_state, ContactState, OPEN, SLIP, STICK};
+use crate::contact::state::{contact_fields, contact_state, ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::scene::{LoadedScene, OrderingKind, Preconditioner};
 
 pub use crate::dual::monolithic::LocalBody;
@@ -654,11 +654,12 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         title: ls.scene.title.clone(),
         ranks: comm.size(),
         mpi: comm.library(),
+        units: (!ls.scene.units.is_empty()).then(|| UnitsReport { length: ls.scene.units.length.clone(), force: ls.scene.units.force.clone(), stress: ls.scene.units.stress() }),
         problem: {
-            let law = if model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) { "Coulomb" } else { "Tresca" };
+            let dual = if sol.tfeti.is_some() { "TFETI dual" } else { "monolithic dual" };
+            let contact = contact_phrase(&model.pairs.as_ref().map(|c| c.laws()).unwrap_or_default());
             match (outcome.is_some(), sol.tfeti.is_some()) {
-                (true, false) => format!("contact with {law} friction (monolithic dual)"),
-                (true, true) => format!("contact with {law} friction (TFETI dual)"),
+                (true, _) => format!("{contact} ({dual})"),
                 (false, false) => "linear elasticity (no contact)".into(),
                 (false, true) => "linear elasticity (no contact, TFETI dual)".into(),
             }
@@ -683,7 +684,14 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             subdomains: f.subdomains.clone(),
         }),
         ordering: format!("{:?}", ls.scene.factorization.ordering).to_lowercase(),
-        mesh: MeshReport { nodes: model.size.nodes, elements: model.size.elements, cells: model.size.describe(), dofs: model.ndof(), free_dofs: sol.bodies.iter().map(|b| b.free_dofs).sum() },
+        mesh: MeshReport {
+            nodes: model.size.nodes,
+            elements: model.size.elements,
+            cells: model.size.describe(),
+            dofs: model.ndof(),
+            free_dofs: model.ndof() - model.constraints.iter().map(|&(v, c, _)| (v, c)).collect::<std::collections::HashSet<_>>().len(),
+            subdomain_dofs: sol.tfeti.is_some().then(|| sol.bodies.iter().map(|b| b.free_dofs).sum()),
+        },
         bodies: sol.bodies.clone(),
         results: Results {
             max_displacement: umax,
@@ -696,6 +704,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
             ContactReport {
                 pairs: c.len(),
                 open: o.state.count(OPEN),
+                contact: o.state.count(CONTACT),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
                 on_slip_bound: o.state.on_slip_bound,

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use super::monitor::Live;
 use super::{ContactOutcome, LocalFields, Solution};
 use crate::contact::pairing::Contact;
-use crate::contact::state::{ContactState, OPEN, SLIP, STICK};
+use crate::contact::state::{ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::model::LoadPath;
 use crate::qp::Params;
 use super::accuracy::Tightening;
@@ -97,6 +97,9 @@ pub struct StepReport {
     pub final_relative_reduced_gradient: f64,
     pub kkt_worst: f64,
     pub open: usize,
+    /// Closed pairs without friction.
+    #[serde(default)]
+    pub contact: usize,
     pub stick: usize,
     pub slip: usize,
     pub total_force_on_slave: [f64; 3],
@@ -122,6 +125,7 @@ impl StepOutput {
             final_relative_reduced_gradient: o.info.err,
             kkt_worst: o.kkt.worst(),
             open: o.state.count(OPEN),
+            contact: o.state.count(CONTACT),
             stick: o.state.count(STICK),
             slip: o.state.count(SLIP),
             total_force_on_slave: o.state.total_force(contact),
@@ -136,8 +140,11 @@ impl StepOutput {
         let r = &self.report;
         let fp = if r.fixed_point_iterations > 0 { format!(", {} fixed-point", r.fixed_point_iterations) } else { String::new() };
         format!(
-            "load step {}/{steps}: nA {}{fp}, open/stick/slip {}/{}/{}, force on slave ({:.4e}, {:.4e}, {:.4e}), max |u| {:.4e}, {:.2} s",
-            r.step, r.n_a, r.open, r.stick, r.slip, r.total_force_on_slave[0], r.total_force_on_slave[1], r.total_force_on_slave[2], r.max_displacement, r.time_s
+            "load step {}/{steps}: nA {}{fp}, {}, force on slave ({:.4e}, {:.4e}, {:.4e}), max |u| {:.4e}, {:.2} s",
+            r.step,
+            r.n_a,
+            super::report::counts(r.open, r.contact, r.stick, r.slip),
+            r.total_force_on_slave[0], r.total_force_on_slave[1], r.total_force_on_slave[2], r.max_displacement, r.time_s
         )
     }
 }

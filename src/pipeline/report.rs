@@ -20,6 +20,9 @@ pub struct Report {
     pub mpi: String,
     /// What was solved, in words.
     pub problem: String,
+    /// The scene's units (length, force, stress), where it names them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub units: Option<UnitsReport>,
     pub tfeti: Option<TfetiReport>,
     /// The fill-reducing ordering of the factorizations.
     pub ordering: String,
@@ -60,7 +63,12 @@ pub struct MeshReport {
     #[serde(default)]
     pub cells: String,
     pub dofs: usize,
+    /// DOFs not held by Dirichlet conditions (of `dofs`, each node once).
     pub free_dofs: usize,
+    /// Under TFETI: the subdomains' DOFs summed (interface nodes once per copy, held DOFs
+    /// included where they are multiplier rows).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subdomain_dofs: Option<usize>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -76,6 +84,9 @@ pub struct Results {
 pub struct ContactReport {
     pub pairs: usize,
     pub open: usize,
+    /// Closed pairs without friction (neither stick nor slip).
+    #[serde(default)]
+    pub contact: usize,
     pub stick: usize,
     pub slip: usize,
     pub on_slip_bound: usize,
@@ -197,5 +208,61 @@ impl<'de> Deserialize<'de> for PhaseTimes {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let m = serde_json::Map::<String, serde_json::Value>::deserialize(d)?;
         Ok(PhaseTimes(m.into_iter().filter(|(k, _)| k != "total").map(|(k, v)| (k, v.as_f64().unwrap_or(0.0))).collect()))
+    }
+}
+
+/// The pairs' states in words: "3 open, 20 stick, 2 slip", "3 open, 22 in contact" (no
+/// friction), "3 open, 10 in contact, 8 stick, 4 slip" (both kinds of pairs).
+pub fn counts(open: usize, contact: usize, stick: usize, slip: usize) -> String {
+    let mut s = format!("{open} open");
+    if contact > 0 {
+        s += &format!(", {contact} in contact");
+    }
+    if contact == 0 || stick + slip > 0 {
+        s += &format!(", {stick} stick, {slip} slip");
+    }
+    s
+}
+
+/// The units results are printed in: the scene's `units`, and the stress unit they make.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct UnitsReport {
+    pub length: Option<String>,
+    pub force: Option<String>,
+    pub stress: Option<String>,
+}
+
+impl UnitsReport {
+    /// " mm" after a length, "" where the scene names no length unit (`which`: 0 length,
+    /// 1 force, 2 stress).
+    pub fn suffix(units: Option<&UnitsReport>, which: usize) -> String {
+        let u = units.and_then(|u| [&u.length, &u.force, &u.stress][which].as_deref());
+        u.map_or(String::new(), |u| format!(" {u}"))
+    }
+}
+
+/// The contact problem in words from each pair entry's law ([`crate::contact::pairing::Contact::laws`]):
+/// "frictionless contact", "contact with Coulomb friction", or each entry's where they differ.
+pub fn contact_phrase(laws: &[(usize, &str)]) -> String {
+    match laws.first() {
+        Some(&(_, first)) if laws.iter().all(|l| l.1 == first) => {
+            if first == "frictionless" { "frictionless contact".into() } else { format!("contact with {first} friction") }
+        }
+        _ => format!("contact: {}", laws.iter().map(|(e, l)| format!("pair {e} {l}")).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_contact_phrase_names_each_law() {
+        assert_eq!(contact_phrase(&[(0, "frictionless")]), "frictionless contact");
+        assert_eq!(contact_phrase(&[(0, "Tresca"), (1, "Tresca")]), "contact with Tresca friction");
+        assert_eq!(contact_phrase(&[(0, "Coulomb"), (1, "frictionless")]), "contact: pair 0 Coulomb, pair 1 frictionless");
+        assert_eq!(counts(3, 22, 0, 0), "3 open, 22 in contact");
+        assert_eq!(counts(3, 0, 20, 2), "3 open, 20 stick, 2 slip");
+        assert_eq!(counts(1, 2, 3, 4), "1 open, 2 in contact, 3 stick, 4 slip");
     }
 }

@@ -55,9 +55,9 @@ pub struct ActiveSets {
     pub free: Vec<bool>,
     /// |A_ν|: pairs in contact.
     pub normal_active: usize,
-    /// |A_τ|: sticking pairs.
+    /// |A_ν ∩ A_τ|: pairs in contact that stick (for the counters; CG's mask is `free`).
     pub stick: usize,
-    /// |I_τ|: sliding pairs.
+    /// |A_ν ∩ I_τ|: pairs in contact that slide.
     pub slip: usize,
 }
 
@@ -163,12 +163,14 @@ impl Lambda {
         for (i, set) in self.tangent.iter().enumerate() {
             let k = self.layout.tangent(i, 0);
             let y = [lambda[k] - rho * r[k], lambda[k + 1] - rho * r[k + 1]];
+            // an open pair's tangential state is not counted (the Tresca bound acts there too)
+            let closed = lambda[i] - rho * r[i] >= 0.0;
             if set.is_outside(&y) {
-                s.slip += 1;
+                s.slip += usize::from(closed);
             } else {
                 s.free[k] = true;
                 s.free[k + 1] = true;
-                s.stick += 1;
+                s.stick += usize::from(closed);
             }
         }
         s
