@@ -9,6 +9,10 @@ two_tet_blocks     the two-block benchmark of two_blocks.geo meshed with 4-node 
                    physical volumes "upper" (0,2)x(0,1)x(1,2) and "lower" (0,2)x(0,1)x(0,1),
                    no shared nodes on z = 1, the physical surfaces of two_blocks.geo
 two_tet10_blocks   the same at order 2 (10-node tetrahedra, 6-node triangles)
+sphere_on_block    a ball of radius 1 centred at (0, 0, 2), physical volume "ball" with its whole
+                   surface "sphere", resting at its pole on the block (-1.5,1.5)x(-1.5,1.5)x(0,1),
+                   physical volume "block" with "block_top" and "block_bottom"; 4-node
+                   tetrahedra, ASCII only
 wedge_layer        the unit cube as one body "body": a boundary layer of wedges (triangles of
                    z = 0 extruded to z = 0.2 in 2 layers) under 4-node tetrahedra; its
                    sub-volumes are also "layer" and "core"; physical surfaces "bottom" (z = 0,
@@ -95,9 +99,31 @@ def wedge_layer(name, size):
     save(name)
 
 
+def sphere_on_block(name, size):
+    gmsh.clear()
+    gmsh.model.add(name)
+    occ = gmsh.model.occ
+    ball = occ.addSphere(0, 0, 2, 1)
+    block = occ.addBox(-1.5, -1.5, 0, 3, 3, 1)
+    occ.synchronize()
+    model = gmsh.model
+    model.addPhysicalGroup(3, [ball], name="ball")
+    model.addPhysicalGroup(3, [block], name="block")
+    model.addPhysicalGroup(2, [b[1] for b in model.getBoundary([(3, ball)])], name="sphere")
+    at_z = lambda z: [abs(t) for _, t in model.getBoundary([(3, block)]) if abs(model.getBoundingBox(2, abs(t))[2] - z) < 1e-6 and abs(model.getBoundingBox(2, abs(t))[5] - z) < 1e-6]
+    model.addPhysicalGroup(2, at_z(1.0), name="block_top")
+    model.addPhysicalGroup(2, at_z(0.0), name="block_bottom")
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    model.mesh.generate(3)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(f"{name}.msh")
+
+
 gmsh.initialize()
 common_options()
 two_blocks("two_tet_blocks", 1, 0.4)
 two_blocks("two_tet10_blocks", 2, 0.5)
 wedge_layer("wedge_layer", 0.3)
+sphere_on_block("sphere_on_block", 0.3)
 gmsh.finalize()

@@ -642,6 +642,9 @@ fn print_summary(s: &pipeline::Summary) {
             f[2],
             unit(1)
         );
+        for note in &c.notes {
+            println!("{note}");
+        }
     }
     let res = &r.results;
     println!(

@@ -210,3 +210,111 @@ fn tied_blocks_are_bitwise_identical_on_1_2_3_ranks() {
         assert!(r.iter().zip(&runs[0]).all(|(a, b)| a.to_bits() == b.to_bits()), "displacement differs");
     }
 }
+
+/// A ball pressed onto a block with its whole surface (`mesh/sphere_on_block.msh`, one Gmsh
+/// physical surface) as the slave face: the nodes that find no master facet are outside the
+/// contact zone (named in `check`, counted in the report) and the answer equals the one with a
+/// cap cut out as slave; a steep quarter cap whose edge rises 0.59 above the flat solves at
+/// the default search distance. Before: "slave node 0 … finds no master facet".
+#[test]
+fn a_whole_surface_as_slave_leaves_the_nodes_without_a_master_outside() {
+    let dir = tmpdir("whole-surface");
+    let msh = root().join("mesh/sphere_on_block.msh");
+    let scene = |slave: &str| {
+        format!(
+            r#"[[material]]
+name = "m"
+E = 1000.0
+nu = 0.3
+[[body]]
+name = "ball"
+material = "m"
+gmsh = {{ file = "{m}", volume = "ball" }}
+[[body]]
+name = "block"
+material = "m"
+gmsh = {{ file = "{m}", volume = "block" }}
+[[face]]
+name = "top"
+body = "ball"
+from = "sphere"
+min = [-1.0, -1.0, 2.8]
+max = [1.0, 1.0, 3.1]
+[[face]]
+name = "cap"
+body = "ball"
+from = "sphere"
+min = [-1.0, -1.0, 0.9]
+max = [1.0, 1.0, 1.6]
+[[dirichlet]]
+face = "block.block_bottom"
+[[dirichlet]]
+face = "ball.top"
+value = [0.0, 0.0, -0.01]
+[[contact.pair]]
+slave = "{slave}"
+master = "block.block_top"
+search_distance = 0.2
+[solver]
+eps = 1e-10
+"#,
+            m = msh.display()
+        )
+    };
+    let whole = dir.join("whole.toml");
+    std::fs::write(&whole, scene("ball.sphere")).unwrap();
+    let cap = dir.join("cap.toml");
+    std::fs::write(&cap, scene("ball.cap")).unwrap();
+    let (a, b) = (solve(&whole, &[], &dir.join("whole.h5")), solve(&cap, &[], &dir.join("cap.h5")));
+    let (ca, cb) = (a.report.contact.as_ref().unwrap(), b.report.contact.as_ref().unwrap());
+    eprintln!("whole: {} pairs, {} outside, {} in contact; cap: {} pairs, {} outside; F {:?} vs {:?}", ca.pairs, ca.outside, ca.contact, cb.pairs, cb.outside, ca.total_force_on_slave, cb.total_force_on_slave);
+    assert!(ca.outside > 100 && ca.contact > 0 && ca.pairs == cb.pairs, "{ca:?} {cb:?}");
+    let (ua, ub) = (&a.solution.displacement, &b.solution.displacement);
+    let scale = common::max_abs(ua);
+    let d = ua.iter().flatten().zip(ub.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(d <= 1e-9 * scale, "whole surface against the cap: max|Δu| = {d:.1e} of {scale:.1e}");
+    let o = common::run(&["check", whole.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains(&format!("  {} slave nodes outside the contact zone (no master facet within the search distance 2.000e-1", ca.outside)), "{out}");
+    assert!(!out.contains("warning"), "{out}");
+    // a steep quarter cap (R = 2, its corner 0.586 above the pole) at the default search distance
+    let steep = r#"[[material]]
+name = "m"
+E = 50000.0
+nu = 0.3
+[[body]]
+name = "cap"
+material = "m"
+box = { min = [0.0, 0.0, 1.5857864376269049], max = [1.0, 1.0, 2.5857864376269049], nodes = [9, 9, 5], sphere = { side = "zmin", radius = 2.0, centre = [0.0, 0.0] } }
+[[body]]
+name = "flat"
+material = "m"
+box = { min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0], nodes = [8, 8, 5] }
+[[dirichlet]]
+face = "flat.zmin"
+[[dirichlet]]
+face = "cap.zmax"
+components = ["z"]
+value = [0.0, 0.0, -0.003]
+[[dirichlet]]
+face = "cap.xmin"
+components = ["x"]
+[[dirichlet]]
+face = "cap.ymin"
+components = ["y"]
+[[dirichlet]]
+face = "flat.xmin"
+components = ["x"]
+[[dirichlet]]
+face = "flat.ymin"
+components = ["y"]
+[[contact.pair]]
+slave = "cap.zmin"
+master = "flat.zmax"
+"#;
+    let path = dir.join("steep.toml");
+    std::fs::write(&path, steep).unwrap();
+    let r = solve(&path, &[], &dir.join("steep.h5"));
+    let c = r.report.contact.as_ref().unwrap();
+    assert!(c.outside > 0 && c.contact > 0 && c.notes.iter().any(|n| n.contains("slave nodes outside the contact zone")), "{c:?}");
+}

@@ -154,6 +154,9 @@ pub struct MortarRows {
     pub coupling: Vec<Vec<(usize, f64)>>,
     /// Normalized weighted gap dᵢ = −Σ_k c_ik (x_k · nᵢ), positive when apart.
     pub gap: Vec<f64>,
+    /// The slave nodes with no master facet (ascending), without rows: only under
+    /// [`MortarParams::allow_uncovered`].
+    pub uncovered: Vec<usize>,
     pub info: MortarInfo,
 }
 
@@ -1157,7 +1160,7 @@ fn finish(
         });
     }
     info.nodes_uncovered = uncovered.len();
-    let mut rows = MortarRows::default();
+    let mut rows = MortarRows { uncovered, ..Default::default() };
     for (node, a) in acc.into_iter().filter(|(_, a)| a.covered) {
         if a.d <= params.min_coverage * a.nominal {
             info.rows_dropped += 1;

@@ -73,6 +73,8 @@ pub struct Contact {
     pub coulomb: Vec<Coefficient>,
     /// How each `[[contact.pair]]` entry was discretized.
     pub discretization: Vec<Discretization>,
+    /// Each entry's slave nodes outside the contact zone (no master facet within reach).
+    pub outside: Vec<Outside>,
     /// Tangential rows left empty (per pair, t₁ and t₂): the slave node's DOFs along that
     /// tangent are all prescribed (a symmetry plane's rollers), so friction along it means
     /// nothing there ([`Contact::void_held_tangents`]). Empty: none.
@@ -349,28 +351,43 @@ fn node_to_node(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64) -
     Ok(rows)
 }
 
-/// Dual mortar rows of one interface ([`crate::contact::mortar`]); `search` the search distance.
-fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64) -> Result<Vec<RowGeom>> {
+/// The rows of one interface, how it was discretized, and its slave nodes that found no master
+/// facet within the search distance (ascending; rows for none of them).
+struct Interface {
+    rows: Vec<RowGeom>,
+    how: Discretization,
+    outside: Vec<usize>,
+    search: f64,
+}
+
+/// Dual mortar rows of one interface ([`crate::contact::mortar`]); `search` the search
+/// distance; `outside`: slave nodes without a master facet are left out (a contact zone), not
+/// an error (a tie).
+fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64, outside: bool) -> Result<Interface> {
     use crate::contact::mortar::{dual_mortar, MortarParams, SurfaceFacet};
     fn facets(f: &Face) -> Vec<SurfaceFacet<'_>> {
         f.facets.iter().map(|q| SurfaceFacet { nodes: q.nodes() }).collect()
     }
-    let params = MortarParams { search_distance: search, ..Default::default() };
+    let params = MortarParams { search_distance: search, allow_uncovered: outside, ..Default::default() };
     let r = dual_mortar(&mesh.nodes, &facets(slave), &facets(master), &params)
         .map_err(|e| Error::scene(key, format!("mortar of {} on {}: {e}", slave.name, master.name)))?;
     if r.is_empty() {
-        return Err(Error::scene(key, format!("faces {} and {} do not overlap within the search distance {search:.3e}", slave.name, master.name)));
+        return Err(Error::scene(
+            key,
+            format!("no slave node of {} finds a master facet of {} within the search distance {search:.3e} (do the faces face each other? is it the right face?)", slave.name, master.name),
+        ));
     }
-    Ok((0..r.len())
-        .map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i] })
-        .collect())
+    let rows = (0..r.len()).map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i] }).collect();
+    Ok(Interface { rows, how: Discretization::Mortar, outside: r.uncovered, search })
 }
 
 /// The rows of interface `slave`–`master` under `discretization` (None: node-to-node where the
-/// faces match, mortar otherwise), and the discretization taken.
-fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>) -> Result<(Vec<RowGeom>, Discretization)> {
-    let search = || search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
-    let mortar = || Ok((mortar_rows(mesh, key, slave, master, search())?, Discretization::Mortar));
+/// faces match, mortar otherwise); `outside` as for [`mortar_rows`].
+#[allow(clippy::too_many_arguments)]
+fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>, outside: bool) -> Result<Interface> {
+    let search = search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
+    let mortar = || mortar_rows(mesh, key, slave, master, search, outside);
+    let nodal = |rows| Ok(Interface { rows, how: Discretization::NodeToNode, outside: vec![], search });
     // a quadratic facet's corner nodes carry no area (∫ N dA = 0 on a tri6's corners): nodal
     // pairs there would hold no force; the mortar's modified dual basis gives every node one
     let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
@@ -383,12 +400,12 @@ fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64,
     match discretization {
         Some(Discretization::Mortar) => mortar(),
         Some(Discretization::NodeToNode) => match node_to_node(mesh, key, slave, master, tol) {
-            Ok(rows) => Ok((rows, Discretization::NodeToNode)),
+            Ok(rows) => nodal(rows),
             Err(NodeToNode::Mismatch(m)) => Err(Error::scene(key, format!("{m}: node-to-node needs matching meshes (discretization = \"mortar\" takes any)"))),
             Err(NodeToNode::Fail(e)) => Err(e),
         },
         None => match node_to_node(mesh, key, slave, master, tol) {
-            Ok(rows) => Ok((rows, Discretization::NodeToNode)),
+            Ok(rows) => nodal(rows),
             Err(NodeToNode::Mismatch(_)) => mortar(),
             Err(NodeToNode::Fail(e)) => Err(e),
         },
@@ -406,8 +423,9 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         let key = format!("contact.pair[{k}]");
         let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
         let tol = p.tolerance.unwrap_or(1e-8 * size);
-        let (rows, how) = interface_rows(mesh, &key, slave, master, tol, p.discretization, p.search_distance)?;
+        let Interface { rows, how, outside, search } = interface_rows(mesh, &key, slave, master, tol, p.discretization, p.search_distance, true)?;
         c.discretization.push(how);
+        c.outside.push(Outside::new(mesh, slave, master, outside, search));
         for row in rows {
             let (s, n, xs) = (row.slave, row.normal, mesh.nodes[row.slave]);
             for &(m, _) in row.coupling.iter().skip(1) {
@@ -490,7 +508,7 @@ pub fn tie(mesh: &Mesh, ties: &[Tie], faces: &[(usize, usize)]) -> Result<Tied> 
     for (k, (p, &(sf, mf))) in ties.iter().zip(faces).enumerate() {
         let key = format!("tie[{k}]");
         let (slave, master) = (&mesh.faces[sf], &mesh.faces[mf]);
-        for row in interface_rows(mesh, &key, slave, master, 1e-8 * size, None, p.search_distance)?.0 {
+        for row in interface_rows(mesh, &key, slave, master, 1e-8 * size, None, p.search_distance, false)?.rows {
             t.slave.push(row.slave);
             t.coupling.push(row.coupling);
             t.entry.push(k);
@@ -569,6 +587,38 @@ mod tests {
         }
     }
 
+    /// Slave nodes without a master facet are outside the contact zone, not an error; those
+    /// over a hole in the master face are flagged; no slave node at all finding one is an error.
+    #[test]
+    fn slave_nodes_without_a_master_are_outside_and_a_hole_is_flagged() {
+        let mut m = blocks(5, 5, [0.0; 3], I);
+        let lower = m.faces.iter().position(|f| f.name == "lower.zmax").unwrap();
+        let inner = |v: usize| (0.49..=1.51).contains(&m.nodes[v][0]) && (0.24..=0.76).contains(&m.nodes[v][1]);
+        let keep: Vec<_> = m.faces[lower].facets.iter().filter(|q| !q.nodes().iter().all(|&v| inner(v))).cloned().collect();
+        assert_eq!(keep.len(), 16 - 4, "the central 2 × 2 master facets are cut out");
+        m.faces[lower].facets = keep;
+        let c = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        let o = &c.outside[0];
+        assert_eq!(c.len(), 24);
+        assert_eq!(o.nodes.len(), 1);
+        assert_eq!(m.nodes[o.nodes[0]], [1.0, 0.5, 1.0]);
+        assert_eq!(o.over, o.nodes, "the node over the hole is flagged");
+        // the slave face larger than the master: its nodes beyond the master are outside, not flagged
+        let mut m = blocks(5, 5, [0.0; 3], I);
+        let upper = m.faces.iter().position(|f| f.name == "upper.zmin").unwrap();
+        let lower = m.faces.iter().position(|f| f.name == "lower.zmax").unwrap();
+        let half: Vec<_> = m.faces[lower].facets.iter().filter(|q| q.nodes().iter().all(|&v| m.nodes[v][0] <= 1.0 + 1e-12)).cloned().collect();
+        m.faces[lower].facets = half;
+        let c = pair(&m, &[seed_pair(Friction::None)], &faces(&m, "upper.zmin", "lower.zmax")).unwrap();
+        assert_eq!(c.outside[0].nodes.len(), 2 * 5, "the slave nodes at x = 1.5 and 2 (their facets touch the master along x = 1 only)");
+        assert!(c.outside[0].over.is_empty());
+        // no slave node finds a master (the master faces away): an error naming both faces
+        let away = m.faces.iter().position(|f| f.name == "lower.zmin").unwrap();
+        let mortar = ContactPair { discretization: Some(Discretization::Mortar), ..seed_pair(Friction::None) };
+        let e = pair(&m, &[mortar], &[(upper, away)]).unwrap_err().to_string();
+        assert!(e.contains("contact.pair[0]") && e.contains("no slave node of upper.zmin finds a master facet of lower.zmin"), "{e}");
+    }
+
     #[test]
     fn rotated_faces_with_a_gap() {
         let r = rotation();
@@ -642,5 +692,69 @@ mod tests {
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
+    }
+}
+
+/// The slave nodes of one contact entry outside its contact zone: no master facet within the
+/// search distance `search`, so no row (inactive). `over` are those of them over the master
+/// face — inside its outline seen along its mean normal, facing it, and within the search
+/// distance of its level — a region that looks as if it should touch but found no master (a
+/// hole in the master face, facets facing away): a warning, not an error.
+#[derive(Clone, Debug, Default)]
+pub struct Outside {
+    pub nodes: Vec<usize>,
+    pub over: Vec<usize>,
+    pub search: f64,
+    /// Where the first of `nodes` and of `over` are (kept when the mesh is released).
+    pub first: [Option<[f64; 3]>; 2],
+}
+
+impl Outside {
+    fn new(mesh: &Mesh, slave: &Face, master: &Face, nodes: Vec<usize>, search: f64) -> Self {
+        let first = nodes.first().map(|&v| mesh.nodes[v]);
+        let mut out = Outside { nodes, over: vec![], search, first: [first, None] };
+        let normal_area = |f: &crate::mesh::Facet| facet_normal_area(f.kind, &f.nodes().iter().map(|&v| mesh.nodes[v]).collect::<Vec<_>>());
+        let mean = master.facets.iter().map(normal_area).fold([0.0; 3], |a, n| std::array::from_fn(|d| a[d] + n[d]));
+        let total: f64 = master.facets.iter().map(|f| dot(normal_area(f), normal_area(f)).sqrt()).sum();
+        let len = dot(mean, mean).sqrt();
+        // a closed or strongly curved master has no outline along one direction
+        if out.nodes.is_empty() || len < 0.5 * total {
+            return out;
+        }
+        let nm = mean.map(|v| v / len);
+        let e1 = tangent(nm, [1.0, 0.0, 0.0]).or_else(|| tangent(nm, [0.0, 1.0, 0.0])).expect("x and y cannot both be normal");
+        let e2 = cross(nm, e1);
+        let (mut lo, mut hi, mut level) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], [f64::INFINITY, f64::NEG_INFINITY]);
+        for v in master.nodes() {
+            let x = mesh.nodes[v];
+            let p = [dot(x, e1), dot(x, e2)];
+            (0..2).for_each(|d| (lo[d], hi[d]) = (lo[d].min(p[d]), hi[d].max(p[d])));
+            level = [level[0].min(dot(x, nm)), level[1].max(dot(x, nm))];
+        }
+        // the outside nodes' normals, area-weighted over their slave facets
+        let mut normals: HashMap<usize, [f64; 3]> = out.nodes.iter().map(|&v| (v, [0.0; 3])).collect();
+        for f in &slave.facets {
+            let n = normal_area(f);
+            for v in f.nodes() {
+                if let Some(s) = normals.get_mut(v) {
+                    (0..3).for_each(|d| s[d] += n[d]);
+                }
+            }
+        }
+        out.over = out
+            .nodes
+            .iter()
+            .copied()
+            .filter(|v| {
+                let (x, n) = (mesh.nodes[*v], normals[v]);
+                let p = [dot(x, e1), dot(x, e2)];
+                let inside = (0..2).all(|d| p[d] > lo[d] && p[d] < hi[d]);
+                let h = dot(x, nm);
+                let near = h >= level[0] - search && h <= level[1] + search;
+                inside && near && dot(n, nm) < -0.5 * dot(n, n).sqrt()
+            })
+            .collect();
+        out.first[1] = out.over.first().map(|&v| mesh.nodes[v]);
+        out
     }
 }

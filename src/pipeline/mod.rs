@@ -624,6 +624,32 @@ pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Mo
     }
 }
 
+/// The lines that say which slave nodes of contact entry `i` are outside its contact zone, and
+/// the warning where some of them lie over the master face (empty: none outside).
+pub fn outside_lines(i: usize, o: &crate::contact::pairing::Outside) -> Vec<String> {
+    let at = |k: usize| {
+        let x = o.first[k].unwrap_or([f64::NAN; 3]);
+        format!("({:.6}, {:.6}, {:.6})", x[0], x[1], x[2])
+    };
+    let mut out = Vec::new();
+    if let Some(&v) = o.nodes.first() {
+        out.push(format!(
+            "  {} slave nodes outside the contact zone (no master facet within the search distance {:.3e}: no contact rows), the first node {v} at {}",
+            o.nodes.len(),
+            o.search,
+            at(0)
+        ));
+    }
+    if let Some(&v) = o.over.first() {
+        out.push(format!(
+            "warning: contact pair {i}: {} slave nodes over the master face (inside its outline, facing it, within the search distance of it) find no master facet, the first node {v} at {}; is the master face whole, and does it face the slave?",
+            o.over.len(),
+            at(1)
+        ));
+    }
+    out
+}
+
 /// DOFs of every body (3 per node).
 pub fn body_dofs(model: &Model) -> Vec<usize> {
     model.mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect()
@@ -705,6 +731,8 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 pairs: c.len(),
                 open: o.state.count(OPEN),
                 contact: o.state.count(CONTACT),
+                outside: c.outside.iter().map(|o| o.nodes.len()).sum(),
+                notes: c.outside.iter().enumerate().flat_map(|(i, o)| outside_lines(i, o).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })).collect(),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
                 on_slip_bound: o.state.on_slip_bound,
@@ -879,6 +907,11 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             mesh.faces[ma].nodes().len(),
             if ls.scene.contact.enabled { "" } else { " — disabled" }
         );
+        if let Some(o) = model.pairs.as_ref().and_then(|c| c.outside.get(i)) {
+            for line in outside_lines(i, o) {
+                let _ = writeln!(s, "{line}");
+            }
+        }
     }
     if let Some(c) = &model.pairs {
         let (gmin, gmax) = c.gap.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &g| (a.min(g), b.max(g)));

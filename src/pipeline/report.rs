@@ -87,6 +87,12 @@ pub struct ContactReport {
     /// Closed pairs without friction (neither stick nor slip).
     #[serde(default)]
     pub contact: usize,
+    /// Slave nodes outside the contact zone (no master facet within reach: no pair).
+    #[serde(default)]
+    pub outside: usize,
+    /// The lines that name them, and the warnings about them ([`super::outside_lines`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     pub stick: usize,
     pub slip: usize,
     pub on_slip_bound: usize,
