@@ -13,6 +13,12 @@ sphere_on_block    a ball of radius 1 centred at (0, 0, 2), physical volume "bal
                    surface "sphere", resting at its pole on the block (-1.5,1.5)x(-1.5,1.5)x(0,1),
                    physical volume "block" with "block_top" and "block_bottom"; 4-node
                    tetrahedra, ASCII only
+sphere_on_block_tet10  the same at size 0.5 in 10-node tetrahedra
+press_fit_rings    a shrink fit, quarter model in plane strain: the ring "shaft" (radii 0.5 to
+                   1.001) inside the ring "hub" (1.0 to 2.0), 0.1 thick in z, both structured
+                   hexahedra on the same 24 angular divisions (16 radial in the shaft, 24 in the
+                   hub); surfaces "shaft_outer", "hub_inner", "<ring>_x0", "<ring>_y0" (the
+                   symmetry planes) and "<ring>_z" (both z faces); ASCII only
 wedge_layer        the unit cube as one body "body": a boundary layer of wedges (triangles of
                    z = 0 extruded to z = 0.2 in 2 layers) under 4-node tetrahedra; its
                    sub-volumes are also "layer" and "core"; physical surfaces "bottom" (z = 0,
@@ -99,7 +105,7 @@ def wedge_layer(name, size):
     save(name)
 
 
-def sphere_on_block(name, size):
+def sphere_on_block(name, size, order=1):
     gmsh.clear()
     gmsh.model.add(name)
     occ = gmsh.model.occ
@@ -116,6 +122,42 @@ def sphere_on_block(name, size):
     gmsh.option.setNumber("Mesh.MeshSizeMin", size)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     model.mesh.generate(3)
+    if order > 1:
+        model.mesh.setOrder(order)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(f"{name}.msh")
+
+
+def ring(geo, r0, r1, nr, nth, t):
+    """A quarter ring r0 < r < r1 in x, y > 0, extruded to z = t in one layer of hexahedra:
+    (volume, lateral surfaces y = 0, outer arc, x = 0, inner arc, the two z faces)."""
+    c = geo.addPoint(0, 0, 0)
+    p = [geo.addPoint(r0, 0, 0), geo.addPoint(r1, 0, 0), geo.addPoint(0, r1, 0), geo.addPoint(0, r0, 0)]
+    lines = [geo.addLine(p[0], p[1]), geo.addCircleArc(p[1], c, p[2]), geo.addLine(p[2], p[3]), geo.addCircleArc(p[3], c, p[0])]
+    base = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    for line, n in zip(lines, (nr, nth, nr, nth)):
+        geo.mesh.setTransfiniteCurve(line, n + 1)
+    geo.mesh.setTransfiniteSurface(base)
+    geo.mesh.setRecombine(2, base)
+    ext = geo.extrude([(2, base)], 0, 0, t, numElements=[1], recombine=True)
+    return ext[1][1], [e[1] for e in ext[2:6]], [base, ext[0][1]]
+
+
+def press_fit_rings(name):
+    gmsh.clear()
+    gmsh.model.add(name)
+    geo = gmsh.model.geo
+    shaft = ring(geo, 0.5, 1.001, 16, 24, 0.1)
+    hub = ring(geo, 1.0, 2.0, 24, 24, 0.1)
+    geo.synchronize()
+    model = gmsh.model
+    for label, (vol, (y0, outer, x0, inner), zs) in (("shaft", shaft), ("hub", hub)):
+        model.addPhysicalGroup(3, [vol], name=label)
+        model.addPhysicalGroup(2, [y0], name=f"{label}_y0")
+        model.addPhysicalGroup(2, [x0], name=f"{label}_x0")
+        model.addPhysicalGroup(2, zs, name=f"{label}_z")
+        model.addPhysicalGroup(2, [outer if label == "shaft" else inner], name="shaft_outer" if label == "shaft" else "hub_inner")
+    model.mesh.generate(3)
     gmsh.option.setNumber("Mesh.Binary", 0)
     gmsh.write(f"{name}.msh")
 
@@ -126,4 +168,6 @@ two_blocks("two_tet_blocks", 1, 0.4)
 two_blocks("two_tet10_blocks", 2, 0.5)
 wedge_layer("wedge_layer", 0.3)
 sphere_on_block("sphere_on_block", 0.3)
+sphere_on_block("sphere_on_block_tet10", 0.5, 2)
+press_fit_rings("press_fit_rings")
 gmsh.finalize()

@@ -360,7 +360,20 @@ pub struct ContactPair {
     /// [`default_search_distance`] of the slave face.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub search_distance: Option<f64>,
+    /// The largest initial overlap taken as touching, as a fraction of the local element size
+    /// (√ of the slave node's area); default [`DEFAULT_MAX_OVERLAP`]. A larger one is an error
+    /// unless `interference`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_overlap: Option<f64>,
+    /// A press fit: the bodies overlap as meshed by design, and the solution removes the
+    /// overlap (any depth within the search distance).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub interference: bool,
 }
+
+/// The default largest initial overlap taken as touching: 10⁻³ of the local element size
+/// (bodies meshed touching overlap by round-off and by the facets' chords: 10⁻⁶–10⁻⁴ h).
+pub const DEFAULT_MAX_OVERLAP: f64 = 1e-3;
 
 /// How a contact or tied interface is discretized.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
@@ -1150,6 +1163,11 @@ impl Scene {
             if let Some(t) = p.search_distance {
                 if !(t.is_finite() && t > 0.0) {
                     return Err(Error::scene(k("search_distance"), format!("must be > 0, got {t}")));
+                }
+            }
+            if let Some(t) = p.max_overlap {
+                if !(t.is_finite() && t >= 0.0 && t < 1.0) {
+                    return Err(Error::scene(k("max_overlap"), format!("a fraction of the element size in [0, 1), got {t}")));
                 }
             }
             match &p.friction {

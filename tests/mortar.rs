@@ -318,3 +318,82 @@ master = "flat.zmax"
     let c = r.report.contact.as_ref().unwrap();
     assert!(c.outside > 0 && c.contact > 0 && c.notes.iter().any(|n| n.contains("slave nodes outside the contact zone")), "{c:?}");
 }
+
+/// A shrink fit against Lamé (`run/validation/press_fit.toml`: rings meshed overlapping by the
+/// radial interference δ = 10⁻³, `interference = true`): the contact pressure at every slave
+/// node within 2 % of p = E'δ/b / ((c² + b²)/(c² − b²) + (b² + a²)/(b² − a²)), frictionless and
+/// with Coulomb friction (no slip by symmetry); without `interference` the overlap (1.5 % of
+/// the element size) is refused naming the node. Before: "bodies overlap" whatever the depth.
+#[test]
+fn a_press_fit_gives_the_lame_contact_pressure() {
+    let scene = root().join("run/validation/press_fit.toml");
+    let dir = tmpdir("press-fit");
+    let (e, nu, a, b, c, delta) = (1000.0f64, 0.3f64, 0.5f64, 1.0f64, 2.0f64, 1e-3f64);
+    let lame = e / (1.0 - nu * nu) * delta / b / ((c * c + b * b) / (c * c - b * b) + (b * b + a * a) / (b * b - a * a));
+    for (name, sets) in [("frictionless", vec![]), ("coulomb", vec!["contact.pair.0.friction={type=\"coulomb\", mu=0.3}"])] {
+        let out = dir.join(format!("{name}.h5"));
+        let r = solve(&scene, &sets, &out);
+        let data = fields(&out);
+        let (p, st) = (f64_field(&data, "contact_pressure"), i32_field(&data, "contact_status"));
+        let closed: Vec<f64> = (0..st.len()).filter(|&v| st[v] > 0).map(|v| p[v]).collect();
+        let worst = closed.iter().map(|q| (q - lame).abs() / lame).fold(0.0, f64::max);
+        let f = r.report.contact.as_ref().unwrap().total_force_on_slave;
+        eprintln!("{name}: {} slave nodes, p in [{:.5}, {:.5}] against Lamé {lame:.5}, worst {:.2} %, F_x {:.6} (−p·b·t = {:.6})", closed.len(), closed.iter().cloned().fold(f64::INFINITY, f64::min), closed.iter().cloned().fold(0.0, f64::max), 100.0 * worst, f[0], -lame * b * 0.1);
+        assert_eq!(closed.len(), 50, "{name}: every slave node closed");
+        assert!(worst <= 0.02, "{name}: contact pressure {:.2} % from Lamé", 100.0 * worst);
+        assert!((f[0] + lame * b * 0.1).abs() <= 0.01 * lame * b * 0.1, "{name}: the resultant {f:?}");
+    }
+    let o = common::run(&["check", scene.to_str().unwrap(), "--set", "contact.pair.0.interference=false"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.lines().count() == 1 && err.contains("bodies overlap") && err.contains("interference = true"), "{err}");
+}
+
+/// Bodies meshed touching on a curved quadratic face: the overlap is measured on the faces' true
+/// geometry (the T⁻¹-transformed weighted gap of a tet10 sphere lies ⅔ of a sagitta below it),
+/// so a ball meshed touching is no overlap and one lifted by 10⁻³ starts 10⁻³ apart.
+#[test]
+fn quadratic_faces_measure_their_gap_on_the_true_geometry() {
+    let dir = tmpdir("quadratic-gap");
+    let msh = root().join("mesh/sphere_on_block_tet10.msh");
+    let scene = format!(
+        r#"[[material]]
+name = "m"
+E = 1000.0
+nu = 0.3
+[[body]]
+name = "ball"
+material = "m"
+gmsh = {{ file = "{m}", volume = "ball" }}
+[[body]]
+name = "block"
+material = "m"
+gmsh = {{ file = "{m}", volume = "block" }}
+[[face]]
+name = "top"
+body = "ball"
+from = "sphere"
+min = [-1.0, -1.0, 2.8]
+max = [1.0, 1.0, 3.1]
+[[dirichlet]]
+face = "block.block_bottom"
+[[dirichlet]]
+face = "ball.top"
+value = [0.0, 0.0, -0.01]
+[[contact.pair]]
+slave = "ball.sphere"
+master = "block.block_top"
+"#,
+        m = msh.display()
+    );
+    let path = dir.join("ball.toml");
+    std::fs::write(&path, scene).unwrap();
+    for (lift, lo) in [(0.0, 0.0), (1e-3, 1e-3)] {
+        let o = common::run(&["check", path.to_str().unwrap(), "--set", &format!("body.0.gmsh.translate=[0.0, 0.0, {lift}]")]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        let line = out.lines().find(|l| l.starts_with("contact: m = ")).unwrap_or_else(|| panic!("{}", String::from_utf8_lossy(&o.stderr)));
+        let gmin: f64 = line.split("gaps in [").nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+        // the pole's averaged normal tilts a little on an unstructured mesh: 1/cos θ of the lift
+        assert!(gmin >= lo - 1e-9 && gmin <= 1.01 * lo + 1e-9, "lift {lift}: the smallest gap {gmin} (the pole's)");
+        assert!(!out.contains("interference"), "{out}");
+    }
+}

@@ -154,6 +154,13 @@ pub struct MortarRows {
     pub coupling: Vec<Vec<(usize, f64)>>,
     /// Normalized weighted gap dᵢ = −Σ_k c_ik (x_k · nᵢ), positive when apart.
     pub gap: Vec<f64>,
+    /// The geometric gap at the slave node: the distance along nᵢ from the node to the master
+    /// surface, on the master facets' true (quadratic) maps; NaN where the node's normal line
+    /// meets none of the master facets its facets overlap (beyond the master's edge). On
+    /// quadratic slave facets the weighted gap is the gap transformed by T⁻¹ (1/(1 − 2α) at an
+    /// edge node less α/(1 − 2α) at each corner), which on a curved face lies below the
+    /// geometric one by about ⅔ of an edge's sagitta.
+    pub geometric_gap: Vec<f64>,
     /// The slave nodes with no master facet (ascending), without rows: only under
     /// [`MortarParams::allow_uncovered`].
     pub uncovered: Vec<usize>,
@@ -901,6 +908,8 @@ struct NodeAcc {
     normal: V3,
     /// M_ij by master node j.
     m: BTreeMap<usize, f64>,
+    /// The master facets its facets overlap (for the geometric gap).
+    masters: Vec<usize>,
     covered: bool,
 }
 
@@ -950,10 +959,10 @@ pub fn dual_mortar(
         let a = facet_dual(s, &segs, si)?;
         for (mi, poly) in &segs {
             let seg = integrate(s, &a, &masters[*mi].0, poly, (si, *mi))?;
-            add_segment(&mut acc, s, &masters[*mi].0, &seg);
+            add_segment(&mut acc, s, &masters[*mi].0, *mi, &seg);
         }
     }
-    let mut rows = finish(coords, acc, params, &mut info)?;
+    let mut rows = finish(coords, acc, &masters, params, &mut info)?;
     info.seconds = start.elapsed().as_secs_f64();
     rows.info = info;
     Ok(rows)
@@ -1126,10 +1135,13 @@ fn integrate(
     Ok(seg)
 }
 
-fn add_segment(acc: &mut BTreeMap<usize, NodeAcc>, s: &SlaveFacet, m: &Facet, seg: &Segment) {
+fn add_segment(acc: &mut BTreeMap<usize, NodeAcc>, s: &SlaveFacet, m: &Facet, mi: usize, seg: &Segment) {
     for i in 0..s.f.n() {
         let node = acc.get_mut(&s.f.nodes[i]).expect("slave node accumulator");
         node.covered = true;
+        if !node.masters.contains(&mi) {
+            node.masters.push(mi);
+        }
         node.d += seg.d[i];
         for j in 0..m.n() {
             *node.m.entry(m.nodes[j]).or_default() += seg.m[i][j];
@@ -1141,6 +1153,7 @@ fn add_segment(acc: &mut BTreeMap<usize, NodeAcc>, s: &SlaveFacet, m: &Facet, se
 fn finish(
     coords: &[V3],
     acc: BTreeMap<usize, NodeAcc>,
+    masters: &[(Facet, V3)],
     params: &MortarParams,
     info: &mut MortarInfo,
 ) -> Result<MortarRows, MortarError> {
@@ -1174,6 +1187,7 @@ fn finish(
                 .map(|(&j, m)| (j, -m / a.d)),
         );
         let gap = -row.iter().map(|&(k, c)| c * dot(coords[k], n)).sum::<f64>();
+        rows.geometric_gap.push(geometric_gap(coords[node], n, a.masters.iter().map(|&k| &masters[k].0)));
         rows.node.push(node);
         rows.normal.push(n);
         rows.area.push(a.d);
@@ -1181,6 +1195,31 @@ fn finish(
         rows.gap.push(gap);
     }
     Ok(rows)
+}
+
+/// The distance along the unit normal `n` from `x` to the nearest of the `masters` facets that
+/// its normal line meets (on their true maps, by Newton on the plane through `x` normal to n);
+/// NaN where it meets none.
+fn geometric_gap<'a>(x: V3, n: V3, masters: impl Iterator<Item = &'a Facet>) -> f64 {
+    let e = if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    let t0 = sub(e, scale(n, dot(e, n)));
+    let t0 = scale(t0, 1.0 / norm(t0));
+    let plane = Plane { c: x, n, t: [t0, cross(n, t0)] };
+    // inside the reference facet, with a margin of round-off
+    let inside = |k: Kind, xi: V2| {
+        let m = 1e-9;
+        if k.is_tri() { xi[0] >= -m && xi[1] >= -m && xi[0] + xi[1] <= 1.0 + m } else { xi[0].abs() <= 1.0 + m && xi[1].abs() <= 1.0 + m }
+    };
+    let mut best = f64::NAN;
+    for m in masters {
+        let Some(xi) = plane.invert(m, [0.0, 0.0]).filter(|&xi| inside(m.kind, xi)) else { continue };
+        let (xm, _) = m.map(&m.kind.shape(xi));
+        let g = dot(sub(xm, x), n);
+        if !(g.abs() >= best.abs()) {
+            best = g;
+        }
+    }
+    best
 }
 
 #[cfg(test)]

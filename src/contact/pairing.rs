@@ -64,7 +64,7 @@ pub struct Contact {
     pub t2: Vec<[f64; 3]>,
     /// Nodal area wᵢ of the slave node.
     pub area: Vec<f64>,
-    /// Initial gap dᵢ ≥ 0.
+    /// Initial gap dᵢ (< 0: an initial interference, removed by the solution).
     pub gap: Vec<f64>,
     pub bound: Vec<SlipBound>,
     /// Index of the scene's `[[contact.pair]]` entry each pair comes from.
@@ -75,6 +75,8 @@ pub struct Contact {
     pub discretization: Vec<Discretization>,
     /// Each entry's slave nodes outside the contact zone (no master facet within reach).
     pub outside: Vec<Outside>,
+    /// Each entry's initial interference.
+    pub interference: Vec<Interference>,
     /// Tangential rows left empty (per pair, t₁ and t₂): the slave node's DOFs along that
     /// tangent are all prescribed (a symmetry plane's rollers), so friction along it means
     /// nothing there ([`Contact::void_held_tangents`]). Empty: none.
@@ -253,7 +255,11 @@ struct RowGeom {
     coupling: Vec<(usize, f64)>,
     normal: [f64; 3],
     area: f64,
+    /// The weighted gap dᵢ (node-to-node: the gap).
     gap: f64,
+    /// The gap on the faces' true geometry ([`crate::contact::mortar::MortarRows::geometric_gap`];
+    /// NaN: not known, beyond the master's edge).
+    geometric: f64,
 }
 
 /// Why node-to-node pairing did not apply.
@@ -346,7 +352,8 @@ fn node_to_node(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64) -
         if dot(n, mnormals[&m]) > -0.5 {
             return Err(NodeToNode::Fail(Error::scene(key, format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name))));
         }
-        rows.push(RowGeom { slave: s, coupling: vec![(s, 1.0), (m, -1.0)], normal: n, area: areas[&s], gap: dot(sub(mesh.nodes[m], xs), n) });
+        let gap = dot(sub(mesh.nodes[m], xs), n);
+        rows.push(RowGeom { slave: s, coupling: vec![(s, 1.0), (m, -1.0)], normal: n, area: areas[&s], gap, geometric: gap });
     }
     Ok(rows)
 }
@@ -377,7 +384,9 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64,
             format!("no slave node of {} finds a master facet of {} within the search distance {search:.3e} (do the faces face each other? is it the right face?)", slave.name, master.name),
         ));
     }
-    let rows = (0..r.len()).map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i] }).collect();
+    let rows = (0..r.len())
+        .map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i], geometric: r.geometric_gap[i] })
+        .collect();
     Ok(Interface { rows, how: Discretization::Mortar, outside: r.uncovered, search })
 }
 
@@ -426,6 +435,11 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         let Interface { rows, how, outside, search } = interface_rows(mesh, &key, slave, master, tol, p.discretization, p.search_distance, true)?;
         c.discretization.push(how);
         c.outside.push(Outside::new(mesh, slave, master, outside, search));
+        // on quadratic slave facets the weighted gap is T⁻¹ of the nodal gaps, below the true
+        // one on a curved face: the constraint takes the gap on the true geometry there
+        let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+        let fraction = p.max_overlap.unwrap_or(crate::scene::DEFAULT_MAX_OVERLAP);
+        let mut fit = Interference::default();
         for row in rows {
             let (s, n, xs) = (row.slave, row.normal, mesh.nodes[row.slave]);
             for &(m, _) in row.coupling.iter().skip(1) {
@@ -439,11 +453,27 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                     ));
                 }
             }
-            if row.gap < -tol {
+            let measured = if row.geometric.is_finite() { row.geometric } else { row.gap };
+            let gap = if quadratic { measured } else { row.gap };
+            let h = row.area.max(0.0).sqrt();
+            if measured < -tol.max(fraction * h) && !p.interference {
                 return Err(Error::scene(
                     &key,
-                    format!("bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}", xs[0], xs[1], xs[2], slave.name, -row.gap, master.name),
+                    format!(
+                        "bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}, more than max_overlap = {fraction:.0e} of its element size {h:.3e} (a press fit: set interference = true)",
+                        xs[0],
+                        xs[1],
+                        xs[2],
+                        slave.name,
+                        -measured,
+                        master.name
+                    ),
                 ));
+            }
+            // round-off below the matching tolerance is touching, not interference
+            if gap < -tol {
+                fit.nodes += 1;
+                fit.depth = fit.depth.max(-gap);
             }
             let dir = p.friction.direction().unwrap_or([1.0, 0.0, 0.0]);
             let t1 = match (tangent(n, dir), p.friction.direction()) {
@@ -460,7 +490,7 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             c.t1.push(t1);
             c.t2.push(cross(t1, n));
             c.area.push(w);
-            c.gap.push(row.gap.max(0.0));
+            c.gap.push(gap);
             c.bound.push(match p.friction {
                 Friction::None => SlipBound::None,
                 Friction::Tresca { g } => SlipBound::Disc(g * w),
@@ -476,8 +506,17 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             });
             c.entry.push(k);
         }
+        c.interference.push(fit);
     }
     Ok(c)
+}
+
+/// The initial interference of one contact entry: its slave nodes that start inside the master
+/// (gap < 0 in the constraint, which the solution removes) and the deepest overlap.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Interference {
+    pub nodes: usize,
+    pub depth: f64,
 }
 
 /// The equality rows of a tied interface: as contact rows, in all three directions.
@@ -554,7 +593,7 @@ mod tests {
     }
 
     fn seed_pair(friction: Friction) -> ContactPair {
-        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None }
+        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: false }
     }
 
     fn faces(m: &Mesh, s: &str, ma: &str) -> Vec<(usize, usize)> {
@@ -688,7 +727,7 @@ mod tests {
         let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
-        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None };
+        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: false };
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
@@ -697,7 +736,7 @@ mod tests {
 
 /// The slave nodes of one contact entry outside its contact zone: no master facet within the
 /// search distance `search`, so no row (inactive). `over` are those of them over the master
-/// face — inside its outline seen along its mean normal, facing it, and within the search
+/// face — inside its outline seen along its mean normal, facing it, and within half the search
 /// distance of its level — a region that looks as if it should touch but found no master (a
 /// hole in the master face, facets facing away): a warning, not an error.
 #[derive(Clone, Debug, Default)]
@@ -750,7 +789,9 @@ impl Outside {
                 let p = [dot(x, e1), dot(x, e2)];
                 let inside = (0..2).all(|d| p[d] > lo[d] && p[d] < hi[d]);
                 let h = dot(x, nm);
-                let near = h >= level[0] - search && h <= level[1] + search;
+                // well within reach (a node near the search distance may miss it along its
+                // facets' slanted normals)
+                let near = h >= level[0] - 0.5 * search && h <= level[1] + 0.5 * search;
                 inside && near && dot(n, nm) < -0.5 * dot(n, n).sqrt()
             })
             .collect();

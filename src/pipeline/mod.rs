@@ -624,9 +624,20 @@ pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Mo
     }
 }
 
+/// What `check` and the report say of contact entry `i` beyond its faces: its slave nodes
+/// outside the contact zone, the warning where some of them lie over the master face, and its
+/// initial interference (empty: nothing to say).
+pub fn pair_notes(c: &crate::contact::pairing::Contact, i: usize) -> Vec<String> {
+    let mut out = c.outside.get(i).map_or_else(Vec::new, |o| outside_lines(i, o));
+    if let Some(f) = c.interference.get(i).filter(|f| f.nodes > 0) {
+        out.push(format!("  initial interference: {} slave nodes start inside the master, at most {:.3e} deep (the solution removes it)", f.nodes, f.depth));
+    }
+    out
+}
+
 /// The lines that say which slave nodes of contact entry `i` are outside its contact zone, and
 /// the warning where some of them lie over the master face (empty: none outside).
-pub fn outside_lines(i: usize, o: &crate::contact::pairing::Outside) -> Vec<String> {
+fn outside_lines(i: usize, o: &crate::contact::pairing::Outside) -> Vec<String> {
     let at = |k: usize| {
         let x = o.first[k].unwrap_or([f64::NAN; 3]);
         format!("({:.6}, {:.6}, {:.6})", x[0], x[1], x[2])
@@ -642,7 +653,7 @@ pub fn outside_lines(i: usize, o: &crate::contact::pairing::Outside) -> Vec<Stri
     }
     if let Some(&v) = o.over.first() {
         out.push(format!(
-            "warning: contact pair {i}: {} slave nodes over the master face (inside its outline, facing it, within the search distance of it) find no master facet, the first node {v} at {}; is the master face whole, and does it face the slave?",
+            "warning: contact pair {i}: {} slave nodes over the master face (inside its outline, facing it, within half the search distance of it) find no master facet, the first node {v} at {}; is the master face whole, and does it face the slave?",
             o.over.len(),
             at(1)
         ));
@@ -732,7 +743,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 open: o.state.count(OPEN),
                 contact: o.state.count(CONTACT),
                 outside: c.outside.iter().map(|o| o.nodes.len()).sum(),
-                notes: c.outside.iter().enumerate().flat_map(|(i, o)| outside_lines(i, o).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })).collect(),
+                notes: (0..c.outside.len()).flat_map(|i| pair_notes(c, i).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })).collect(),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
                 on_slip_bound: o.state.on_slip_bound,
@@ -907,14 +918,12 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             mesh.faces[ma].nodes().len(),
             if ls.scene.contact.enabled { "" } else { " — disabled" }
         );
-        if let Some(o) = model.pairs.as_ref().and_then(|c| c.outside.get(i)) {
-            for line in outside_lines(i, o) {
-                let _ = writeln!(s, "{line}");
-            }
+        for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i)) {
+            let _ = writeln!(s, "{line}");
         }
     }
     if let Some(c) = &model.pairs {
-        let (gmin, gmax) = c.gap.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &g| (a.min(g), b.max(g)));
+        let (gmin, gmax) = c.gap.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &g| (a.min(g), b.max(g)));
         let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
         let _ = writeln!(
             s,
