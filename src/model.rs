@@ -83,6 +83,15 @@ impl LoadPath {
         self.steps > 1
     }
 
+    /// The resultant force of traction entry `i` at factor 1 (the sum of its nodal forces).
+    pub fn traction_resultant(&self, i: usize) -> [f64; 3] {
+        let mut f = [0.0; 3];
+        for &(d, x) in &self.traction[i].1 {
+            f[d % 3] += x;
+        }
+        f
+    }
+
     /// The nodal forces (DOF, value) of every traction at step k (1…K), in the order
     /// [`Model::state`] sums them.
     pub fn forces(&self, k: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
@@ -220,11 +229,10 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             return Err(Error::scene(key("name"), format!("face \"{full}\" already exists")));
         }
         let src = face_index(&mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
-        let inside = |p: [f64; 3]| (0..3).all(|d| p[d] >= f.min[d] && p[d] <= f.max[d]);
-        let facets: Vec<_> =
-            mesh.faces[src].facets.iter().filter(|q| q.nodes().iter().all(|&v| inside(mesh.nodes[v]))).copied().collect();
+        let region = f.region(i)?;
+        let facets: Vec<_> = mesh.faces[src].facets.iter().filter(|q| q.nodes().iter().all(|&v| region.contains(mesh.nodes[v]))).copied().collect();
         if facets.is_empty() {
-            return Err(Error::scene(key("min"), format!("no facet of \"{}\" lies inside the given box", mesh.faces[src].name)));
+            return Err(Error::scene(format!("face[{i}]"), format!("no facet of \"{}\" lies inside {}", mesh.faces[src].name, region.describe())));
         }
         faces.insert(full.clone(), mesh.faces.len());
         mesh.faces.push(Face { name: full, body, facets });

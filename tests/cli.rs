@@ -23,7 +23,7 @@ fn abs_mesh(rel: &str) -> String {
 #[test]
 fn bad_input_gives_one_line_and_no_file() {
     let off = ["--set", "contact.enabled=false"];
-    assert_clean_failure("malformed", &seed_with("[mesh]", "[mesh"), &[], &["scene.toml", "line 6"]);
+    assert_clean_failure("malformed", &seed_with("[mesh]", "[mesh"), &[], &["scene.toml", "line 7"]);
     assert_clean_failure("unknown-key", &seed_with("eps = 1e-8", "epsilon = 1e-8"), &[], &["solver", "epsilon"]);
     assert_clean_failure("unknown-key-set", SEED, &["--set", "mesh.nn=3"], &["mesh", "nn"]);
     assert_clean_failure("nu", &seed_with("nu = 0.35", "nu = 0.5"), &off, &["material[1].nu", "0.5"]);
@@ -155,7 +155,7 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("face-unknown-body", &seed_plus(&face("patch", "middle", "zmax")), &off, &["face[0].body", "middle"]);
     bad.add("face-unknown-from", &seed_plus(&face("patch", "upper", "top")), &off, &["face[0].from", "upper.top"]);
     let empty = face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [5.0, 0.0, 0.0]").replace("max = [1.0, 1.0, 2.0]", "max = [6.0, 1.0, 2.0]");
-    bad.add("face-empty-box", &seed_plus(&empty), &off, &["face[0].min", "upper.zmax"]);
+    bad.add("face-empty-box", &seed_plus(&empty), &off, &["face[0]", "upper.zmax", "no facet", "the box"]);
     let lower_body = "[[body]]\nname = \"lower\"\nmaterial = \"lower\"";
     let dup_body = seed_with(lower_body, "[[body]]\nname = \"upper\"\nmaterial = \"lower\"");
     bad.add("dup-body", &dup_body, &off, &["body[1].name", "duplicate body name \"upper\""]);
@@ -167,9 +167,9 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("pair-zmin-xmin", &pair("upper.zmin", "lower.xmin"), &n4, &["contact.pair[0]", "upper.zmin", "lower.xmin", "do not face each other"]);
     bad.add("pair-zmax-zmax", &pair("upper.zmax", "lower.zmax"), &n4, &["contact.pair[0]", "upper.zmax", "lower.zmax", "do not face each other"]);
     bad.add("pair-zmin-zmin", &pair("upper.zmin", "lower.zmin"), &n4, &["contact.pair[0]", "do not face each other"]);
-    // opposite normals but the master lies behind the slave: no master facet in front (mortar,
-    // the default where the nodes do not match) names a slave node
-    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "slave node", "no master facet"]);
+    // opposite normals but the master lies behind the slave: no slave node finds a master facet
+    // in front (mortar, the default where the nodes do not match): an error naming both faces
+    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "no slave node", "finds a master facet"]);
     bad.add("pair-same-body", &pair("upper.zmin", "upper.zmax"), &n4, &["contact.pair[0]", "same body"]);
     bad.add("pair-unknown-body", &pair("upper.zmin", "ground.zmax"), &n4, &["contact.pair[0].master", "ground.zmax"]);
     // non-matching faces refused where node-to-node is asked for (mortar takes them)

@@ -261,3 +261,41 @@ fn every_scene_in_run_still_checks() {
         assert!(o.status.success(), "{}: {}", p.display(), String::from_utf8_lossy(&o.stderr));
     }
 }
+
+/// `[[face]]` regions: a box, a ball, a cylinder and a half-space cut the facets whose nodes all
+/// lie in them; `check` prints each face's area and each traction's resultant (a pressure on a
+/// cut face carries its area, not the region's). Two regions, a radius ≤ 0 or a zero normal are
+/// refused naming the key. Before: boxes only, and no area or resultant printed.
+#[test]
+fn faces_are_cut_by_boxes_balls_cylinders_and_half_spaces_with_their_areas_printed() {
+    // the seed's upper zmax face (z = 2) is 2 × 1 on 4 × 4 nodes: facets 2/3 × 1/3
+    let region = |r: &str| format!("[[face]]\nname = \"patch\"\nbody = \"upper\"\nfrom = \"zmax\"\n{r}\n");
+    let cases = [
+        ("box", "min = [0.0, 0.0, 1.9]\nmax = [1.4, 1.0, 2.1]", 4.0 / 3.0),
+        ("sphere", "sphere = { centre = [0.0, 0.0, 2.0], radius = 1.5 }", 2.0 / 3.0 * 2.0 / 3.0 * 2.0 + 2.0 / 3.0 * 1.0 / 3.0),
+        ("cylinder", "cylinder = { point = [0.0, 0.0, 2.0], axis = [0.0, 1.0, 0.0], radius = 1.4 }", 4.0 / 3.0),
+        ("half_space", "half_space = { point = [1.3, 0.0, 0.0], normal = [1.0, 0.0, 0.0] }", 2.0 / 3.0),
+    ];
+    for (name, r, area) in cases {
+        let scene = format!("{}\n{}\n[[traction]]\nface = \"upper.patch\"\np = [0.0, 0.0, -3.0]\n", SEED, region(r));
+        let out = check_ok(name, &scene, &["--set", "mesh.n=4"]);
+        let line = out.lines().find(|l| l.starts_with("  upper.patch:")).unwrap_or_else(|| panic!("{name}: {out}"));
+        let printed: f64 = line.rsplit("area ").next().unwrap().parse().unwrap();
+        assert!((printed - area).abs() <= 1e-6 * area, "{name}: area {printed} ≠ {area} ({line})");
+        let t = out.lines().find(|l| l.starts_with("traction[2] on upper.patch")).unwrap_or_else(|| panic!("{name}: {out}"));
+        let fz: f64 = t.split("resultant (").nth(1).unwrap().split(')').next().unwrap().split(", ").nth(2).unwrap().parse().unwrap();
+        assert!((fz + 3.0 * area).abs() <= 1e-6 * area, "{name}: resultant {fz} ≠ −3 × {area} ({t})");
+    }
+    let dir = tmpdir("face-regions-bad");
+    for (r, key) in [
+        ("min = [0.0, 0.0, 1.9]\nmax = [1.4, 1.0, 2.1]\nsphere = { centre = [0.0, 0.0, 2.0], radius = 1.5 }", "face[0]"),
+        ("sphere = { centre = [0.0, 0.0, 2.0], radius = 0.0 }", "face[0].sphere.radius"),
+        ("half_space = { point = [1.3, 0.0, 0.0], normal = [0.0, 0.0, 0.0] }", "face[0].half_space.normal"),
+        ("cylinder = { point = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], radius = -1.0 }", "face[0].cylinder.radius"),
+        ("min = [0.0, 0.0, 1.9]", "face[0].max"),
+    ] {
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, format!("{SEED}\n{}", region(r))).unwrap();
+        assert_clean_failure(key, &std::fs::read_to_string(&path).unwrap(), &["--set", "mesh.n=4"], &[key]);
+    }
+}
