@@ -160,6 +160,11 @@ pub fn facet_area_vector(x: &[[f64; 3]], d: &[[f64; 2]]) -> [f64; 3] {
 
 /// ∫ N_a dA over a facet: the consistent nodal weights of a uniform surface density (a tri6's
 /// corners get 0, its edge nodes a third of the area; a quad8's corners a negative share).
+/// The area of a face (its facets' true maps) on the coordinates `x`.
+pub fn face_area(face: &crate::mesh::Face, x: &[[f64; 3]]) -> f64 {
+    face.facets.iter().map(|q| facet_nodal_areas(q.kind, &q.nodes().iter().map(|&v| x[v]).collect::<Vec<_>>()).iter().sum::<f64>()).sum()
+}
+
 /// quad4 as [`quad4_nodal_areas`] (2 × 2 Gauss, exact).
 pub fn facet_nodal_areas(kind: FacetKind, x: &[[f64; 3]]) -> Vec<f64> {
     if kind == FacetKind::Quad4 {

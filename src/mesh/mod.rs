@@ -40,11 +40,6 @@ pub struct Face {
 }
 
 impl Face {
-    /// The area of the face (its facets' true maps) on the coordinates `x`.
-    pub fn area(&self, x: &[[f64; 3]]) -> f64 {
-        self.facets.iter().map(|q| crate::fem::cell::facet_nodal_areas(q.kind, &q.nodes().iter().map(|&v| x[v]).collect::<Vec<_>>()).iter().sum::<f64>()).sum()
-    }
-
     /// The distinct nodes of the face, sorted.
     pub fn nodes(&self) -> Vec<usize> {
         let mut v: Vec<usize> = self.facets.iter().flat_map(|q| q.nodes().to_vec()).collect();

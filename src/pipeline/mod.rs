@@ -903,11 +903,11 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     let _ = writeln!(s, "faces:");
     for f in &mesh.faces {
-        let _ = writeln!(s, "  {}: {}, {} nodes, area {:.6e}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len(), f.area(&mesh.nodes));
+        let _ = writeln!(s, "  {}: {}, {} nodes, area {:.6e}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len(), crate::fem::cell::face_area(f, &mesh.nodes));
     }
     for (i, t) in ls.scene.traction.iter().enumerate() {
         let r = model.path.traction_resultant(i);
-        let area = mesh.face(&t.face).map_or(f64::NAN, |f| f.area(&mesh.nodes));
+        let area = mesh.face(&t.face).map_or(f64::NAN, |f| crate::fem::cell::face_area(f, &mesh.nodes));
         let _ = writeln!(s, "traction[{i}] on {}: p = ({}, {}, {}) over area {area:.6e}, resultant ({:.6e}, {:.6e}, {:.6e}) at factor 1", t.face, t.p[0], t.p[1], t.p[2], r[0], r[1], r[2]);
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
