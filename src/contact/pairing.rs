@@ -454,7 +454,9 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                 }
             }
             let measured = if row.geometric.is_finite() { row.geometric } else { row.gap };
+            // an overlap of round-off (within the matching tolerance) is touching: gap 0
             let gap = if quadratic { measured } else { row.gap };
+            let gap = if gap < 0.0 && gap >= -tol { 0.0 } else { gap };
             let h = row.area.max(0.0).sqrt();
             if measured < -tol.max(fraction * h) && !p.interference {
                 return Err(Error::scene(
@@ -470,8 +472,7 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
                     ),
                 ));
             }
-            // round-off below the matching tolerance is touching, not interference
-            if gap < -tol {
+            if gap < 0.0 {
                 fit.nodes += 1;
                 fit.depth = fit.depth.max(-gap);
             }
