@@ -223,6 +223,65 @@ fn node_normals(mesh: &Mesh, face: &Face) -> HashMap<usize, [f64; 3]> {
     out.into_iter().map(|(v, n)| (v, unit(n))).collect()
 }
 
+/// The curvature of a face at each node, from its averaged normals: the largest angle between
+/// the normals of two nodes of a facet around it over their distance (0 on a flat face).
+fn node_curvatures(mesh: &Mesh, face: &Face, normals: &HashMap<usize, [f64; 3]>) -> HashMap<usize, f64> {
+    let mut out: HashMap<usize, f64> = HashMap::new();
+    for q in &face.facets {
+        let v = q.nodes();
+        let mut k = 0.0f64;
+        for a in 0..v.len() {
+            for b in a + 1..v.len() {
+                let (na, nb) = (normals[&v[a]], normals[&v[b]]);
+                let c = cross(na, nb);
+                let angle = dot(c, c).sqrt().atan2(dot(na, nb));
+                let d = sub(mesh.nodes[v[a]], mesh.nodes[v[b]]);
+                let len = dot(d, d).sqrt();
+                if len > 0.0 {
+                    k = k.max(angle / len);
+                }
+            }
+        }
+        for &n in v {
+            let e = out.entry(n).or_insert(0.0);
+            *e = e.max(k);
+        }
+    }
+    out
+}
+
+/// The contact frame's normal at a row: the two faces' normals (the slave's `ns` at its node,
+/// the master's `nm` where the row couples, by the coefficients' weights) averaged with the
+/// weights of their radii of curvature, n ∝ κ_m n_s − κ_s n_m — the common normal of the
+/// surfaces that the bodies approach along (Hertz: the load axis for either side as slave; the
+/// flat face's normal against a curved one; the bisector of equal spheres). The slave's where
+/// both faces are flat. The slave's own normal would tilt the frame by r/R on a curved slave,
+/// so that the gap closing under pressing would read as a tangential slip of about (r²/2R)·(r/R).
+fn frame_normal(row: &RowGeom, sn: &HashMap<usize, [f64; 3]>, sk: &HashMap<usize, f64>, mn: &HashMap<usize, [f64; 3]>, mk: &HashMap<usize, f64>) -> [f64; 3] {
+    let ns = row.normal;
+    let ks = sk.get(&row.slave).copied().unwrap_or(0.0);
+    let (mut nm, mut km, mut w) = ([0.0; 3], 0.0, 0.0);
+    for &(v, c) in &row.coupling {
+        if let (Some(n), Some(&k)) = (mn.get(&v), mk.get(&v)) {
+            if sn.contains_key(&v) {
+                continue;
+            }
+            (0..3).for_each(|d| nm[d] += c.abs() * n[d]);
+            km += c.abs() * k;
+            w += c.abs();
+        }
+    }
+    if w == 0.0 || (ks == 0.0 && km == 0.0) {
+        return ns;
+    }
+    let km = km / w;
+    let nm = unit(nm);
+    let n: [f64; 3] = std::array::from_fn(|d| km * ns[d] - ks * nm[d]);
+    let l = dot(n, n).sqrt();
+    // faces that do not face each other keep the slave's normal (the pairing refuses them)
+    if !(l > 0.0) || dot(ns, nm) > 0.0 { ns } else { n.map(|v| v / l) }
+}
+
 /// Consistent nodal areas ∫ φᵢ dA of a face.
 fn node_areas(mesh: &Mesh, face: &Face) -> HashMap<usize, f64> {
     let mut out = HashMap::new();
@@ -440,7 +499,12 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
         let fraction = p.max_overlap.unwrap_or(crate::scene::DEFAULT_MAX_OVERLAP);
         let mut fit = Interference::default();
+        let (sn, mn) = (node_normals(mesh, slave), node_normals(mesh, master));
+        let (sk, mk) = (node_curvatures(mesh, slave, &sn), node_curvatures(mesh, master, &mn));
         for row in rows {
+            // the frame between the faces' normals, and the weighted gap along it
+            let n = frame_normal(&row, &sn, &sk, &mn, &mk);
+            let row = if n == row.normal { row } else { RowGeom { gap: -row.coupling.iter().map(|&(k, c)| c * dot(mesh.nodes[k], n)).sum::<f64>(), normal: n, ..row } };
             let (s, n, xs) = (row.slave, row.normal, mesh.nodes[row.slave]);
             for &(m, _) in row.coupling.iter().skip(1) {
                 if let Some(prev) = couples.insert((s.min(m), s.max(m)), k).filter(|&prev| prev != k) {
