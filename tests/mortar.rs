@@ -211,18 +211,12 @@ fn tied_blocks_are_bitwise_identical_on_1_2_3_ranks() {
     }
 }
 
-/// A ball pressed onto a block with its whole surface (`mesh/sphere_on_block.msh`, one Gmsh
-/// physical surface) as the slave face: the nodes that find no master facet are outside the
-/// contact zone (named in `check`, counted in the report) and the answer equals the one with a
-/// cap cut out as slave; a steep quarter cap whose edge rises 0.59 above the flat solves at
-/// the default search distance. Before: "slave node 0 … finds no master facet".
-#[test]
-fn a_whole_surface_as_slave_leaves_the_nodes_without_a_master_outside() {
-    let dir = tmpdir("whole-surface");
-    let msh = root().join("mesh/sphere_on_block.msh");
-    let scene = |slave: &str| {
-        format!(
-            r#"[[material]]
+/// The ball of `msh` (`mesh/sphere_on_block*.msh`) pressed 0.01 onto the clamped block by the
+/// cap of its top, with the contact pair's slave `slave`, `faces` more `[[face]]` entries and
+/// `pair` more keys of the pair (then any tables after it).
+fn ball_on_block(msh: &std::path::Path, slave: &str, faces: &str, pair: &str) -> String {
+    format!(
+        r#"[[material]]
 name = "m"
 E = 1000.0
 nu = 0.3
@@ -240,13 +234,7 @@ body = "ball"
 from = "sphere"
 min = [-1.0, -1.0, 2.8]
 max = [1.0, 1.0, 3.1]
-[[face]]
-name = "cap"
-body = "ball"
-from = "sphere"
-min = [-1.0, -1.0, 0.9]
-max = [1.0, 1.0, 1.6]
-[[dirichlet]]
+{faces}[[dirichlet]]
 face = "block.block_bottom"
 [[dirichlet]]
 face = "ball.top"
@@ -254,11 +242,26 @@ value = [0.0, 0.0, -0.01]
 [[contact.pair]]
 slave = "{slave}"
 master = "block.block_top"
-search_distance = 0.2
-[solver]
-eps = 1e-10
-"#,
-            m = msh.display()
+{pair}"#,
+        m = msh.display()
+    )
+}
+
+/// A ball pressed onto a block with its whole surface (`mesh/sphere_on_block.msh`, one Gmsh
+/// physical surface) as the slave face: the nodes that find no master facet are outside the
+/// contact zone (named in `check`, counted in the report) and the answer equals the one with a
+/// cap cut out as slave; a steep quarter cap whose edge rises 0.59 above the flat solves at
+/// the default search distance. Before: "slave node 0 … finds no master facet".
+#[test]
+fn a_whole_surface_as_slave_leaves_the_nodes_without_a_master_outside() {
+    let dir = tmpdir("whole-surface");
+    let msh = root().join("mesh/sphere_on_block.msh");
+    let scene = |slave: &str| {
+        ball_on_block(
+            &msh,
+            slave,
+            "[[face]]\nname = \"cap\"\nbody = \"ball\"\nfrom = \"sphere\"\nmin = [-1.0, -1.0, 0.9]\nmax = [1.0, 1.0, 1.6]\n",
+            "search_distance = 0.2\n[solver]\neps = 1e-10\n",
         )
     };
     let whole = dir.join("whole.toml");
@@ -355,36 +358,7 @@ fn a_press_fit_gives_the_lame_contact_pressure() {
 fn quadratic_faces_measure_their_gap_on_the_true_geometry() {
     let dir = tmpdir("quadratic-gap");
     let msh = root().join("mesh/sphere_on_block_tet10.msh");
-    let scene = format!(
-        r#"[[material]]
-name = "m"
-E = 1000.0
-nu = 0.3
-[[body]]
-name = "ball"
-material = "m"
-gmsh = {{ file = "{m}", volume = "ball" }}
-[[body]]
-name = "block"
-material = "m"
-gmsh = {{ file = "{m}", volume = "block" }}
-[[face]]
-name = "top"
-body = "ball"
-from = "sphere"
-min = [-1.0, -1.0, 2.8]
-max = [1.0, 1.0, 3.1]
-[[dirichlet]]
-face = "block.block_bottom"
-[[dirichlet]]
-face = "ball.top"
-value = [0.0, 0.0, -0.01]
-[[contact.pair]]
-slave = "ball.sphere"
-master = "block.block_top"
-"#,
-        m = msh.display()
-    );
+    let scene = ball_on_block(&msh, "ball.sphere", "", "");
     let path = dir.join("ball.toml");
     std::fs::write(&path, scene).unwrap();
     for (lift, lo) in [(0.0, 0.0), (1e-3, 1e-3)] {
