@@ -42,6 +42,8 @@ pub struct Model {
     pub floating: Vec<Vec<usize>>,
     /// Every group of bodies joined by `[[tie]]` (two bodies or more), each ascending.
     pub tied_groups: Vec<Vec<usize>>,
+    /// Why the slave of each pair given by `faces` is the one it is (pair index, words).
+    pub slave_choice: Vec<(usize, String)>,
     /// Each body's node order for its factor, computed once: `[plain, contact nodes last]`
     /// (`pipeline::body_order`; the plan counts its fill, the factorization uses it).
     pub orders: Vec<[OnceLock<NodeOrder>; 2]>,
@@ -311,9 +313,18 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     }
 
     let mut contact = Vec::new();
+    let mut slave_choice = Vec::new();
     for (i, p) in scene.contact.pair.iter().enumerate() {
-        let s = face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?;
-        let m = face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?;
+        let (s, m) = match &p.faces {
+            None => (face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?, face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?),
+            Some(f) => {
+                let a = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[0])?;
+                let b = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[1])?;
+                let (s, m, why) = choose_slave(&mesh, &lame_e(scene, &mesh), a, b, p);
+                slave_choice.push((i, why));
+                (s, m)
+            }
+        };
         if mesh.faces[s].body == mesh.faces[m].body {
             return Err(Error::scene(format!("contact.pair[{i}]"), "slave and master faces belong to the same body (self-contact is not supported)"));
         }
@@ -435,7 +446,44 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
     let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
     let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, orders })
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, orders })
+}
+
+/// Young's modulus of each body (for the slave rule).
+fn lame_e(scene: &Scene, mesh: &Mesh) -> Vec<f64> {
+    let index = scene.material_index();
+    mesh.bodies.iter().map(|b| scene.bodies.iter().find(|x| x.name == b.name).and_then(|x| index.get(x.material.as_str())).map_or(f64::NAN, |&k| scene.materials[k].e)).collect()
+}
+
+/// The slave of two faces `a`, `b` (indices into `mesh.faces`) where the pair leaves it open:
+/// the face named by `slave` or `master` alone; else the one with the smaller E·h (Young's
+/// modulus of its body times its mean facet size √(area/facets)) — the softer and the finer side.
+/// A stiff slave over a soft, coarser master makes the dual rows nearly dependent (the master's
+/// compliance reaches the slave rows only through the fewer master nodes): a stiff flat punch as
+/// slave left 91 of 123 nodes under it open in 1 084 products, the soft block as slave none in 74.
+/// Within 1 % the finer face, then `a`. Returns (slave, master, the reason in words).
+fn choose_slave(mesh: &Mesh, e: &[f64], a: usize, b: usize, p: &crate::scene::ContactPair) -> (usize, usize, String) {
+    let (fa, fb) = (&mesh.faces[a], &mesh.faces[b]);
+    if !p.slave.is_empty() || !p.master.is_empty() {
+        let a_is_slave = if p.slave.is_empty() { p.master == fb.name } else { p.slave == fa.name };
+        let (s, m) = if a_is_slave { (a, b) } else { (b, a) };
+        return (s, m, format!("slave {} as named", mesh.faces[s].name));
+    }
+    let size = |f: &Face| (crate::fem::cell::face_area(f, &mesh.nodes) / f.facets.len().max(1) as f64).sqrt();
+    let (ha, hb) = (size(fa), size(fb));
+    let (ka, kb) = (e[fa.body] * ha, e[fb.body] * hb);
+    let a_is_slave = if (ka - kb).abs() > 0.01 * ka.max(kb) { ka < kb } else { ha <= hb };
+    let (s, m) = if a_is_slave { (a, b) } else { (b, a) };
+    let (ks, km, hs, hm) = if a_is_slave { (ka, kb, ha, hb) } else { (kb, ka, hb, ha) };
+    let (fs, fm) = (&mesh.faces[s], &mesh.faces[m]);
+    let (softer, finer) = (e[fs.body] < e[fm.body], hs < hm);
+    let side = match (softer, finer) {
+        (true, true) => "the softer and finer side",
+        (true, false) => "the softer side",
+        (false, true) => "the finer side",
+        (false, false) => "the first of `faces`",
+    };
+    (s, m, format!("slave {} chosen: E·h {ks:.3e} (E {:.3e}, facets {hs:.3e}) against {km:.3e} (E {:.3e}, facets {hm:.3e}) of {}: {side}", fs.name, e[fs.body], e[fm.body], fm.name))
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound

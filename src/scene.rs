@@ -465,8 +465,15 @@ impl Default for ContactSettings {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactPair {
+    /// The slave face (its nodes carry the multipliers); with `master`, or alone with `faces`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub slave: String,
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub master: String,
+    /// The two faces, where the slave is left to the rule of [`ContactPair::resolve`] (or named
+    /// by `slave` or `master` alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub faces: Option<[String; 2]>,
     #[serde(default)]
     pub friction: Friction,
     /// Matching tolerance of slave and master node coordinates (m); default 1e-8 × model size.
@@ -1271,7 +1278,23 @@ impl Scene {
         }
         for (i, p) in self.contact.pair.iter().enumerate() {
             let k = |f: &str| format!("contact.pair[{i}].{f}");
-            if p.slave == p.master {
+            match (&p.faces, p.slave.is_empty(), p.master.is_empty()) {
+                (None, false, false) => {}
+                (None, _, _) => return Err(Error::scene(k(if p.slave.is_empty() { "slave" } else { "master" }), "name both `slave` and `master`, or the two faces as `faces = [\"a.x\", \"b.y\"]`")),
+                (Some(f), s, m) => {
+                    if f[0] == f[1] {
+                        return Err(Error::scene(k("faces"), "the two faces must be different"));
+                    }
+                    if !s && !m {
+                        return Err(Error::scene(k("faces"), "with `faces`, name at most one of `slave` and `master`"));
+                    }
+                    let named = if s { &p.master } else { &p.slave };
+                    if !named.is_empty() && !f.contains(named) {
+                        return Err(Error::scene(k(if s { "master" } else { "slave" }), format!("\"{named}\" is not one of `faces`")));
+                    }
+                }
+            }
+            if p.slave == p.master && !p.slave.is_empty() {
                 return Err(Error::scene(k("master"), "slave and master must be different faces"));
             }
             if let Some(t) = p.tolerance {

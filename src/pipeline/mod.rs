@@ -923,6 +923,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             mesh.faces[ma].nodes().len(),
             if ls.scene.contact.enabled { "" } else { " — disabled" }
         );
+        if let Some((_, why)) = model.slave_choice.iter().find(|c| c.0 == i) {
+            let _ = writeln!(s, "  {why}");
+        }
         for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i)) {
             let _ = writeln!(s, "{line}");
         }
