@@ -316,7 +316,13 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let mut slave_choice = Vec::new();
     for (i, p) in scene.contact.pair.iter().enumerate() {
         let (s, m) = match &p.faces {
-            None => (face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?, face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?),
+            None => {
+                let (s, m) = (face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?, face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?);
+                if let Some(w) = stiff_slave(&mesh, &lame_e(scene, &mesh), s, m, i) {
+                    slave_choice.push((i, w));
+                }
+                (s, m)
+            }
             Some(f) => {
                 let a = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[0])?;
                 let b = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[1])?;
@@ -455,6 +461,29 @@ fn lame_e(scene: &Scene, mesh: &Mesh) -> Vec<f64> {
     mesh.bodies.iter().map(|b| scene.bodies.iter().find(|x| x.name == b.name).and_then(|x| index.get(x.material.as_str())).map_or(f64::NAN, |&k| scene.materials[k].e)).collect()
 }
 
+/// E·h of a face: its body's Young's modulus times its mean facet size √(area/facets).
+fn stiffness_size(mesh: &Mesh, e: &[f64], f: usize) -> (f64, f64) {
+    let face = &mesh.faces[f];
+    let h = (crate::fem::cell::face_area(face, &mesh.nodes) / face.facets.len().max(1) as f64).sqrt();
+    (e[face.body] * h, h)
+}
+
+/// A warning where the named slave `s` has more than twice the master's E·h: a stiff slave over
+/// a soft master makes the contact rows nearly dependent (measured on a flat punch over a block,
+/// both meshes given: E·h 4.7× the master's left 20 of 123 nodes under it open in 261 products,
+/// 470× left 91 open in 1 084; the block as slave: none open, 64–74 products).
+fn stiff_slave(mesh: &Mesh, e: &[f64], s: usize, m: usize, i: usize) -> Option<String> {
+    let ((ks, _), (km, _)) = (stiffness_size(mesh, e, s), stiffness_size(mesh, e, m));
+    (ks > 2.0 * km).then(|| {
+        format!(
+            "warning: contact pair {i}: the slave {} has {:.1}× the E·h (Young's modulus × facet size) of the master {}: a stiff slave over a soft master leaves nodes open and costs many products; swap them, or give `faces` and let the rule choose",
+            mesh.faces[s].name,
+            ks / km,
+            mesh.faces[m].name
+        )
+    })
+}
+
 /// The slave of two faces `a`, `b` (indices into `mesh.faces`) where the pair leaves it open:
 /// the face named by `slave` or `master` alone; else the one with the smaller E·h (Young's
 /// modulus of its body times its mean facet size √(area/facets)) — the softer and the finer side.
@@ -469,9 +498,7 @@ fn choose_slave(mesh: &Mesh, e: &[f64], a: usize, b: usize, p: &crate::scene::Co
         let (s, m) = if a_is_slave { (a, b) } else { (b, a) };
         return (s, m, format!("slave {} as named", mesh.faces[s].name));
     }
-    let size = |f: &Face| (crate::fem::cell::face_area(f, &mesh.nodes) / f.facets.len().max(1) as f64).sqrt();
-    let (ha, hb) = (size(fa), size(fb));
-    let (ka, kb) = (e[fa.body] * ha, e[fb.body] * hb);
+    let ((ka, ha), (kb, hb)) = (stiffness_size(mesh, e, a), stiffness_size(mesh, e, b));
     let a_is_slave = if (ka - kb).abs() > 0.01 * ka.max(kb) { ka < kb } else { ha <= hb };
     let (s, m) = if a_is_slave { (a, b) } else { (b, a) };
     let (ks, km, hs, hm) = if a_is_slave { (ka, kb, ha, hb) } else { (kb, ka, hb, ha) };

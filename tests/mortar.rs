@@ -421,6 +421,12 @@ friction = {{ type = "coulomb", mu = 0.3 }}
     assert!(n_a <= 150, "{n_a} products");
     let o = common::run(&["check", path.to_str().unwrap(), "--set", "contact.pair.0.slave=\"punch.punch_bottom\""]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("slave punch.punch_bottom as named"));
+    // the stiff punch named as slave: a warning naming both faces and the ratio
+    let named = scene.replace("faces = [\"punch.punch_bottom\", \"block.block_top\"]", "slave = \"punch.punch_bottom\"\nmaster = \"block.block_top\"");
+    let stiff = dir.join("stiff.toml");
+    std::fs::write(&stiff, named).unwrap();
+    let out = String::from_utf8_lossy(&common::run(&["check", stiff.to_str().unwrap()]).stdout).into_owned();
+    assert!(out.contains("warning: contact pair 0: the slave punch.punch_bottom has 470.0× the E·h"), "{out}");
     for (set, key) in [
         ("contact.pair.0.faces=[\"block.block_top\", \"block.block_top\"]", "contact.pair[0].faces"),
         ("contact.pair.0.slave=\"punch.punch_top\"", "contact.pair[0].slave"),

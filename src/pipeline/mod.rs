@@ -743,7 +743,13 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                 open: o.state.count(OPEN),
                 contact: o.state.count(CONTACT),
                 outside: c.outside.iter().map(|o| o.nodes.len()).sum(),
-                notes: (0..c.outside.len()).flat_map(|i| pair_notes(c, i).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })).collect(),
+                notes: model
+                    .slave_choice
+                    .iter()
+                    .filter(|w| w.1.starts_with("warning"))
+                    .map(|w| w.1.clone())
+                    .chain((0..c.outside.len()).flat_map(|i| pair_notes(c, i).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })))
+                    .collect(),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
                 on_slip_bound: o.state.on_slip_bound,
@@ -924,7 +930,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             if ls.scene.contact.enabled { "" } else { " — disabled" }
         );
         if let Some((_, why)) = model.slave_choice.iter().find(|c| c.0 == i) {
-            let _ = writeln!(s, "  {why}");
+            let _ = writeln!(s, "{}{why}", if why.starts_with("warning") { "" } else { "  " });
         }
         for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i)) {
             let _ = writeln!(s, "{line}");
