@@ -241,7 +241,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     }
 
     let materials = scene.material_index();
-    let lame = scene
+    let lame: Vec<Lame> = scene
         .bodies
         .iter()
         .map(|b| {
@@ -314,11 +314,12 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
 
     let mut contact = Vec::new();
     let mut slave_choice = Vec::new();
+    let young: Vec<f64> = lame.iter().map(Lame::young).collect();
     for (i, p) in scene.contact.pair.iter().enumerate() {
         let (s, m) = match &p.faces {
             None => {
                 let (s, m) = (face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?, face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?);
-                if let Some(w) = stiff_slave(&mesh, &lame_e(scene, &mesh), s, m, i) {
+                if let Some(w) = stiff_slave(&mesh, &young, s, m, i) {
                     slave_choice.push((i, w));
                 }
                 (s, m)
@@ -326,7 +327,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             Some(f) => {
                 let a = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[0])?;
                 let b = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[1])?;
-                let (s, m, why) = choose_slave(&mesh, &lame_e(scene, &mesh), a, b, p);
+                let (s, m, why) = choose_slave(&mesh, &young, a, b, p);
                 slave_choice.push((i, why));
                 (s, m)
             }
@@ -453,12 +454,6 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
     let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, orders })
-}
-
-/// Young's modulus of each body (for the slave rule).
-fn lame_e(scene: &Scene, mesh: &Mesh) -> Vec<f64> {
-    let index = scene.material_index();
-    mesh.bodies.iter().map(|b| scene.bodies.iter().find(|x| x.name == b.name).and_then(|x| index.get(x.material.as_str())).map_or(f64::NAN, |&k| scene.materials[k].e)).collect()
 }
 
 /// E·h of a face: its body's Young's modulus times its mean facet size √(area/facets).

@@ -1308,7 +1308,7 @@ impl Scene {
                 }
             }
             if let Some(t) = p.max_overlap {
-                if !(t.is_finite() && t >= 0.0 && t < 1.0) {
+                if !(0.0..1.0).contains(&t) {
                     return Err(Error::scene(k("max_overlap"), format!("a fraction of the element size in [0, 1), got {t}")));
                 }
             }

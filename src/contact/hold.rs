@@ -138,7 +138,7 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     }
     // the body (or group) that moves most along d; its unbalanced, applied and carried
     // generalized forces in the natural modes (force; moment / size), r = e − Gλ*
-    let mut share: Vec<(&[usize], f64, [[f64; 6]; 3])> = Vec::new();
+    let mut share: Vec<Share> = Vec::new();
     for (j, (b, m)) in rows.owner.iter().enumerate() {
         let i = match share.iter().position(|s| s.0 == b.as_slice()) {
             Some(i) => i,
@@ -149,10 +149,10 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
         };
         let s = &mut share[i];
         s.1 += d[j] * d[j];
-        for q in 0..6 {
-            s.2[0][q] += d[j] * m[q];
-            s.2[1][q] += e[j] * m[q];
-            s.2[2][q] += gl[j] * m[q];
+        for (q, mq) in m.iter().enumerate() {
+            s.2[0][q] += d[j] * mq;
+            s.2[1][q] += e[j] * mq;
+            s.2[2][q] += gl[j] * mq;
         }
     }
     let (bodies, _, [r, l, c]) = share.into_iter().fold((&[][..], -1.0, [[0.0; 6]; 3]), |a, s| if s.1 > a.1 { s } else { a });
@@ -162,6 +162,10 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     let sign = if l[q] != 0.0 { l[q].signum() } else { r[q].signum() };
     Ok(Some(Unheld { bodies: bodies.to_vec(), motion: rigid::dominant(&r), natural: q, load: sign * l[q] * unit, supply: sign * c[q] * unit }))
 }
+
+/// One body's (or group's) part of the unbalanced load: its bodies, Σ d², and its unbalanced,
+/// applied and carried generalized forces in the natural modes.
+type Share<'a> = (&'a [usize], f64, [[f64; 6]; 3]);
 
 /// A load the contact cannot meet closer than this (relative to ‖e_f‖) cannot be held.
 const UNBALANCED: f64 = 1e-6;

@@ -1215,7 +1215,7 @@ fn geometric_gap<'a>(x: V3, n: V3, masters: impl Iterator<Item = &'a Facet>) -> 
         let Some(xi) = plane.invert(m, [0.0, 0.0]).filter(|&xi| inside(m.kind, xi)) else { continue };
         let (xm, _) = m.map(&m.kind.shape(xi));
         let g = dot(sub(xm, x), n);
-        if !(g.abs() >= best.abs()) {
+        if best.is_nan() || g.abs() < best.abs() {
             best = g;
         }
     }

@@ -279,7 +279,7 @@ fn frame_normal(row: &RowGeom, sn: &HashMap<usize, [f64; 3]>, sk: &HashMap<usize
     let n: [f64; 3] = std::array::from_fn(|d| km * ns[d] - ks * nm[d]);
     let l = dot(n, n).sqrt();
     // faces that do not face each other keep the slave's normal (the pairing refuses them)
-    if !(l > 0.0) || dot(ns, nm) > 0.0 { ns } else { n.map(|v| v / l) }
+    if l.is_nan() || l <= 0.0 || dot(ns, nm) > 0.0 { ns } else { n.map(|v| v / l) }
 }
 
 /// Consistent nodal areas ∫ φᵢ dA of a face.
@@ -818,8 +818,9 @@ impl Outside {
         let first = nodes.first().map(|&v| mesh.nodes[v]);
         let mut out = Outside { nodes, over: vec![], search, first: [first, None] };
         let normal_area = |f: &crate::mesh::Facet| facet_normal_area(f.kind, &f.nodes().iter().map(|&v| mesh.nodes[v]).collect::<Vec<_>>());
-        let mean = master.facets.iter().map(normal_area).fold([0.0; 3], |a, n| std::array::from_fn(|d| a[d] + n[d]));
-        let total: f64 = master.facets.iter().map(|f| dot(normal_area(f), normal_area(f)).sqrt()).sum();
+        let areas: Vec<[f64; 3]> = master.facets.iter().map(normal_area).collect();
+        let mean = areas.iter().fold([0.0; 3], |a, n| std::array::from_fn(|d| a[d] + n[d]));
+        let total: f64 = areas.iter().map(|&n| dot(n, n).sqrt()).sum();
         let len = dot(mean, mean).sqrt();
         // a closed or strongly curved master has no outline along one direction
         if out.nodes.is_empty() || len < 0.5 * total {

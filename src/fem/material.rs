@@ -14,6 +14,11 @@ impl Lame {
         Lame { lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu: e / (2.0 * (1.0 + nu)) }
     }
 
+    /// Young's modulus E = μ(3λ + 2μ)/(λ + μ).
+    pub fn young(&self) -> f64 {
+        self.mu * (3.0 * self.lambda + 2.0 * self.mu) / (self.lambda + self.mu)
+    }
+
     /// σ = D ε in Voigt notation.
     pub fn stress(&self, eps: &[f64; 6]) -> [f64; 6] {
         let tr = eps[0] + eps[1] + eps[2];
