@@ -1,6 +1,7 @@
 //! `tresca-feti`: the command line. Parses arguments (clap) before MPI starts, initializes MPI,
-//! runs the pipeline on every rank, and lets only rank 0 print. Errors: one line on stderr from
-//! rank 0, exit code 1 on every rank.
+//! runs the pipeline on every rank, and lets only rank 0 print. Usage errors: as clap prints
+//! them, exit code 2, from the launcher's first rank. Errors in the user's files and keys: one
+//! line on stderr from rank 0, exit code 1 on every rank.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -14,8 +15,9 @@ use tresca_feti::pipeline;
     name = "tresca-feti",
     version,
     about = "TFETI solver for 3D linear-elastic contact with friction (Tresca, orthotropic, Coulomb)",
-    after_help = "A first run:\n  tresca-feti check run/tutorial.toml              validate a scene, print what it builds\n  mpirun -n 2 tresca-feti solve run/tutorial.toml  solve it on 2 MPI ranks\nResults: out/<scene name>.h5 (HDF5), .xdmf (open it in ParaView), .json (the report).\nErrors: one line naming the key or file, exit code 1; docs/troubleshooting.md says what to do.\nDocumentation: README.md; docs/tutorial.md, docs/scene-reference.md (every scene key),\ndocs/method.md, docs/validation.md, docs/performance.md."
+    after_help = "A first run:\n  tresca-feti check run/tutorial.toml              validate a scene, print what it builds\n  mpirun -n 2 tresca-feti solve run/tutorial.toml  solve it on 2 MPI ranks\nResults: out/<scene name>.h5 (HDF5), .xdmf (open it in ParaView), .json (the report).\nErrors in a scene or mesh: one line naming the key or file, exit code 1; docs/troubleshooting.md says what to do.\nDocumentation: README.md; docs/tutorial.md, docs/scene-reference.md (every scene key),\ndocs/method.md, docs/validation.md, docs/performance.md."
 )]
+#[command(arg_required_else_help = true)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -426,17 +428,13 @@ fn bench_tfeti(
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
-        Err(e) if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) => e.exit(),
         Err(e) => {
-            // one line, like every other error (clap's own message adds usage lines)
-            let text = e.to_string();
-            let parts: Vec<&str> = text
-                .lines()
-                .map(str::trim)
-                .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
-                .collect();
-            eprintln!("{}", parts.join(" "));
-            return ExitCode::from(2);
+            // usage errors as clap formats them (the help for a missing command), printed by the
+            // first rank only: MPI has not started, the launcher's environment names the rank
+            if first_rank(|v| std::env::var(v).ok()) {
+                let _ = e.print();
+            }
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
     if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } = cli.cmd {
@@ -473,6 +471,12 @@ fn launched_by_mpi() -> bool {
     let set = |v: &str| std::env::var_os(v).is_some();
     let several_tasks = std::env::var("SLURM_NTASKS").ok().and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n > 1) && set("SLURM_PROCID");
     std::env::var("TRESCA_FETI_MPI").is_ok_and(|v| v == "1") || several_tasks || ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK", "MPI_LOCALNRANKS", "ALPS_APP_PE"].iter().any(|v| set(v))
+}
+
+/// Whether this process is the first of its launch (or not launched by MPI at all), from the
+/// rank a launcher puts in the environment before MPI starts: Open MPI, MPICH/PMI, PMIx, Slurm.
+fn first_rank(var: impl Fn(&str) -> Option<String>) -> bool {
+    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID"].iter().find_map(|v| var(v)).and_then(|r| r.trim().parse::<u64>().ok()).is_none_or(|r| r == 0)
 }
 
 /// Open MPI's point-to-point layer for a run whose ranks all share one host, unless the user
@@ -617,7 +621,8 @@ fn print_summary(s: &pipeline::Summary) {
         // plain CG (TFETI without contact) solves A x = b: no KKT conditions beyond its residual
         let kkt = if r.contact.is_some() { format!(", KKT residual {:.1e}", sv.kkt_worst) } else { String::new() };
         let fp = if i.fixed_point_iterations > 0 { format!("{} Coulomb fixed-point steps, ", i.fixed_point_iterations) } else { String::new() };
-        let mut mixed = r.single_precision_error.map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
+        // announced only where a product was taken in single precision
+        let mut mixed = r.single_precision_error.filter(|_| i.inexact_products > 0).map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
         if let Some(n) = r.explicit_products {
             mixed += &format!(", explicit products (trailing blocks of {n} contact DOFs)");
         }
@@ -632,7 +637,12 @@ fn print_summary(s: &pipeline::Summary) {
     let unit = |which| tresca_feti::pipeline::report::UnitsReport::suffix(r.units.as_ref(), which);
     if let Some(c) = &r.contact {
         let f = c.total_force_on_slave;
-        let bound = if c.stick + c.slip > 0 || c.contact == 0 { format!("; {} on the slip bound", c.on_slip_bound) } else { String::new() };
+        let inside = c.slip.saturating_sub(c.on_slip_bound);
+        let bound = match (c.slip, inside) {
+            (0, _) => String::new(),
+            (_, 0) => "; every slipping pair on the slip bound".to_string(),
+            _ => format!("; of the slipping pairs {} on the slip bound, {inside} sliding within ε inside it", c.on_slip_bound),
+        };
         println!(
             "contact: {} pairs — {}{bound}; contact force on the slave body ({:.4e}, {:.4e}, {:.4e}){}",
             c.pairs,
@@ -666,7 +676,7 @@ fn print_summary(s: &pipeline::Summary) {
 
 #[cfg(test)]
 mod tests {
-    use super::single_host_pml;
+    use super::{first_rank, single_host_pml};
 
     fn env<'a>(pairs: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
         move |v| pairs.iter().find(|(k, _)| *k == v).map(|(_, x)| x.to_string())
@@ -679,5 +689,15 @@ mod tests {
         assert_eq!(single_host_pml(env(&[("OMPI_COMM_WORLD_SIZE", "4"), ("OMPI_COMM_WORLD_LOCAL_SIZE", "2")])), None);
         assert_eq!(single_host_pml(env(&[("OMPI_COMM_WORLD_SIZE", "2"), ("OMPI_COMM_WORLD_LOCAL_SIZE", "2"), ("OMPI_MCA_pml", "ucx")])), None);
         assert_eq!(single_host_pml(env(&[("PMI_SIZE", "2")])), None);
+    }
+
+    #[test]
+    fn the_first_rank_from_any_launcher() {
+        assert!(first_rank(env(&[])));
+        assert!(first_rank(env(&[("OMPI_COMM_WORLD_RANK", "0")])));
+        assert!(!first_rank(env(&[("OMPI_COMM_WORLD_RANK", "1")])));
+        assert!(!first_rank(env(&[("PMI_RANK", "3")])));
+        assert!(!first_rank(env(&[("SLURM_PROCID", "1")])));
+        assert!(first_rank(env(&[("PMIX_RANK", "0")])));
     }
 }

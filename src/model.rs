@@ -337,12 +337,6 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         contact.push((s, m));
     }
-    let contact_active = scene.contact.enabled && !contact.is_empty();
-    let mut pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
-    if let Some(c) = pairs.as_mut() {
-        let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
-        c.void_held_tangents(|v, k| held.contains(&(v, k)));
-    }
     let mut tie_faces = Vec::new();
     for (i, t) in scene.ties.iter().enumerate() {
         let s = face_index(&mesh, &faces, format!("tie[{i}].slave"), &t.slave)?;
@@ -351,6 +345,13 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             return Err(Error::scene(format!("tie[{i}]"), "slave and master faces belong to the same body"));
         }
         tie_faces.push((s, m));
+    }
+    overlapping_rows(&mesh, &tie_faces, &contact)?;
+    let contact_active = scene.contact.enabled && !contact.is_empty();
+    let mut pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
+    if let Some(c) = pairs.as_mut() {
+        let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
+        c.void_held_tangents(|v, k| held.contains(&(v, k)));
     }
     let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
 
@@ -456,6 +457,38 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, orders })
 }
 
+/// The slave rule in words, as `check` prints it and the docs state it ([`choose_slave`]).
+pub const SLAVE_RULE: &str = "the smaller E·h (Young's modulus × mean facet size)";
+
+/// Refuses ties and contact pairs whose rows would be the same constraint twice (B without full
+/// row rank, found only by the FETI scaling or the coarse factorization otherwise): a slave
+/// face in two ties, two ties or a tie and a contact pair between the same two faces, and a
+/// tie's slave face that is also a contact pair's slave. `ties`, `contact`: (slave, master)
+/// face indices in scene order.
+fn overlapping_rows(mesh: &Mesh, ties: &[(usize, usize)], contact: &[(usize, usize)]) -> Result<()> {
+    let name = |f: usize| &mesh.faces[f].name;
+    let same_faces = |a: (usize, usize), b: (usize, usize)| a == b || a == (b.1, b.0);
+    for (j, &(s, m)) in ties.iter().enumerate() {
+        for (i, &(si, mi)) in ties[..j].iter().enumerate() {
+            if same_faces((s, m), (si, mi)) {
+                return Err(Error::scene(format!("tie[{j}]"), format!("ties {} and {} again, as tie[{i}] does: each pair of faces is tied once; remove one", name(s), name(m))));
+            }
+            if s == si {
+                return Err(Error::scene(format!("tie[{j}].slave"), format!("{} is already the slave of tie[{i}]: a slave face is tied once (its nodes would carry two sets of tie rows)", name(s))));
+            }
+        }
+        for (i, &(cs, cm)) in contact.iter().enumerate() {
+            if same_faces((s, m), (cs, cm)) {
+                return Err(Error::scene(format!("tie[{j}]"), format!("ties {} and {}, which contact.pair[{i}] puts in contact: faces are either tied or in contact; remove the tie or the pair", name(s), name(m))));
+            }
+            if s == cs {
+                return Err(Error::scene(format!("tie[{j}].slave"), format!("{} is also the slave of contact.pair[{i}]: a slave face carries either tie rows or contact rows", name(s))));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// E·h of a face: its body's Young's modulus times its mean facet size √(area/facets).
 fn stiffness_size(mesh: &Mesh, e: &[f64], f: usize) -> (f64, f64) {
     let face = &mesh.faces[f];
@@ -505,7 +538,7 @@ fn choose_slave(mesh: &Mesh, e: &[f64], a: usize, b: usize, p: &crate::scene::Co
         (false, true) => "the finer side",
         (false, false) => "the first of `faces`",
     };
-    (s, m, format!("slave {} chosen: E·h {ks:.3e} (E {:.3e}, facets {hs:.3e}) against {km:.3e} (E {:.3e}, facets {hm:.3e}) of {}: {side}", fs.name, e[fs.body], e[fm.body], fm.name))
+    (s, m, format!("slave {} chosen by {SLAVE_RULE}: E·h {ks:.3e} (E {:.3e}, facets {hs:.3e}) against {km:.3e} (E {:.3e}, facets {hm:.3e}) of {}: {side}", fs.name, e[fs.body], e[fm.body], fm.name))
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound

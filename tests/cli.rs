@@ -540,9 +540,11 @@ fn failure_on_one_rank_or_no_convergence_stops_all_ranks() {
         assert!(!o.status.success(), "{case}");
         assert_eq!(e.matches("error: ").count(), 1, "{case}: {e}");
         assert!(e.contains(expect), "{case}: {e}");
-        for ext in ["h5", "xdmf", "json", "h5.tmp"] {
+        for ext in ["h5", "xdmf", "json"] {
             assert!(!out.with_extension(ext).exists(), "{case}: {ext} left behind");
         }
+        let temps: Vec<_> = std::fs::read_dir(out.parent().unwrap()).into_iter().flatten().flatten().filter(|e| e.file_name().to_string_lossy().ends_with(".tmp")).collect();
+        assert!(temps.is_empty(), "{case}: temporary files left behind");
     }
 }
 
@@ -589,10 +591,9 @@ fn table1_prints_the_table_and_writes_the_csv() {
     assert_eq!(lines[1].split(',').nth(4), Some("default"));
     assert_eq!(lines[2].split(',').nth(4), Some("paper"));
     let o = run(&["table1", "--sizes", "4", "--solvers", "newton"]);
-    assert!(!o.status.success());
+    assert_eq!(o.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("unknown solver \"newton\""), "{stderr}");
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("error: ") && stderr.contains("unknown solver \"newton\""), "{stderr}");
     // the preconditioned TSSN needs TFETI: table1 (monolithic) refuses it before any solve
     let o = run(&["table1", "--sizes", "4", "--solvers", "tssn:dirichlet"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -605,13 +606,101 @@ fn table1_prints_the_table_and_writes_the_csv() {
     assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: /proc/no-such-dir"));
 }
 
+/// Usage errors as clap formats them, exit code 2: the help with its first-run lines for a
+/// missing command, the error and the usage line otherwise; under mpirun from one rank only.
 #[test]
-fn bad_arguments_give_one_line() {
-    for args in [&["solve"][..], &["solve", "x.toml", "--bogus"], &["table1", "--sizes", "a"]] {
+fn usage_errors_as_clap_prints_them_once() {
+    let o = run(&[]);
+    let help = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{help}");
+    assert!(help.lines().count() > 10 && help.contains("A first run:") && help.contains("Commands:"), "{help}");
+    assert!(help.lines().all(|l| l.chars().count() <= 200), "readable lines: {help}");
+    for args in [&["solve"][..], &["solve", "x.toml", "--bogus"], &["table1", "--sizes", "a"], &["sovle", "x.toml"]] {
         let o = run(args);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
-        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        assert!(stderr.starts_with("error: ") && stderr.contains("try '--help'"), "{args:?}: {stderr}");
+        assert!((2..=8).contains(&stderr.trim().lines().count()), "{args:?}: {stderr}");
     }
+    // under a launcher: printed by the first rank only
+    for args in [&[][..], &["solve"]] {
+        let o = mpirun(2, args);
+        let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(!o.status.success(), "{all}");
+        assert_eq!(all.matches("\nUsage: tresca-feti").count(), 1, "{args:?}: {all}");
+    }
+}
+
+/// Every printed length, area, force and stress carries the scene's unit names: the step lines
+/// of a load path, the summary, and `check`'s faces, tractions, load and gaps.
+#[test]
+fn units_where_they_are_printed() {
+    let seed = root().join("run/seed.toml");
+    let units = ["--set", "units.length=\"mm\"", "--set", "units.force=\"N\"", "--set", "mesh.n=4", "--set", "load.steps=2"];
+    let dir = tmpdir("units");
+    let out = dir.join("u.h5");
+    let mut args = vec!["solve", seed.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(&units);
+    let o = run(&args);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let steps: Vec<&str> = text.lines().filter(|l| l.contains("] load step ")).collect();
+    assert_eq!(steps.len(), 2, "{text}");
+    for l in steps {
+        assert!(l.contains(") N, max |u| ") && l.contains(" mm, "), "{l}");
+    }
+    assert!(text.lines().any(|l| l.starts_with("contact:") && l.ends_with(" N")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("max |u| = ") && l.contains(" mm (body") && l.ends_with(" MPa")), "{text}");
+    let mut args = vec!["check", seed.to_str().unwrap()];
+    args.extend_from_slice(&units);
+    let o = run(&args);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let faces: Vec<&str> = text.lines().filter(|l| l.contains(" nodes, area ")).collect();
+    assert!(!faces.is_empty() && faces.iter().all(|l| l.ends_with(" mm²")), "{text}");
+    let tractions: Vec<&str> = text.lines().filter(|l| l.starts_with("traction[")).collect();
+    assert!(!tractions.is_empty(), "{text}");
+    for l in tractions {
+        assert!(l.contains(") MPa over area ") && l.contains(" mm², resultant (") && l.contains(") N at factor 1"), "{l}");
+    }
+    assert!(text.lines().any(|l| l.starts_with("total applied load: (") && l.ends_with(") N")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("contact: m = ") && l.contains(" mm², gaps in [") && l.contains("] mm, ")), "{text}");
+}
+
+/// Counters that mean what they say: "on the slip bound" counts slipping (closed) pairs only,
+/// never more than slip, and the summary says what the rest of the slipping pairs do; a run
+/// that took no product in single precision does not announce mixed precision.
+#[test]
+fn counters_mean_what_they_say() {
+    let dir = tmpdir("counters");
+    // the seed at N = 4: half its pairs open, their tangential multipliers on the Tresca bound
+    let out = dir.join("seed.h5");
+    let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=4", "-q", "--out", out.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("seed.json")).unwrap()).unwrap();
+    let c = &report["contact"];
+    let (open, slip, bound) = (c["open"].as_u64().unwrap(), c["slip"].as_u64().unwrap(), c["on_slip_bound"].as_u64().unwrap());
+    assert!(open > 0 && slip > 0 && bound <= slip, "{c}");
+    let line = text.lines().find(|l| l.starts_with("contact: ")).unwrap();
+    assert!(line.contains(&format!("{slip} slip; ")), "{line}");
+    assert!(line.contains("every slipping pair on the slip bound") || line.contains(&format!("of the slipping pairs {bound} on the slip bound, {} sliding within ε inside it", slip - bound)), "{line}");
+    // a body held by contact alone, solved by SSN-BiCGSTAB on exact products only
+    let out = dir.join("floating.h5");
+    let o = run(&["solve", root().join("run/validation/floating_block.toml").to_str().unwrap(), "-q", "--out", out.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("floating.json")).unwrap()).unwrap();
+    assert_eq!(report["solver"]["inexact_products"].as_u64(), Some(0), "{text}");
+    let solver = text.lines().find(|l| l.starts_with("solver ")).unwrap();
+    assert!(!solver.contains("mixed precision"), "{solver}");
+    // and where products were single precision, it is said with their count
+    let out = dir.join("tfeti.h5");
+    let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=8", "--set", "decomposition.subdomains=2", "-q", "--out", out.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("tfeti.json")).unwrap()).unwrap();
+    let n = report["solver"]["inexact_products"].as_u64().unwrap();
+    let solver = text.lines().find(|l| l.starts_with("solver ")).unwrap();
+    assert_eq!(n > 0, solver.contains(&format!("mixed precision ({n} products in single precision")), "{solver}");
 }

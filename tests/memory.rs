@@ -75,6 +75,18 @@ fn max_memory_sets_the_limit_and_names_itself() {
     let o = Command::new(BIN).args(["solve", &seed(), "--max-memory", "lots"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not a size"));
+    let o = Command::new(BIN).args(["solve", &seed(), "--max-memory", "8GBBBB"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "8GBBBB is no size");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--max-memory"));
+    // a variable that is no size: one line naming it, for solve and check, no result file
+    for bad in ["lots", "0", "-1", "8GBBBB"] {
+        let o = Command::new(BIN).args(["solve", &seed(), "--set", "mesh.n=4", "-q", "--out", out.to_str().unwrap()]).env("TRESCA_FETI_MAX_MEMORY", bad).output().unwrap();
+        let line = one_line_failure(bad, &o, &out);
+        assert!(line.contains("TRESCA_FETI_MAX_MEMORY") && line.contains(bad), "{line}");
+        let o = Command::new(BIN).args(["check", &seed(), "--set", "mesh.n=4"]).env("TRESCA_FETI_MAX_MEMORY", bad).output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "check with TRESCA_FETI_MAX_MEMORY={bad}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("TRESCA_FETI_MAX_MEMORY"));
+    }
     // enough memory: the run goes through
     let o = Command::new(BIN).args(["solve", &seed(), "--set", "mesh.n=4", "-q", "--max-memory", "4G", "--out", out.to_str().unwrap()]).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -412,7 +412,7 @@ friction = {{ type = "coulomb", mu = 0.3 }}
     std::fs::write(&path, &scene).unwrap();
     let o = common::run(&["check", path.to_str().unwrap()]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("contact pair 0: slave block.block_top") && out.contains("slave block.block_top chosen: E·h") && out.contains("the softer side"), "{out}");
+    assert!(out.contains("contact pair 0: slave block.block_top") && out.contains("slave block.block_top chosen by the smaller E·h (Young's modulus × mean facet size): E·h") && out.contains("the softer side"), "{out}");
     let r = solve(&path, &[], &dir.join("r.h5"));
     let c = r.report.contact.as_ref().unwrap();
     let n_a = r.report.solver.as_ref().unwrap().info.n_a;
@@ -436,4 +436,32 @@ friction = {{ type = "coulomb", mu = 0.3 }}
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.lines().count() == 1 && err.contains(key), "{set}: {err}");
     }
+}
+
+/// Trust round four, 6: ties whose rows would repeat a constraint are refused in the model
+/// build with one line naming the keys (before, the FETI scaling's "BBᵀ is singular"): a tie
+/// on a contact pair's faces, a duplicated tie (also with the roles swapped), a slave face in
+/// two ties, a tie's slave that is a contact slave.
+#[test]
+fn ties_that_repeat_a_constraint_are_refused_naming_the_keys() {
+    let dir = tmpdir("tie-repeat");
+    let tie = |s: &str, m: &str| format!("[[tie]]\nslave = \"{s}\"\nmaster = \"{m}\"\n");
+    let cases = [
+        (format!("{CONTACT}{}", tie("upper.zmin", "lower.zmax")), "tie[0]", "contact.pair[0]"),
+        (format!("{CONTACT}{}", tie("lower.zmax", "upper.zmin")), "tie[0]", "contact.pair[0]"),
+        (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("upper.zmin", "lower.zmax")), "tie[1]", "tie[0]"),
+        (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("lower.zmax", "upper.zmin")), "tie[1]", "tie[0]"),
+        (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("upper.zmin", "lower.xmax")), "tie[1].slave", "tie[0]"),
+        (format!("{}{}", "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.xmax\"\n", tie("upper.zmin", "lower.zmax")), "tie[0].slave", "contact.pair[0]"),
+    ];
+    for (interface, key, other) in cases {
+        let scene = write(&dir, &stack([5, 4, 4], "hex8", &interface));
+        let o = common::run(&["check", scene.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{interface}: {err}");
+        assert!(err.lines().count() == 1 && err.starts_with(&format!("error: {key}:")) && err.contains(other), "{interface}: {err}");
+    }
+    // one tie on its own still checks
+    let scene = write(&dir, &stack([5, 4, 4], "hex8", &tie("upper.zmin", "lower.zmax")));
+    assert!(common::run(&["check", scene.to_str().unwrap()]).status.success());
 }

@@ -1,7 +1,9 @@
 //! Result paths that must not cost the user data or hang the run: a result naming an input or
 //! another result is refused before any work; a result path that is a directory or FIFO is
 //! refused; a full disk under `mpirun -n 2` ends every rank with ENOSPC's text; a result set
-//! appears whole or not at all; SIGTERM in the output phase leaves no `*.tmp` behind.
+//! appears whole or not at all; SIGTERM in the output phase leaves no `*.tmp` behind, and
+//! after the commit leaves the whole set and says so; two runs onto one output leave one
+//! run's set.
 
 mod common;
 
@@ -215,27 +217,25 @@ fn full_disk(name: &str, size: &str, n: usize, checks: &[&str], rank_counts: &[u
     }
 }
 
-/// Defect 4: SIGTERM while the run is in the output phase (held there by
-/// `TRESCA_FETI_PAUSE=output`, the set under its temporary names) removes the temporary
-/// files: exit ≠ 0, one line, no `*.tmp` and no result file.
-#[test]
-fn sigterm_in_the_output_phase_leaves_no_temporary_file() {
-    let dir = tmpdir("signal");
+/// A run held at `TRESCA_FETI_PAUSE=<pause>` in `dir/o`, on 1 rank or under `mpirun -n 2`,
+/// signalled with SIGTERM once `ready` holds for the folder's file names; its output.
+fn signalled_at(dir: &Path, pause: &str, ranks: usize, ready: impl Fn(&[String]) -> bool) -> Output {
     let scene = root().join("run/seed.toml");
     let out = dir.join("o").join("r.h5");
-    let mut child = Command::new(BIN)
-        .args(["solve", scene.to_str().unwrap(), "--set", "mesh.n=3", "--out", out.to_str().unwrap(), "-q"])
-        .env("TRESCA_FETI_PAUSE", "output")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=3", "--out", out.to_str().unwrap(), "-q"];
+    let mut cmd = if ranks == 1 {
+        let mut c = Command::new(BIN);
+        c.args(args);
+        c
+    } else {
+        mpirun_cmd(ranks, &args)
+    };
+    let mut child = cmd.env("TRESCA_FETI_PAUSE", pause).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     let t0 = Instant::now();
-    let tmp = dir.join("o").join("r.h5.tmp");
-    while !tmp.exists() && t0.elapsed() < Duration::from_secs(50) {
+    while !ready(&names(&dir.join("o"))) && t0.elapsed() < Duration::from_secs(50) {
         std::thread::sleep(Duration::from_millis(50));
     }
-    assert!(tmp.exists(), "the run never wrote {}", tmp.display());
+    assert!(ready(&names(&dir.join("o"))), "the run never got there: {:?}", names(&dir.join("o")));
     std::thread::sleep(Duration::from_millis(300));
     assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
     let deadline = Instant::now() + Duration::from_secs(20);
@@ -243,11 +243,78 @@ fn sigterm_in_the_output_phase_leaves_no_temporary_file() {
         assert!(Instant::now() < deadline, "still running 20 s after SIGTERM");
         std::thread::sleep(Duration::from_millis(50));
     }
-    let o = child.wait_with_output().unwrap();
+    child.wait_with_output().unwrap()
+}
+
+/// Defect 4: SIGTERM while the run is in the output phase (held there by
+/// `TRESCA_FETI_PAUSE=output`, the set under its temporary names) removes the temporary
+/// files: exit ≠ 0, one line, no `*.tmp` and no result file.
+#[test]
+fn sigterm_in_the_output_phase_leaves_no_temporary_file() {
+    let dir = tmpdir("signal");
+    let o = signalled_at(&dir, "output", 1, |names| names.iter().any(|n| n.starts_with("r.h5.") && n.ends_with(".tmp")));
     assert!(!o.status.success());
     let left = names(&dir.join("o"));
     assert!(left.is_empty(), "left behind: {left:?}");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("SIGTERM"), "{stderr}");
+    assert!(stderr.contains("SIGTERM") && stderr.contains("no result written"), "{stderr}");
+}
+
+/// Trust round four, 7: SIGTERM once the set is renamed into place (held by
+/// `TRESCA_FETI_PAUSE=committed`, on 1 and 2 ranks): the complete set stays, no temporary file,
+/// and the one line says the results were written, not that files were removed.
+#[test]
+fn sigterm_after_the_commit_says_the_set_is_complete() {
+    for ranks in [1, 2] {
+        let dir = tmpdir(&format!("signal-committed-{ranks}"));
+        let o = signalled_at(&dir, "committed", ranks, |names| names.iter().any(|n| n == "r.json"));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{stderr}");
+        assert_eq!(names(&dir.join("o")), ["r.h5", "r.json", "r.xdmf"], "{ranks} rank(s)");
+        let ours: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(ours.len(), 1, "{ranks} rank(s): {stderr}");
+        assert!(ours[0].contains("SIGTERM") && ours[0].contains("after the results were written (complete)") && ours[0].contains("r.h5"), "{}", ours[0]);
+        assert!(!stderr.contains("removed"), "{stderr}");
+        common::fields(&dir.join("o").join("r.h5"));
+    }
+}
+
+/// Trust round four, 1: two runs at once onto the same `--out` (1 and 2 ranks, 10 pairs), with
+/// different loads: both succeed, and the set left holds the h5, XDMF and JSON of one run —
+/// the JSON's max |u| is the h5 file's — with no temporary file beside it.
+#[test]
+fn two_runs_onto_one_output_leave_one_runs_set() {
+    let dir = tmpdir("concurrent");
+    let scene = root().join("run/seed.toml");
+    let out = dir.join("r.h5");
+    for pair in 0..10 {
+        let ranks = if pair % 2 == 0 { 1 } else { 2 };
+        let spawn = |load: &str| {
+            let p = format!("traction.0.p=[0.0, 0.0, {load}]");
+            let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=4", "--set", &p, "--out", out.to_str().unwrap(), "-q"];
+            let mut cmd = if ranks == 1 {
+                let mut c = Command::new(BIN);
+                c.args(args);
+                c
+            } else {
+                mpirun_cmd(ranks, &args)
+            };
+            cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap()
+        };
+        let (a, b) = (spawn("-1.0"), spawn("-2.0"));
+        for (name, child) in [("a", a), ("b", b)] {
+            let o = child.wait_with_output().unwrap();
+            assert!(o.status.success(), "pair {pair} run {name} ({ranks} rank(s)): {}", String::from_utf8_lossy(&o.stderr));
+        }
+        assert_eq!(names(&dir), ["r.h5", "r.json", "r.xdmf"], "pair {pair}");
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+        let json_umax = report["results"]["max_displacement"].as_f64().unwrap();
+        let data = common::fields(&out);
+        let u = common::f64_field(&data, "displacement");
+        let h5_umax = u.chunks(3).map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
+        assert!((json_umax - h5_umax).abs() <= 1e-12 * h5_umax, "pair {pair}: the JSON (max |u| {json_umax:e}) and the h5 ({h5_umax:e}) come from different runs");
+        let xdmf = std::fs::read_to_string(dir.join("r.xdmf")).unwrap();
+        assert!(xdmf.contains("r.h5:"), "pair {pair}: {xdmf}");
+    }
 }

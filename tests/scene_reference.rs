@@ -76,3 +76,24 @@ fn the_reference_examples_parse() {
         }
     }
 }
+
+/// One piece of slave advice everywhere: the rule's own words (`model::SLAVE_RULE`, which
+/// `check` prints with its choice) in the tutorial and at both keys of the reference, and no
+/// other advice beside it.
+#[test]
+fn the_docs_give_the_slave_rule() {
+    let rule = tresca_feti::model::SLAVE_RULE;
+    let flat = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+    let tutorial = flat(&std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/tutorial.md")).unwrap());
+    assert!(tutorial.contains(rule), "docs/tutorial.md does not state the slave rule \"{rule}\"");
+    let reference = reference();
+    for key in ["contact.pair.slave", "contact.pair.faces"] {
+        let (_, row) = rows(&reference).into_iter().find(|(k, _)| k == key).unwrap_or_else(|| panic!("no row for {key}"));
+        assert!(row.contains(rule), "{key}: {row}");
+    }
+    for doc in [&tutorial, &flat(&reference)] {
+        for other in ["take the finer side", "take the softer side", "take the stiffer side", "take the coarser side"] {
+            assert!(!doc.to_lowercase().contains(other), "advice beside the rule: {other}");
+        }
+    }
+}

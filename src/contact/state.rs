@@ -30,7 +30,8 @@ pub struct ContactState {
     pub gap: Vec<f64>,
     /// Relative tangential displacement of the slave w.r.t. the master node, global vector.
     pub slip: Vec<[f64; 3]>,
-    /// Pairs with ‖λ̄τ,ᵢ‖ on the slip bound (open ones included: with Tresca the bound acts there too).
+    /// Closed pairs with ‖λ̄τ,ᵢ‖ on the slip bound: the slipping pairs but those an ε-hair
+    /// inside it that slide (see [`contact_state`]).
     pub on_slip_bound: usize,
 }
 
@@ -74,12 +75,12 @@ pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64],
             let out = [lt[0] * (1.0 + tol), lt[1] * (1.0 + tol)];
             set.tangent[i].is_outside(&out) && lt != [0.0, 0.0]
         };
-        s.on_slip_bound += usize::from(on_bound);
         let sliding = set.layout.friction && lt != [0.0, 0.0] && {
             let t = set.tangent[i].max_step(&lt, &[-lt[0], -lt[1]]);
             t / (1.0 + t) < rt[0].hypot(rt[1]) / bnorm.max(f64::MIN_POSITIVE)
         };
         let closed = lambda[i] > tol * lmax;
+        s.on_slip_bound += usize::from(closed && on_bound && contact.has_friction_at(i));
         s.status.push(if !closed {
             OPEN
         } else if !contact.has_friction_at(i) {

@@ -12,6 +12,10 @@ pub fn metis_exclusive<T>(f: impl FnOnce() -> T) -> T {
     f()
 }
 
+/// What a [`Error::Memory`] of METIS names until the pipeline names the mesh
+/// ([`crate::pipeline::memory::name_the_mesh`]).
+pub const METIS_MEMORY: &str = "the METIS ordering";
+
 /// Nested-dissection permutation of an undirected graph given in CSR form without self loops.
 /// Returns `perm` with `perm[new] = old`.
 pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>> {
@@ -42,6 +46,9 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
             iperm.as_mut_ptr(),
         )
     });
+    if status == metis_sys::rstatus_et_METIS_ERROR_MEMORY as i32 {
+        return Err(Error::memory(METIS_MEMORY, format!("METIS ran out of memory ordering a graph of {n} nodes and {} edges", adjncy.len() / 2)));
+    }
     if status != metis_sys::rstatus_et_METIS_OK as i32 {
         return Err(Error::numerical("METIS ordering", format!("METIS_NodeND failed with status {status}")));
     }

@@ -51,15 +51,27 @@ pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
 }
 
 /// The whole file, its buffer reserved first: a file larger than the memory left is an error,
-/// not an abort.
+/// not an abort. A pipe (`/dev/stdin`) is read once, as it arrives, each chunk's memory
+/// reserved before it is read.
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     use std::io::Read;
     let file = path.display().to_string();
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(&file, e))?;
-    let len = f.metadata().map(|m| m.len() as usize).unwrap_or(0);
-    let mut bytes = super::try_vec::<u8>("the file's bytes", len.saturating_add(1))?;
-    f.read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
-    Ok(bytes)
+    let meta = f.metadata().map_err(|e| Error::io(&file, e))?;
+    if meta.is_file() {
+        let mut bytes = super::try_vec::<u8>("the file's bytes", (meta.len() as usize).saturating_add(1))?;
+        f.read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
+        return Ok(bytes);
+    }
+    const CHUNK: usize = 1 << 22;
+    let mut bytes: Vec<u8> = Vec::new();
+    loop {
+        bytes.try_reserve(CHUNK).map_err(|_| Error::memory(&file, format!("the piped mesh does not fit in memory after {} read", crate::error::human_bytes(bytes.len() as f64))))?;
+        let n = f.by_ref().take(CHUNK as u64).read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
+        if n == 0 {
+            return Ok(bytes);
+        }
+    }
 }
 
 /// Nodes and elements as the `$Nodes` and `$Elements` section headers give them (each at
@@ -69,7 +81,9 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub fn header_counts(path: &Path) -> Option<(u64, u64, u64)> {
     use std::io::{Seek, SeekFrom};
     let mut f = std::fs::File::open(path).ok()?;
-    let size = f.metadata().ok()?.len();
+    // a pipe can be read once only: the reader takes it, its estimate is what arrives
+    let meta = f.metadata().ok().filter(std::fs::Metadata::is_file)?;
+    let size = meta.len();
     let mut head = vec![0u8; 512];
     let n = read_up_to(&mut f, &mut head);
     let encoding = check_header(&head[..n]).ok()?;

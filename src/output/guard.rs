@@ -1,6 +1,6 @@
 //! Which paths a run may write. Owns the check, made before anything is computed, that no
 //! result path — the HDF5 file, its XDMF and JSON sidecars, the exports (`output.export_dual`,
-//! `output.export_fclib`), and the temporary `<name>.tmp` each is written under — is an input
+//! `output.export_fclib`) — is an input
 //! of the run (the scene file, a mesh a body reads) or another result, and that each result
 //! path is new or a regular file (not a directory, FIFO, device or socket).
 //!
@@ -11,7 +11,7 @@
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::{Component, Path, PathBuf};
 
-use super::{sibling, tmp};
+use super::sibling;
 use crate::error::{Error, Result};
 use crate::scene::LoadedScene;
 
@@ -78,35 +78,14 @@ pub fn check_paths(inputs: &[Named], results: &[Named]) -> Result<()> {
     let ids: Vec<Identity> = results.iter().map(|r| Identity::of(&r.path)).collect();
     for input in inputs {
         let id = Identity::of(&input.path);
-        for (r, rid) in results.iter().zip(&ids) {
-            let temp = tmp(&r.path);
-            let hit = if id.same(rid) {
-                Some(format!("{} {}", r.what, r.path.display()))
-            } else if id.same(&Identity::of(&temp)) {
-                Some(format!("the temporary file {} of {} {}", temp.display(), r.what, r.path.display()))
-            } else {
-                None
-            };
-            if let Some(hit) = hit {
-                return Err(Error::scene(&r.key, format!("{hit} would overwrite {} {}; choose another path", input.what, input.path.display())));
-            }
+        if let Some(r) = results.iter().zip(&ids).find_map(|(r, rid)| id.same(rid).then_some(r)) {
+            return Err(Error::scene(&r.key, format!("{} {} would overwrite {} {}; choose another path", r.what, r.path.display(), input.what, input.path.display())));
         }
     }
-    // a result must not be another result, nor the temporary file another is written under
-    let temps: Vec<Identity> = results.iter().map(|r| Identity::of(&tmp(&r.path))).collect();
+    // a result must not be another result
     for (j, b) in results.iter().enumerate() {
-        let clash = (0..j).find_map(|i| {
-            let temp = ids[i].same(&temps[j]) || temps[i].same(&ids[j]);
-            (ids[i].same(&ids[j]) || temp).then_some((&results[i], temp))
-        });
-        if let Some((a, temp)) = clash {
-            let (bp, ap) = (b.path.display(), a.path.display());
-            let msg = if temp {
-                format!("{} {bp} and {} {ap} ({}) clash: one is the other's temporary (.tmp) file; give each result its own path", b.what, a.what, a.key)
-            } else {
-                format!("{} {bp} is also {} {ap} ({}); give each result its own path", b.what, a.what, a.key)
-            };
-            return Err(Error::scene(&b.key, msg));
+        if let Some(a) = (0..j).find(|&i| ids[i].same(&ids[j])).map(|i| &results[i]) {
+            return Err(Error::scene(&b.key, format!("{} {} is also {} {} ({}); give each result its own path", b.what, b.path.display(), a.what, a.path.display(), a.key)));
         }
     }
     Ok(())

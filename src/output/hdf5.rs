@@ -180,10 +180,10 @@ impl Drop for Reserve {
 }
 
 /// Writes named f64 arrays (each with its shape) to a new serial HDF5 file, under
-/// `<path>.tmp` renamed when complete: a failure leaves no file.
+/// a temporary name of its own renamed when complete: a failure leaves no file.
 pub fn write_arrays(path: &Path, arrays: &[(&str, Vec<usize>, &[f64])]) -> Result<()> {
     let shown = path.display().to_string();
-    let tmp = super::tmp(path);
+    let tmp = super::staging(path, &super::tmpfiles::token());
     super::tmpfiles::track(&tmp);
     let result = (|| -> std::result::Result<(), ::hdf5::Error> {
         let file = ::hdf5::File::create(&tmp)?;

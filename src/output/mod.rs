@@ -2,10 +2,12 @@
 //!
 //! Owns the [`OutputData`] description (mesh + named node/cell fields + string attributes, and
 //! the [`Step`]s of a load path) that the pipeline fills, and the writers. A result set is
-//! written under temporary names ([`stage`]: `<name>.tmp`, tracked by [`tmpfiles`] for
-//! signals), read back and completed there, and renamed into place only when all of it
-//! succeeded ([`Staged::commit`]); a rename that fails takes back the ones before it, so a
-//! failed run leaves neither a result file nor a temporary one behind.
+//! written under temporary names of its own ([`stage`]: `<name>.<pid>-<clock>.tmp`, tracked by
+//! [`tmpfiles`] for signals), read back and completed there, and renamed into place only when
+//! all of it succeeded ([`Staged::commit`]), under an exclusive lock on the results' folder,
+//! so that of two runs writing the same set the later commit replaces the whole earlier set; a
+//! rename that fails takes back the ones before it, so a failed run leaves neither a result
+//! file nor a temporary one behind.
 
 pub mod guard;
 pub mod hdf5;
@@ -134,13 +136,14 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
+    let tmp = staging(path, &tmpfiles::token());
     tmpfiles::track(&tmp);
     let written = std::fs::write(&tmp, bytes).and_then(|()| {
-        let _held = tmpfiles::hold();
-        std::fs::rename(&tmp, path)
+        let mut held = tmpfiles::hold();
+        let _lock = FolderLock::take(path)?;
+        std::fs::rename(&tmp, path)?;
+        held.untrack(&tmp);
+        Ok(())
     });
     if written.is_err() {
         let _ = std::fs::remove_file(&tmp);
@@ -154,10 +157,43 @@ pub fn sibling(h5: &Path, ext: &str) -> PathBuf {
     h5.with_extension(ext)
 }
 
-fn tmp(path: &Path) -> PathBuf {
+/// `<path>.<token>.tmp`: where `path` is written before its rename.
+fn staging(path: &Path, token: &str) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
-    s.push(".tmp");
+    s.push(format!(".{token}.tmp"));
     PathBuf::from(s)
+}
+
+/// The token of one run's temporary names, the same on every rank (rank 0's [`tmpfiles::token`]).
+fn run_token<C: Comm>(comm: &C) -> String {
+    let mut buf = if comm.is_root() { tmpfiles::token().into_bytes() } else { Vec::new() };
+    comm.broadcast_bytes(0, &mut buf);
+    String::from_utf8_lossy(&buf).into_owned()
+}
+
+/// An exclusive `flock` on the folder of a result, held while a set is renamed into place:
+/// runs writing into one folder commit one after the other. Released when dropped (closed).
+struct FolderLock {
+    /// The open folder; closing it releases the lock.
+    _folder: std::fs::File,
+}
+
+impl FolderLock {
+    fn take(target: &Path) -> std::io::Result<FolderLock> {
+        use std::os::fd::AsRawFd;
+        let dir = target.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let f = std::fs::File::open(dir)?;
+        loop {
+            // SAFETY: flock on a descriptor this function owns
+            if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } == 0 {
+                return Ok(FolderLock { _folder: f });
+            }
+            let e = std::io::Error::last_os_error();
+            if e.kind() != std::io::ErrorKind::Interrupted {
+                return Err(e);
+            }
+        }
+    }
 }
 
 /// A result set under its temporary names, until [`Staged::commit`] renames it into place;
@@ -194,6 +230,12 @@ impl Staged {
     pub fn commit<C: Comm>(mut self, comm: &C) -> Result<Vec<PathBuf>> {
         let renamed = comm.agree(if self.root { rename_all(&self.temps, &self.targets) } else { Ok(()) });
         self.committed = renamed.is_ok();
+        if self.committed {
+            // every rank's list: a signal now removes nothing of the set
+            for t in &self.temps {
+                tmpfiles::untrack(t);
+            }
+        }
         renamed.map(|()| self.targets.clone())
     }
 }
@@ -212,10 +254,20 @@ impl Drop for Staged {
     }
 }
 
-/// Renames each of `temps` to its `targets`, under [`tmpfiles::hold`]; on a failure removes
-/// the targets renamed so far and the temporary files left.
+/// Renames each of `temps` to its `targets`, under [`tmpfiles::hold`] and the [`FolderLock`] of
+/// the first target; on a failure removes the targets renamed so far and the temporary files
+/// left. Once all are renamed, the targets are the signal thread's written set.
 fn rename_all(temps: &[PathBuf], targets: &[PathBuf]) -> Result<()> {
-    let _held = tmpfiles::hold();
+    let mut held = tmpfiles::hold();
+    let _lock = match targets.first().map(|p| FolderLock::take(p).map_err(|e| Error::io(p.display().to_string(), e))) {
+        Some(Err(e)) => {
+            for left in temps {
+                let _ = std::fs::remove_file(left);
+            }
+            return Err(e);
+        }
+        lock => lock,
+    };
     for (i, (t, p)) in temps.iter().zip(targets).enumerate() {
         if let Err(e) = std::fs::rename(t, p) {
             for done in &targets[..i] {
@@ -227,6 +279,10 @@ fn rename_all(temps: &[PathBuf], targets: &[PathBuf]) -> Result<()> {
             return Err(Error::io(p.display().to_string(), e));
         }
     }
+    for t in temps {
+        held.untrack(t);
+    }
+    held.written.extend(targets.iter().cloned());
     Ok(())
 }
 
@@ -254,7 +310,8 @@ pub fn stage<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report
         targets.push(sibling(h5, "json"));
         targets.len() - 1
     });
-    let temps: Vec<PathBuf> = targets.iter().map(|p| tmp(p)).collect();
+    let token = run_token(comm);
+    let temps: Vec<PathBuf> = targets.iter().map(|p| staging(p, &token)).collect();
     for t in &temps {
         tmpfiles::track(t);
     }
@@ -270,7 +327,7 @@ pub fn stage<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report
 /// the report once the `output` phase it times is over.
 pub fn rewrite_report<C: Comm>(comm: &C, h5: &Path, report: &serde_json::Value) -> Result<()> {
     comm.agree(if comm.is_root() {
-        let (path, temp) = (sibling(h5, "json"), tmp(&sibling(h5, "json")));
+        let (path, temp) = (sibling(h5, "json"), staging(&sibling(h5, "json"), &tmpfiles::token()));
         tmpfiles::track(&temp);
         let r = write_json(&temp, &path, report).and_then(|()| rename_all(std::slice::from_ref(&temp), std::slice::from_ref(&path)));
         let _ = std::fs::remove_file(&temp);

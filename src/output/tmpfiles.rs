@@ -1,54 +1,80 @@
-//! The run's temporary result files (`<name>.tmp`), and what happens to them on SIGINT or
+//! The run's temporary result files (`<name>.<token>.tmp`), and what happens to them on SIGINT or
 //! SIGTERM. Owns the process-wide list of the temporary files that exist (writers [`track`]
 //! one before creating it and [`untrack`] it once renamed or removed) and the signal thread
 //! ([`remove_on_signal`]): signal-hook's handler only wakes that thread (async-signal-safe);
 //! the thread, an ordinary one, removes every tracked file, says so in one line (rank 0, where
-//! there was one) and ends the process with 128 + the signal's number. Renames into place run
-//! under [`hold`], so a signal never interleaves with them.
+//! there was one, or that the set was already complete) and ends the process with 128 + the
+//! signal's number. Renames into place run under [`hold`], so a signal never interleaves with
+//! them. Temporary names carry a per-run [`token`].
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-static TRACKED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// The run's files as a signal finds them.
+pub struct Files {
+    /// Temporary files that exist (or are being written).
+    pub temps: Vec<PathBuf>,
+    /// Result files renamed into place: the set is complete.
+    pub written: Vec<PathBuf>,
+}
+
+static TRACKED: Mutex<Files> = Mutex::new(Files { temps: Vec::new(), written: Vec::new() });
 
 /// The list, even if a thread panicked while holding it (a list of paths stays valid).
-fn list() -> MutexGuard<'static, Vec<PathBuf>> {
+fn list() -> MutexGuard<'static, Files> {
     TRACKED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Records `path` as a temporary file to remove if a signal ends the run.
 pub fn track(path: &Path) {
-    list().push(path.to_path_buf());
+    list().temps.push(path.to_path_buf());
 }
 
 /// Forgets `path` (renamed into place, or removed).
 pub fn untrack(path: &Path) {
-    let mut l = list();
-    if let Some(i) = l.iter().position(|p| p == path) {
-        l.swap_remove(i);
+    list().untrack(path);
+}
+
+impl Files {
+    /// Forgets temporary file `path` (for a caller holding the list, [`hold`]).
+    pub fn untrack(&mut self, path: &Path) {
+        if let Some(i) = self.temps.iter().position(|p| p == path) {
+            self.temps.swap_remove(i);
+        }
     }
 }
 
 /// Holds the list for the caller's renames: the signal thread waits until they are done.
-pub fn hold() -> MutexGuard<'static, Vec<PathBuf>> {
+pub fn hold() -> MutexGuard<'static, Files> {
     list()
 }
 
+/// A unique suffix for one run's temporary files: this process's id and the clock, so that
+/// runs writing the same results at once never share a temporary name.
+pub fn token() -> String {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    format!("{}-{:x}", std::process::id(), nanos as u64)
+}
+
 /// Starts the thread that, on SIGINT or SIGTERM, removes the tracked files and ends the
-/// process (exit status 128 + signal number); `loud`: print the one line (rank 0 only).
+/// process (exit status 128 + signal number); `loud`: print the one line (rank 0 only): the
+/// temporary files removed (no result written), or, once the set was renamed into place, that
+/// it is complete.
 pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
         if let Some(sig) = signals.forever().next() {
             let files = list();
-            for f in files.iter() {
-                let _ = std::fs::remove_file(f);
-            }
-            // nothing removed: a rank that mpirun ends after another failed (its error is said)
-            if loud && !files.is_empty() {
-                let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
-                eprintln!("error: interrupted by {name}; removed {} temporary file(s)", files.len());
+            let removed = files.temps.iter().filter(|f| std::fs::remove_file(f).is_ok()).count();
+            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            // nothing removed nor written: a rank that mpirun ends after another failed (its
+            // error is said)
+            if loud && removed > 0 {
+                eprintln!("error: interrupted by {name}; removed {removed} temporary file(s), no result written");
+            } else if loud && !files.written.is_empty() {
+                let names: Vec<String> = files.written.iter().map(|p| p.display().to_string()).collect();
+                eprintln!("error: interrupted by {name} after the results were written (complete): {}", names.join(", "));
             }
             // SAFETY: _exit ends the process at once, holding the list so no rename follows;
             // neither MPI nor HDF5 (mid-write on the main thread) is finalized or flushed.

@@ -350,22 +350,35 @@ pub fn set_limit(bytes: u64) {
     let _ = LIMIT.set(bytes as f64);
 }
 
-/// `8G`, `500M`, `64k`, `1.5GB`, `4GiB` or plain bytes (k/M/G/T: powers of 1024).
+/// `8G`, `500M`, `64k`, `1.5GB`, `4GiB` or plain bytes (k/M/G/T: powers of 1024); strict:
+/// one number, then at most one unit with an optional `B` or `iB`, nothing else.
 pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
     let t = s.trim();
     let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
     let (num, unit) = t.split_at(split);
-    let v: f64 = num.parse().map_err(|_| format!("\"{s}\" is not a size (e.g. 8G, 500M, 1048576)"))?;
-    let unit = unit.trim().to_ascii_lowercase();
-    let unit = unit.trim_end_matches("ib").trim_end_matches('b');
-    let scale = match unit {
+    let not_a_size = || format!("\"{s}\" is not a size (e.g. 8G, 500M, 4GiB, 1048576)");
+    if num.is_empty() || !num.starts_with(|c: char| c.is_ascii_digit()) {
+        return Err(not_a_size());
+    }
+    let v: f64 = num.parse().map_err(|_| not_a_size())?;
+    let lower = unit.trim_start().to_ascii_lowercase();
+    let (prefix, rest) = lower.split_at(lower.find(|c: char| c != 'k' && c != 'm' && c != 'g' && c != 't').unwrap_or(lower.len()).min(1));
+    let scale = match prefix {
         "" => 1.0,
         "k" => 1024.0,
         "m" => 1024.0 * 1024.0,
         "g" => 1024.0 * 1024.0 * 1024.0,
-        "t" => 1024.0f64.powi(4),
-        _ => return Err(format!("\"{s}\": unknown unit \"{unit}\" (k, M, G, T)")),
+        _ => 1024.0f64.powi(4),
     };
+    let suffix_ok = match rest {
+        "" => true,
+        "b" => true,
+        "ib" => !prefix.is_empty(),
+        _ => false,
+    };
+    if !suffix_ok {
+        return Err(format!("\"{s}\": unknown unit \"{}\" (k, M, G, T, with an optional B or iB)", unit.trim()));
+    }
     let bytes = v * scale;
     if !(bytes.is_finite() && bytes >= 1.0) {
         return Err(format!("\"{s}\" must be at least one byte"));
@@ -375,18 +388,20 @@ pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
 
 /// The memory the ranks of this host may use and where that figure comes from; `None` where
 /// nothing says.
-pub fn available() -> Option<(f64, String)> {
+/// nothing says. A `TRESCA_FETI_MAX_MEMORY` that is not a size is an error naming it.
+pub fn available() -> Result<Option<(f64, String)>> {
     if let Some(&l) = LIMIT.get() {
-        return Some((l, "--max-memory".into()));
+        return Ok(Some((l, "--max-memory".into())));
     }
-    if let Ok(v) = std::env::var("TRESCA_FETI_MAX_MEMORY") {
-        if let Ok(b) = parse_size(&v) {
-            return Some((b as f64, "TRESCA_FETI_MAX_MEMORY".into()));
-        }
+    if let Some(v) = std::env::var_os("TRESCA_FETI_MAX_MEMORY") {
+        let b = parse_size(&v.to_string_lossy()).map_err(|e| Error::scene("TRESCA_FETI_MAX_MEMORY", e))?;
+        return Ok(Some((b as f64, "TRESCA_FETI_MAX_MEMORY".into())));
     }
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let kb: f64 = info.lines().find(|l| l.starts_with("MemAvailable:"))?.split_whitespace().nth(1)?.parse().ok()?;
-    Some((kb * 1024.0, "MemAvailable in /proc/meminfo; set --max-memory to override".into()))
+    let mem_available = || -> Option<f64> {
+        let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+        info.lines().find(|l| l.starts_with("MemAvailable:"))?.split_whitespace().nth(1)?.parse().ok()
+    };
+    Ok(mem_available().map(|kb| (kb * 1024.0, "MemAvailable in /proc/meminfo; set --max-memory to override".into())))
 }
 
 /// This host's name as a number (52 bits, exact in an f64), to count the ranks that share it.
@@ -420,12 +435,23 @@ pub fn check_after_plan<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, plan
     check(comm, &count.key, &after_plan(&count, model, &ls.scene.decomposition, chosen, comm.size(), ls.scene.solver.precision))
 }
 
+/// A memory error of METIS (its out-of-memory status) as the memory check's own: one line
+/// naming the key of the mesh (`mesh.n` or the mesh file); other errors unchanged.
+pub fn name_the_mesh(ls: &LoadedScene, e: Error) -> Error {
+    match e {
+        Error::Memory { what, msg } if what == crate::linalg::ordering::METIS_MEMORY => {
+            Error::memory(MeshCount::of(ls).key, format!("{msg}: the run needs more memory than this host has for it; use a coarser mesh or more hosts"))
+        }
+        e => e,
+    }
+}
+
 /// Refuses a run whose estimate (per rank) times the ranks on this host exceeds what is
 /// available there: one line naming `key`, the estimate and its parts, and the limit.
 /// Collective; every rank returns the same verdict.
 pub fn check<C: Comm>(comm: &C, key: &str, e: &Estimate) -> Result<()> {
     let on_host = ranks_on_host(comm);
-    comm.agree(verdict(key, e, on_host, comm.rank(), available()))
+    comm.agree(available().and_then(|limit| verdict(key, e, on_host, comm.rank(), limit)))
 }
 
 /// The refusal, if any (pure: the estimate, the ranks on the host, the limit).
@@ -441,9 +467,9 @@ pub fn verdict(key: &str, e: &Estimate, on_host: usize, rank: usize, limit: Opti
 
 /// The lines `check` prints: the estimate per rank on `ranks` ranks, its parts, what it was
 /// based on, and the memory available here.
-pub fn summary(e: &Estimate, ranks: usize) -> String {
+pub fn summary(e: &Estimate, ranks: usize) -> Result<String> {
     let all = e.total() * ranks as f64;
-    let limit = match available() {
+    let limit = match available()? {
         Some((b, source)) => {
             let fits = if all <= b { "fits" } else { "does not fit: solve refuses it" };
             format!("{} available on this host ({source}); {fits}", human_bytes(b))
@@ -451,7 +477,7 @@ pub fn summary(e: &Estimate, ranks: usize) -> String {
         None => "no figure of the available memory".into(),
     };
     let host = if ranks > 1 { format!(", {} for {ranks} ranks on one host", human_bytes(all)) } else { String::new() };
-    format!("memory: about {} per rank{host}; {}\n  {limit}\n", e.describe(), e.basis)
+    Ok(format!("memory: about {} per rank{host}; {}\n  {limit}\n", e.describe(), e.basis))
 }
 
 #[cfg(test)]
@@ -476,6 +502,11 @@ mod tests {
         assert!(parse_size("lots").is_err());
         assert!(parse_size("8X").is_err());
         assert!(parse_size("0").is_err());
+        assert_eq!(parse_size("8gb"), Ok(8 << 30));
+        assert_eq!(parse_size("2048B"), Ok(2048));
+        for bad in ["8GBBBB", "8GiBiB", "-1", "", "lots", "8 G B", "1e9", "8iB", "8GG", ".5G"] {
+            assert!(parse_size(bad).is_err(), "{bad:?}");
+        }
     }
 
     #[test]

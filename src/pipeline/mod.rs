@@ -102,7 +102,8 @@ fn injected_fault<C: Comm>(comm: &C, phase: &str) -> Option<Error> {
 }
 
 /// `TRESCA_FETI_PAUSE=<phase>` sleeps 60 s at a point of that phase (`output`: the result
-/// set written under its temporary names, not yet renamed), so a test can signal the run there.
+/// set written under its temporary names, not yet renamed; `committed`: renamed into place,
+/// before the summary), so a test can signal the run there.
 fn pause_for_tests(phase: &str) {
     if std::env::var("TRESCA_FETI_PAUSE").is_ok_and(|p| p == phase) {
         std::thread::sleep(std::time::Duration::from_secs(60));
@@ -320,7 +321,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let set = contact.constraint_set();
     let name = s.params.method().name();
     let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
-    let mut walk = path::Walk::new(&model.path, dual.dim(), &s.params);
+    let mut walk = path::Walk::new(&model.path, dual.dim(), &s.params, report::UnitsReport::of(&ls.scene.units));
     for k in 1..=walk.steps {
         walk.begin();
         if walk.on_path {
@@ -543,7 +544,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
-    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common))?;
+    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common)).map_err(|e| memory::name_the_mesh(&ls, e))?;
     memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
@@ -568,10 +569,11 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
     }
     let (sol, outcome) = match &model.pairs {
-        _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t)?,
-        Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o)))?,
-        None => (solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t)?, None),
-    };
+        _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),
+        Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o))),
+        None => solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t).map(|s| (s, None)),
+    }
+    .map_err(|e| memory::name_the_mesh(&ls, e))?;
     let h5 = ls.output_path();
     let mut report = report(comm, &ls, &model, &sol, outcome.as_ref(), &t);
     report.decomposition_plan = plan;
@@ -611,6 +613,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         staged.rewrite_report(comm, &json)?;
     }
     let files = staged.commit(comm)?;
+    pause_for_tests("committed");
     Ok(Summary { report, files, solution: sol })
 }
 
@@ -626,26 +629,26 @@ pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Mo
 
 /// What `check` and the report say of contact entry `i` beyond its faces: its slave nodes
 /// outside the contact zone, the warning where some of them lie over the master face, and its
-/// initial interference (empty: nothing to say).
-pub fn pair_notes(c: &crate::contact::pairing::Contact, i: usize) -> Vec<String> {
-    let mut out = c.outside.get(i).map_or_else(Vec::new, |o| outside_lines(i, o));
+/// initial interference (empty: nothing to say); lengths with the unit suffix `length`.
+pub fn pair_notes(c: &crate::contact::pairing::Contact, i: usize, length: &str) -> Vec<String> {
+    let mut out = c.outside.get(i).map_or_else(Vec::new, |o| outside_lines(i, o, length));
     if let Some(f) = c.interference.get(i).filter(|f| f.nodes > 0) {
-        out.push(format!("  initial interference: {} slave nodes start inside the master, at most {:.3e} deep (the solution removes it)", f.nodes, f.depth));
+        out.push(format!("  initial interference: {} slave nodes start inside the master, at most {:.3e}{length} deep (the solution removes it)", f.nodes, f.depth));
     }
     out
 }
 
 /// The lines that say which slave nodes of contact entry `i` are outside its contact zone, and
 /// the warning where some of them lie over the master face (empty: none outside).
-fn outside_lines(i: usize, o: &crate::contact::pairing::Outside) -> Vec<String> {
+fn outside_lines(i: usize, o: &crate::contact::pairing::Outside, length: &str) -> Vec<String> {
     let at = |k: usize| {
         let x = o.first[k].unwrap_or([f64::NAN; 3]);
-        format!("({:.6}, {:.6}, {:.6})", x[0], x[1], x[2])
+        format!("({:.6}, {:.6}, {:.6}){length}", x[0], x[1], x[2])
     };
     let mut out = Vec::new();
     if let Some(&v) = o.nodes.first() {
         out.push(format!(
-            "  {} slave nodes outside the contact zone (no master facet within the search distance {:.3e}: no contact rows), the first node {v} at {}",
+            "  {} slave nodes outside the contact zone (no master facet within the search distance {:.3e}{length}: no contact rows), the first node {v} at {}",
             o.nodes.len(),
             o.search,
             at(0)
@@ -686,12 +689,13 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
     let body_of_node = mesh.bodies.iter().position(|b| b.nodes.contains(&at)).unwrap_or(0);
     let dec = &ls.scene.decomposition;
     let solver = &ls.scene.solver.params;
+    let length = UnitsReport::suffix(UnitsReport::of(&ls.scene.units).as_ref(), 0);
     Report {
         scene: ls.path.display().to_string(),
         title: ls.scene.title.clone(),
         ranks: comm.size(),
         mpi: comm.library(),
-        units: (!ls.scene.units.is_empty()).then(|| UnitsReport { length: ls.scene.units.length.clone(), force: ls.scene.units.force.clone(), stress: ls.scene.units.stress() }),
+        units: UnitsReport::of(&ls.scene.units),
         problem: {
             let dual = if sol.tfeti.is_some() { "TFETI dual" } else { "monolithic dual" };
             let contact = contact_phrase(&model.pairs.as_ref().map(|c| c.laws()).unwrap_or_default());
@@ -748,7 +752,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                     .iter()
                     .filter(|w| w.1.starts_with("warning"))
                     .map(|w| w.1.clone())
-                    .chain((0..c.outside.len()).flat_map(|i| pair_notes(c, i).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })))
+                    .chain((0..c.outside.len()).flat_map(|i| pair_notes(c, i, &length).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })))
                     .collect(),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
@@ -874,7 +878,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     held_by_contact(&mut ls.scene.decomposition, &model);
     let mut chosen = None;
     let priced = if plan::automatic(&ls.scene.decomposition) {
-        let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks)?;
+        let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks).map_err(|e| memory::name_the_mesh(&ls, e))?;
         match plan::cheapest(&cands) {
             Some(c) if c.tfeti => ls.scene.decomposition.target_dofs = c.target_dofs,
             _ => ls.scene.decomposition.subdomains = Some(1),
@@ -888,6 +892,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let mesh = &model.mesh;
+    let units = report::UnitsReport::of(&ls.scene.units);
+    let unit = |which| report::UnitsReport::suffix(units.as_ref(), which);
+    let (length, force, stress, area) = (unit(0), unit(1), unit(2), unit(3));
     let mut s = String::new();
     let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
     let _ = writeln!(s, "mesh: {} bodies, {} nodes, {}", mesh.bodies.len(), mesh.nodes.len(), crate::mesh::describe_cells(&mesh.cells));
@@ -909,15 +916,15 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     let _ = writeln!(s, "faces:");
     for f in &mesh.faces {
-        let _ = writeln!(s, "  {}: {}, {} nodes, area {:.6e}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len(), crate::fem::cell::face_area(f, &mesh.nodes));
+        let _ = writeln!(s, "  {}: {}, {} nodes, area {:.6e}{area}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len(), crate::fem::cell::face_area(f, &mesh.nodes));
     }
     for (i, t) in ls.scene.traction.iter().enumerate() {
         let r = model.path.traction_resultant(i);
-        let area = mesh.face(&t.face).map_or(f64::NAN, |f| crate::fem::cell::face_area(f, &mesh.nodes));
-        let _ = writeln!(s, "traction[{i}] on {}: p = ({}, {}, {}) over area {area:.6e}, resultant ({:.6e}, {:.6e}, {:.6e}) at factor 1", t.face, t.p[0], t.p[1], t.p[2], r[0], r[1], r[2]);
+        let a = mesh.face(&t.face).map_or(f64::NAN, |f| crate::fem::cell::face_area(f, &mesh.nodes));
+        let _ = writeln!(s, "traction[{i}] on {}: p = ({}, {}, {}){stress} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, t.p[0], t.p[1], t.p[2], r[0], r[1], r[2]);
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
-    let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e})", load[0], load[1], load[2]);
+    let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e}){force}", load[0], load[1], load[2]);
     let _ = writeln!(s, "DOFs: n = {} ({} free after Dirichlet elimination)", model.ndof(), free_total);
     for (i, &(sl, ma)) in model.contact.iter().enumerate() {
         let _ = writeln!(
@@ -932,7 +939,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         if let Some((_, why)) = model.slave_choice.iter().find(|c| c.0 == i) {
             let _ = writeln!(s, "{}{why}", if why.starts_with("warning") { "" } else { "  " });
         }
-        for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i)) {
+        for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i, &length)) {
             let _ = writeln!(s, "{line}");
         }
     }
@@ -941,7 +948,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
         let _ = writeln!(
             s,
-            "contact: m = {} pairs ({}), Σw = {:.6e}, gaps in [{gmin:.3e}, {gmax:.3e}], multipliers: {} normal + {} tangential ({} void: held by Dirichlet conditions)",
+            "contact: m = {} pairs ({}), Σw = {:.6e}{area}, gaps in [{gmin:.3e}, {gmax:.3e}]{length}, multipliers: {} normal + {} tangential ({} void: held by Dirichlet conditions)",
             c.len(),
             c.discretization.iter().map(|d| format!("{d:?}").to_lowercase().replace("nodetonode", "node-to-node")).collect::<Vec<_>>().join(", "),
             c.area.iter().sum::<f64>(),
@@ -970,7 +977,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     if let Some(p) = priced {
         let _ = write!(s, "{p}");
     }
-    let _ = write!(s, "{}", memory::summary(&needs, ranks));
+    let _ = write!(s, "{}", memory::summary(&needs, ranks)?);
     let _ = write!(s, "dual: {}", if dec.is_tfeti(&body_dofs(&model)) { "TFETI" } else { "monolithic" });
     Ok(s)
 }

@@ -15,6 +15,7 @@ use crate::contact::state::{ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::model::LoadPath;
 use crate::qp::Params;
 use super::accuracy::Tightening;
+use super::report::UnitsReport;
 
 /// The walk along a load path: the warm start y and the last step's tangential jump B_T u, the
 /// solver's settings with σ_max measured at the first step and reused (A does not change along
@@ -26,6 +27,8 @@ pub struct Walk {
     pub y: Vec<f64>,
     pub jump: Vec<f64>,
     pub params: Params,
+    /// The scene's units, for the step lines.
+    units: Option<UnitsReport>,
     records: Vec<StepOutput>,
     /// Where the accuracy guard tightened ε, every step so far.
     tightenings: Vec<Tightening>,
@@ -34,8 +37,8 @@ pub struct Walk {
 
 impl Walk {
     /// Before the first step, on a dual of length `dim`.
-    pub fn new(path: &LoadPath, dim: usize, params: &Params) -> Self {
-        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), records: vec![], tightenings: vec![], start: Instant::now() }
+    pub fn new(path: &LoadPath, dim: usize, params: &Params, units: Option<UnitsReport>) -> Self {
+        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), units, records: vec![], tightenings: vec![], start: Instant::now() }
     }
 
     /// Step k begins (its time starts).
@@ -53,7 +56,7 @@ impl Walk {
         }
         if let (true, Some((c, o))) = (self.on_path, contact) {
             let rec = StepOutput::new(k, solution, c, o, self.start.elapsed().as_secs_f64());
-            live.line(&rec.line(self.steps));
+            live.line(&rec.line(self.steps, self.units.as_ref()));
             self.records.push(rec);
         }
         if k == self.steps {
@@ -135,16 +138,23 @@ impl StepOutput {
         StepOutput { report, local: sol.local.clone(), state: o.state.clone() }
     }
 
-    /// The live summary line of the step.
-    pub fn line(&self, steps: usize) -> String {
+    /// The live summary line of the step, forces and lengths in the scene's `units`.
+    pub fn line(&self, steps: usize, units: Option<&UnitsReport>) -> String {
         let r = &self.report;
         let fp = if r.fixed_point_iterations > 0 { format!(", {} fixed-point", r.fixed_point_iterations) } else { String::new() };
+        let f = r.total_force_on_slave;
         format!(
-            "load step {}/{steps}: nA {}{fp}, {}, force on slave ({:.4e}, {:.4e}, {:.4e}), max |u| {:.4e}, {:.2} s",
+            "load step {}/{steps}: nA {}{fp}, {}, force on slave ({:.4e}, {:.4e}, {:.4e}){}, max |u| {:.4e}{}, {:.2} s",
             r.step,
             r.n_a,
             super::report::counts(r.open, r.contact, r.stick, r.slip),
-            r.total_force_on_slave[0], r.total_force_on_slave[1], r.total_force_on_slave[2], r.max_displacement, r.time_s
+            f[0],
+            f[1],
+            f[2],
+            UnitsReport::suffix(units, 1),
+            r.max_displacement,
+            UnitsReport::suffix(units, 0),
+            r.time_s
         )
     }
 }

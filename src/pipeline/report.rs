@@ -95,6 +95,8 @@ pub struct ContactReport {
     pub notes: Vec<String>,
     pub stick: usize,
     pub slip: usize,
+    /// Of the `slip` pairs, those with ‖λ̄τ‖ on the slip bound; the others slide an ε-hair
+    /// inside it (their slip explains them better than sticking would).
     pub on_slip_bound: usize,
     pub total_force_on_slave: [f64; 3],
 }
@@ -239,10 +241,18 @@ pub struct UnitsReport {
 }
 
 impl UnitsReport {
+    /// The scene's `units`, none where it names neither.
+    pub fn of(units: &crate::scene::Units) -> Option<UnitsReport> {
+        (!units.is_empty()).then(|| UnitsReport { length: units.length.clone(), force: units.force.clone(), stress: units.stress() })
+    }
+
     /// " mm" after a length, "" where the scene names no length unit (`which`: 0 length,
-    /// 1 force, 2 stress).
+    /// 1 force, 2 stress, 3 area).
     pub fn suffix(units: Option<&UnitsReport>, which: usize) -> String {
-        let u = units.and_then(|u| [&u.length, &u.force, &u.stress][which].as_deref());
+        let u = units.and_then(|u| match which {
+            3 => u.length.as_ref().map(|l| format!("{l}²")),
+            _ => [&u.length, &u.force, &u.stress][which].clone(),
+        });
         u.map_or(String::new(), |u| format!(" {u}"))
     }
 }

@@ -371,7 +371,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
     let name = if contact.is_some() { params.method().name() } else { "cg" };
     let coulomb = contact.filter(|c| c.is_coulomb());
     let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
-    let mut walk = super::path::Walk::new(&model.path, dual.dim(), params);
+    let mut walk = super::path::Walk::new(&model.path, dual.dim(), params, super::report::UnitsReport::of(&ls.scene.units));
     for k in 1..=walk.steps {
         walk.begin();
         if walk.on_path {
