@@ -326,3 +326,12 @@ fn a_piped_mesh_is_read_once() {
     assert!(mesh_line(&text).is_some());
     assert_eq!(mesh_line(&text), mesh_line(&String::from_utf8_lossy(&from_file.stdout)), "{text}");
 }
+
+/// Trust round four, 6: a body thinner than its elements can represent (the seed's upper block
+/// 1e-9 thick: edge ratio 2e9) is refused naming its box, not left to a Cholesky error asking
+/// whether the body is held; 1e-6 thick (ratio 2e6) still solves.
+#[test]
+fn a_body_too_thin_for_its_elements_is_refused_naming_it() {
+    assert_clean_failure("thin", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000000001]"], &["body[0].box", "body \"upper\"", "thinner than the element can represent"]);
+    check_ok("thin-ok", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000001]"]);
+}

@@ -800,7 +800,15 @@ fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind
                 m * d.iter().map(|v| (v / m) * (v / m)).sum::<f64>().sqrt()
             }
         };
-        let e = edges(kind).iter().map(|&ab| len(ab)).fold(0.0f64, f64::max);
+        let (short, e) = edges(kind).iter().map(|&ab| len(ab)).fold((f64::INFINITY, 0.0f64), |(a, b), l| (a.min(l), b.max(l)));
+        if short > 0.0 && e / short > crate::scene::range::MAX_ASPECT {
+            return Err(format!(
+                "{} {etag} has edges of {short:.3e} against {e:.3e} m (ratio {:.1e}): thinner than the element can represent (ratio at most {:e}: the stiffness's condition number grows with its square); remesh the thin part",
+                singular(kind),
+                e / short,
+                crate::scene::range::MAX_ASPECT
+            ));
+        }
         if e > 0.0 && lo.is_none_or(|l| e < l.0) {
             lo = Some((e, etag, kind));
         }
