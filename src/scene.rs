@@ -1208,12 +1208,6 @@ impl Scene {
                                 ));
                             }
                         }
-                        if hi / lo > range::MAX_ASPECT {
-                            return Err(Error::scene(
-                                k("box"),
-                                format!("body \"{}\": element edges of {lo:.3e} against {hi:.3e} m (ratio {:.1e}) are thinner than the element can represent (ratio at most {:e}: the stiffness's condition number grows with its square); use more nodes along the long sides, fewer across, or a thicker body", b.name, hi / lo, range::MAX_ASPECT),
-                            ));
-                        }
                         let far = bx.min.iter().chain(&bx.max).fold(0.0f64, |a, v| a.max(v.abs()));
                         if far > range::MAX {
                             return Err(Error::scene(k("box"), format!("body \"{}\": coordinates up to {far:.3e} m lie outside ±{:e} m; move the box nearer the origin or scale the units", b.name, range::MAX)));
@@ -1225,6 +1219,12 @@ impl Scene {
                             return Err(Error::scene(
                                 key,
                                 format!("body \"{}\" would have {total:.3e} nodes ({n:?}); at most {MAX_BODY_NODES} are supported", b.name),
+                            ));
+                        }
+                        if hi / lo > range::MAX_ASPECT {
+                            return Err(Error::scene(
+                                k("box"),
+                                format!("body \"{}\": element edges of {lo:.3e} against {hi:.3e} m (ratio {:.1e}) are thinner than the element can represent (ratio at most {:e}: the stiffness's condition number grows with its square); use more nodes along the long sides, fewer across, or a thicker body", b.name, hi / lo, range::MAX_ASPECT),
                             ));
                         }
                     }

@@ -124,3 +124,26 @@ fn a_block_on_a_tied_stack_is_held_by_contact_and_the_tie_group_by_its_base() {
     // N = 4 · 0.5, T = 0.3 · 0.15 (the washer's xmin face: 0.5 × 0.3)
     assert!((f[0] + 0.045).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "{f:?}");
 }
+
+/// Trust round four, 2: a body of one hexahedron (2 nodes per edge, the least the docs allow)
+/// on rollers, frictionless, held in z by contact alone and pressed by p = 1 over its 2 × 1
+/// top: its four contact nodes carry 0.5 each. Before, the projected rhs was round-off (Gλ = e
+/// alone carries the load) and SMALSE-M's relative test and the KKT check against it failed
+/// ("KKT residual 1.4e-1" after tightening ε to 1e-14; 1 000 iterations at ε 3.8e-18).
+#[test]
+fn a_one_hexahedron_body_held_by_contact_alone_is_solved() {
+    let dir = tmpdir("one-hex");
+    let scene = std::fs::read_to_string(root().join("run/validation/floating_block.toml")).unwrap().replace("friction = { type = \"coulomb\", mu = 0.3 }", "").replace("p = [0.3, 0.0, 0.0]", "p = [0.0, 0.0, 0.0]")
+        + "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\n[[dirichlet]]\nface = \"upper.ymin\"\ncomponents = [\"y\"]\n";
+    let path = dir.join("one_hex.toml");
+    std::fs::write(&path, scene).unwrap();
+    for (nodes, pairs) in [("[2, 2, 2]", 4), ("[2, 2, 3]", 4), ("[3, 3, 3]", 9)] {
+        let sets = [format!("body.0.box.nodes={nodes}")];
+        let r = solve(&path, &sets.iter().map(String::as_str).collect::<Vec<_>>(), &dir.join("r.h5"));
+        let c = r.report.contact.as_ref().unwrap();
+        let f = c.total_force_on_slave;
+        assert!(f[0].abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "{nodes}: {f:?}");
+        assert_eq!((c.pairs, c.open), (pairs, 0), "{nodes}");
+        assert!(r.report.solver.as_ref().unwrap().kkt_worst <= 1e-8, "{nodes}");
+    }
+}

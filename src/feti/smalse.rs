@@ -75,6 +75,10 @@ impl<'c, C: Comm> Operator for Penalized<'_, 'c, C> {
     }
 }
 
+/// The smallest residual, relative to σ‖λ‖, that double precision reaches on the dual
+/// gradient (1000 ε_mach): SMALSE-M's residual scale is kept at least this over ε.
+const REACHABLE: f64 = 1e3 * f64::EPSILON;
+
 /// `P M P + ϱ⁻¹Q` ≈ A_ϱ⁻¹ from a preconditioner M of F on every row.
 pub struct PenalizedPreconditioner<'a, 'c, C: Comm> {
     dual: &'a TfetiDual<'c, C>,
@@ -129,7 +133,7 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, m: Option<&dyn Preconditioner>, s
         op.apply(&pl, &mut y);
         b0.iter_mut().zip(&y).for_each(|(b, v)| *b += v);
     }
-    let bnorm = sp.norm(&b0).max(f64::MIN_POSITIVE);
+    let b0_norm = sp.norm(&b0);
     let n_power = if p.common.sigma.is_some() { 0 } else { p.common.power_iterations };
     let sigma = p.common.sigma.unwrap_or_else(|| qp::estimate_sigma(&op, &p.common));
     if !(sigma.is_finite() && sigma > 0.0) {
@@ -142,7 +146,11 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, m: Option<&dyn Preconditioner>, s
     let mut nu = vec![0.0; x0.len()];
     // ϱλ_e: the penalty's pull toward Gλ = e
     let b0: Vec<f64> = b0.iter().zip(&lambda_e).map(|(b, l)| b + op.penalty * l).collect();
+    // the scale of the residuals: ‖P(d̃ − Fλ̂)‖, but not below what ε of it double precision
+    // can reach on a gradient of size σ‖λ_e‖ — where Gλ = e alone carries the load (a body
+    // held by contact alone, pressed uniformly) the projected rhs is round-off
     let eps = p.common.eps;
+    let bnorm = b0_norm.max(REACHABLE / eps * sigma * sp.norm(&lambda_e)).max(f64::MIN_POSITIVE);
     let mut eps_k = eps.max(1e-2);
     let mut total = Info { sigma_est: sigma, n_a_power: n_power, n_a: usize::from(shifted), ..Default::default() };
     let mut sm = SmalseInfo { penalty: op.penalty, ..Default::default() };

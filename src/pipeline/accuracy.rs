@@ -172,7 +172,8 @@ impl Guard {
         }
         let tighter = verdict.tighter_eps().filter(|_| self.tries < MAX_TIGHTENINGS);
         let Some(eps) = tighter else {
-            let tried = if self.tries > 0 { format!(" after tightening ε to {:.1e}", verdict.eps) } else { String::new() };
+            let floor = if verdict.eps <= EPS_FLOOR { ", the smallest ε double precision reaches" } else { "" };
+            let tried = if self.tries > 0 { format!(" after tightening ε to {:.1e}{floor}", verdict.eps) } else { String::new() };
             return Err(crate::Error::numerical(what, format!("the result fails its accuracy check{tried}: {}", verdict.reason())));
         };
         self.tries += 1;

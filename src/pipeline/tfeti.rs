@@ -432,7 +432,13 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
                 let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
                 // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
                 let set_i = if c.is_coulomb() { qp::cone::bounds(&set_i, &c.coulomb, &li) } else { set_i };
-                let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
+                // gaps relative to the displacements as well as to ‖b‖: where the equality Gλ = e
+                // alone carries the load (a body held by contact alone, pressed uniformly) b is
+                // round-off and would make round-off gaps look like penetration
+                let mut umax = [rec.u.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()))];
+                comm.max_f64(&mut umax);
+                let gap_scale = bnorm.max(umax[0]);
+                let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, gap_scale, accuracy::force_scale(gap_scale, sol.info.sigma_est));
                 (set_i, li, ri, kkt)
             });
             let kkt = judged.as_ref().map_or(0.0, |j| j.3.worst());
