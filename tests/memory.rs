@@ -161,3 +161,21 @@ fn under_mpirun_every_rank_refuses_and_one_prints() {
     assert!(!stderr.contains("memory allocation of"), "{stderr}");
     assert!(!out.exists());
 }
+
+/// Trust round four, 8: under `ulimit -v` (RLIMIT_AS) the estimate is held against what the
+/// limit leaves of the address space, not MemAvailable: the seed at N = 150 under 4 GB is one
+/// line naming mesh.n and the limit, before any mesh is made (before, METIS failed inside with
+/// status −3 after four lines of its own).
+#[test]
+fn ulimit_v_is_the_limit_where_it_is_smaller() {
+    let dir = tmpdir("ulimit");
+    let out = dir.join("r.h5");
+    let cmd = format!("ulimit -v 4000000 && exec {BIN} solve {} --set mesh.n=150 -q --out {}", seed(), out.display());
+    let t0 = Instant::now();
+    let o = Command::new("bash").args(["-c", &cmd]).output().unwrap();
+    let line = one_line_failure("ulimit", &o, &out);
+    for want in ["mesh.n: the run needs about", "ulimit -v (RLIMIT_AS)"] {
+        assert!(line.contains(want), "expected `{want}` in: {line}");
+    }
+    assert!(t0.elapsed() < Duration::from_secs(10), "refused before the mesh: {:?}", t0.elapsed());
+}

@@ -28,7 +28,8 @@
 //! scene at N = 16 … 41 (README, "Bad input"): the estimate is 1.02–1.15× the measured peak.
 //!
 //! The limit is `--max-memory` ([`set_limit`]), else `TRESCA_FETI_MAX_MEMORY`, else
-//! `MemAvailable` of `/proc/meminfo`; the ranks on one host share it (their estimates are
+//! `MemAvailable` of `/proc/meminfo` or, where smaller, what `ulimit -v` leaves of the address
+//! space; the ranks on one host share it (their estimates are
 //! summed, hosts told apart by name). Without any of them nothing is checked.
 
 use std::sync::OnceLock;
@@ -401,7 +402,26 @@ pub fn available() -> Result<Option<(f64, String)>> {
         let info = std::fs::read_to_string("/proc/meminfo").ok()?;
         info.lines().find(|l| l.starts_with("MemAvailable:"))?.split_whitespace().nth(1)?.parse().ok()
     };
-    Ok(mem_available().map(|kb| (kb * 1024.0, "MemAvailable in /proc/meminfo; set --max-memory to override".into())))
+    let host = mem_available().map(|kb| (kb * 1024.0, "MemAvailable in /proc/meminfo; set --max-memory to override".to_string()));
+    // `ulimit -v` caps this process's address space: what is left of it, the estimate's own
+    // `process` part given back (the mappings of MPI and HDF5 are counted in both)
+    let limited = address_space_left().map(|b| (b + PROCESS, "ulimit -v (RLIMIT_AS) less this process's mappings".to_string()));
+    Ok(match (host, limited) {
+        (Some(h), Some(l)) => Some(if l.0 < h.0 { l } else { h }),
+        (h, l) => h.or(l),
+    })
+}
+
+/// The address space this process may still map under RLIMIT_AS (`ulimit -v`), if limited.
+fn address_space_left() -> Option<f64> {
+    let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit writes the struct it is given
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY {
+        return None;
+    }
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status.lines().find(|l| l.starts_with("VmSize:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some((r.rlim_cur as f64 - kb * 1024.0).max(0.0))
 }
 
 /// This host's name as a number (52 bits, exact in an f64), to count the ranks that share it.
