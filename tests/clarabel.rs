@@ -83,11 +83,14 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
 
 #[test]
 fn dual_solvers_match_clarabel_on_the_primal_socp() {
-    for n in [6, 8] {
+    // the bounds: about 2× what was measured (2026-12-05: u 1.31e-9 … 1.32e-9 at N = 6,
+    // 2.93e-8 at N = 8; force 1.2e-11 … 1.7e-11 and 8.0e-10 … 8.1e-10), docs/validation.md
+    for (n, tol_u, tol_f) in [(6, 3e-9, 4e-11), (8, 6e-8, 2e-9)] {
         for method in Method::ALL {
             let c = compare(n, method, &[]);
-            assert!(c.u_rel <= 1e-6, "N = {n} {method:?}: u differs by {:.2e}", c.u_rel);
-            assert!(c.force_rel <= 1e-6, "N = {n} {method:?}: total contact force differs by {:.2e}", c.force_rel);
+            eprintln!("N = {n} {method:?}: u within {:.2e}, total force within {:.2e}", c.u_rel, c.force_rel);
+            assert!(c.u_rel <= tol_u, "N = {n} {method:?}: u differs by {:.2e}", c.u_rel);
+            assert!(c.force_rel <= tol_f, "N = {n} {method:?}: total contact force differs by {:.2e}", c.force_rel);
             assert_eq!(c.counts.0, c.counts.1, "N = {n} {method:?}: open/stick/slip counts differ");
         }
     }
@@ -98,8 +101,10 @@ fn orthotropic_friction_matches_clarabel_too() {
     let ortho = "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.02, direction=[1.0, 1.0, 0.0]}";
     for method in [Method::SsnBicgstab, Method::Gimssn, Method::Tssn] {
         let c = compare(6, method, &[ortho]);
-        assert!(c.u_rel <= 1e-6, "{method:?}: u differs by {:.2e}", c.u_rel);
-        assert!(c.force_rel <= 1e-6, "{method:?}: total contact force differs by {:.2e}", c.force_rel);
+        eprintln!("orthotropic {method:?}: u within {:.2e}, total force within {:.2e}", c.u_rel, c.force_rel);
+        // measured 4.57e-8 and 3.23e-9 (2026-12-05)
+        assert!(c.u_rel <= 1e-7, "{method:?}: u differs by {:.2e}", c.u_rel);
+        assert!(c.force_rel <= 7e-9, "{method:?}: total contact force differs by {:.2e}", c.force_rel);
         assert_eq!(c.counts.0, c.counts.1, "{method:?}: open/stick/slip counts differ");
     }
 }

@@ -47,10 +47,12 @@ fn max_abs(u: &[[f64; 3]]) -> f64 {
     u.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()))
 }
 
-/// Compares every decomposition with the monolithic solution (u within 1e-8 relative, jumps
-/// and Dirichlet values within 1e-10); returns the worst relative difference in u.
+/// Compares every decomposition with the monolithic solution (u within 3e-10 relative, jumps
+/// and Dirichlet values within 1e-10); returns the worst relative difference in u. At
+/// ε = 1e-12 the differences measured 2026-12-05 were 5.0e-12 … 1.4e-11 on the seed (N = 8,
+/// 12; S = 1 … 8), up to 1.1e-10 on the roller slabs: the bound is about 2× the worst.
 fn equivalence(scene: &str, sets: &[String], parts: &[usize]) -> f64 {
-    equivalence_within(scene, sets, parts, 1e-8, 1e-10)
+    equivalence_within(scene, sets, parts, 3e-10, 1e-10)
 }
 
 /// How one decomposition compares with the monolithic solution of the same scene.
@@ -126,6 +128,7 @@ fn equivalence_within(scene: &str, sets: &[String], parts: &[usize], tol_u: f64,
     let mut worst: f64 = 0.0;
     for a in agreement(scene, sets, parts) {
         let s = a.subdomains;
+        eprintln!("S = {s}: u within {:.2e} of the monolithic solution, gluing jump {:.2e}", a.du, a.gluing_jump);
         assert!(a.du <= tol_u, "S = {s}: u differs from the monolithic solution by {:.2e} (relative)", a.du);
         assert!(a.gluing_jump <= tol_jump, "S = {s}: gluing jump {:.2e}", a.gluing_jump);
         assert!(a.feasibility <= 1e-10, "S = {s}: ‖Gλ − e‖/‖e‖ = {:.2e}", a.feasibility);
