@@ -110,7 +110,8 @@ fn cattaneo_mindlin3d_stick_radius_on_non_matching_meshes() {
     eprintln!("P = {p:.3}, Q/(μP) = {:.3}, a = {a:.4}, c = {c:.4} ({:.2} h), stick zone along x [{lo:.4}, {hi:.4}]: half-width {half:.4} ({:+.2} h from c)", q / (mu * p), c / h, (half - c) / h);
     assert!((0.3..0.7).contains(&(q / (mu * p))), "the shear is sized for Q ≈ μP/2");
     assert!(nodes.iter().filter(|n| n.1 == 0.0 && n.2 != OPEN && n.0 > lo && n.0 < hi).all(|n| n.2 == STICK), "one stick zone along x");
-    assert!((half - c).abs() <= h, "stick half-width {half:.4} vs c = {c:.4}: more than one element (h = {h})");
+    // measured 2026-12-05: +0.27 h (docs/validation.md: within 0.35 h at three levels)
+    assert!((half - c).abs() <= 0.5 * h, "stick half-width {half:.4} vs c = {c:.4}: more than half an element (h = {h})");
 }
 
 /// Pressing alone (equal materials: no relative slip in theory), either body as slave: no node
@@ -141,7 +142,8 @@ fn cattaneo_mindlin3d_pressing_alone_slips_nowhere_with_either_body_as_slave() {
         let worst = closed.iter().map(|&v| q[3 * v].hypot(q[3 * v + 1])).fold(0.0, f64::max) / (0.3 * p0);
         eprintln!("{name} as slave: {} stick, {} slip, max |q|/(μ max p) {worst:.3}", c.stick, c.slip);
         assert_eq!(c.slip, 0, "{name} as slave: pressing alone slips nowhere");
-        assert!(worst < 0.1, "{name} as slave: the spurious shear reaches {worst:.3} of μ max p");
+        // measured 2026-12-05: 0.036 (cap as slave), 0.024 (flat as slave)
+        assert!(worst < 0.06, "{name} as slave: the spurious shear reaches {worst:.3} of μ max p");
     }
     // the sheared step: the stick zone along x centred on the axis (within a tenth of h)
     let s = dir.join("sheared.h5");

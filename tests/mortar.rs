@@ -338,13 +338,17 @@ fn a_press_fit_gives_the_lame_contact_pressure() {
         let r = solve(&scene, &sets, &out);
         let data = fields(&out);
         let (p, st) = (f64_field(&data, "contact_pressure"), i32_field(&data, "contact_status"));
-        let closed: Vec<f64> = (0..st.len()).filter(|&v| st[v] > 0).map(|v| p[v]).collect();
+        // closed: stick, slip or in contact (status 1 is open, 0 no contact node)
+        let closed: Vec<f64> = (0..st.len()).filter(|&v| st[v] > 1).map(|v| p[v]).collect();
+        let mean = closed.iter().sum::<f64>() / closed.len().max(1) as f64;
         let worst = closed.iter().map(|q| (q - lame).abs() / lame).fold(0.0, f64::max);
         let f = r.report.contact.as_ref().unwrap().total_force_on_slave;
         eprintln!("{name}: {} slave nodes, p in [{:.5}, {:.5}] against Lamé {lame:.5}, worst {:.2} %, F_x {:.6} (−p·b·t = {:.6})", closed.len(), closed.iter().cloned().fold(f64::INFINITY, f64::min), closed.iter().cloned().fold(0.0, f64::max), 100.0 * worst, f[0], -lame * b * 0.1);
         assert_eq!(closed.len(), 50, "{name}: every slave node closed");
         assert!(worst <= 0.02, "{name}: contact pressure {:.2} % from Lamé", 100.0 * worst);
-        assert!((f[0] + lame * b * 0.1).abs() <= 0.01 * lame * b * 0.1, "{name}: the resultant {f:?}");
+        // measured 2026-12-05: worst +1.51 %, mean −0.08 %, the resultant to 5 digits
+        assert!((mean - lame).abs() <= 0.002 * lame, "{name}: mean pressure {:.3} % from Lamé", 100.0 * (mean / lame - 1.0));
+        assert!((f[0] + lame * b * 0.1).abs() <= 1e-4 * lame * b * 0.1, "{name}: the resultant {f:?}");
     }
     let o = common::run(&["check", scene.to_str().unwrap(), "--set", "contact.pair.0.interference=false"]);
     let err = String::from_utf8_lossy(&o.stderr);
