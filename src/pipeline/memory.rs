@@ -504,11 +504,11 @@ pub fn summary(e: &Estimate, ranks: usize) -> Result<String> {
 mod tests {
     use super::*;
 
+    /// The count of the seed scene at `n`, as [`MeshCount::of`] makes it from the scene (no
+    /// mesh is built).
     fn seed(n: usize) -> MeshCount {
-        let nodes = (n * n * n) as f64;
-        let e = ((n - 1) * (n - 1) * (n - 1)) as f64;
-        let q = 6.0 * ((n - 1) * (n - 1)) as f64;
-        MeshCount { nodes: 2.0 * nodes, elements: 2.0 * e, facets: 2.0 * q, files: 0.0, transient: 0.0, body_dofs: vec![3.0 * nodes; 2], key: "mesh.n".into() }
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
+        MeshCount::of(&crate::scene::load(&path, &[format!("mesh.n={n}")]).unwrap())
     }
 
     #[test]
