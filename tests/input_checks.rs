@@ -58,20 +58,26 @@ fn material_data_outside_double_range_is_refused() {
     assert_clean_failure("traction-tiny", SEED, &["--set", "mesh.n=3", "--set", "traction.1.p=[1e-200, 0.0, 0.0]"], &["traction[1].p", "1e-200"]);
     assert_clean_failure("dirichlet-huge", SEED, &["--set", "mesh.n=3", "--set", "dirichlet.0.value=[1e200, 0.0, 0.0]"], &["dirichlet[0].value", "1e200"]);
     assert_clean_failure("g-huge", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction.g=1e200"], &["contact.pair[0].friction.g", "1e200"]);
-    // the stability suite's ν = 0.4999 and a wide but sane range of units still solve
+    // the stability suite's ν = 0.4999 and a wide but sane range of units still solve, and
+    // with loads given as forces u scales as 1/E: E·u is the same at E = 5e10 and 1e-3 as at
+    // the scene's 5e4 (to 1e-6: the solves stop at ε = 1e-8)
     let nu = std::fs::read_to_string(root().join("run/stress/nu_04999.toml")).unwrap();
-    for (name, sets) in [("nu-04999", vec!["mesh.n=4"]), ("E-pa", vec!["mesh.n=3", "material.0.E=5e10", "material.1.E=5e10"]), ("E-soft", vec!["mesh.n=3", "material.0.E=1e-3", "material.1.E=1e-3"])] {
+    let mut scaled: Vec<(f64, Vec<[f64; 3]>)> = Vec::new();
+    for (name, e) in [("nu-04999", 5e4), ("E-pa", 5e10), ("E-soft", 1e-3)] {
         let dir = tmpdir(name);
         let path = dir.join("scene.toml");
         std::fs::write(&path, &nu).unwrap();
         let out = dir.join("r.h5");
-        let mut args = vec!["solve", path.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()];
-        for s in &sets {
-            args.extend(["--set", s]);
-        }
-        let o = run(&args);
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let (e0, e1) = (format!("material.0.E={e:e}"), format!("material.1.E={e:e}"));
+        let s = common::solve(&path, &["mesh.n=4", &e0, &e1], &out);
         assert!(out.exists(), "{name}");
+        scaled.push((e, s.solution.displacement));
+    }
+    let (e_ref, u_ref) = &scaled[0];
+    let size = u_ref.iter().flatten().fold(0.0f64, |a, v| a.max((e_ref * v).abs()));
+    for (e, u) in &scaled[1..] {
+        let d = u.iter().flatten().zip(u_ref.iter().flatten()).map(|(a, b)| (e * a - e_ref * b).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-6 * size, "E = {e:e}: E·u differs from E = {e_ref:e} by {:.2e} relative", d / size);
     }
 }
 
