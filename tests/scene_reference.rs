@@ -97,3 +97,48 @@ fn the_docs_give_the_slave_rule() {
         }
     }
 }
+
+/// Every `docs/troubleshooting.md#…` anchor an error names (each kind's section) or a doc
+/// links to is a heading of that page (GitHub's slug: lower case, spaces to hyphens, other
+/// punctuation dropped).
+#[test]
+fn the_troubleshooting_anchors_errors_name_exist() {
+    use tresca_feti::Error;
+    let root = env!("CARGO_MANIFEST_DIR");
+    let page = std::fs::read_to_string(format!("{root}/docs/troubleshooting.md")).unwrap();
+    let slug = |h: &str| h.trim().to_lowercase().chars().filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-').collect::<String>().replace(' ', "-");
+    let headings: BTreeSet<String> = page.lines().filter_map(|l| l.strip_prefix('#')).map(|h| slug(h.trim_start_matches('#'))).collect();
+    let errors = [
+        Error::scene("k", "m"),
+        Error::mesh("f", "m"),
+        Error::io("p", std::io::Error::other("x")),
+        Error::numerical("w", "r"),
+        Error::output("p", "m"),
+        Error::memory("w", "m"),
+    ];
+    let mut anchors: BTreeSet<String> = errors.iter().filter_map(|e| e.docs_section()).map(str::to_string).collect();
+    for dir in ["src", "docs"] {
+        let mut stack = vec![std::path::PathBuf::from(format!("{root}/{dir}"))];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if p.extension().is_some_and(|x| x == "rs" || x == "md") {
+                    let text = std::fs::read_to_string(&p).unwrap();
+                    for part in text.split("troubleshooting.md#").skip(1) {
+                        // `#{s}` in a format string is the section of docs_section, checked above
+                        let a: String = part.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '-').collect();
+                        if !a.is_empty() {
+                            anchors.insert(a);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(anchors.len() >= 6, "{anchors:?}");
+    for a in &anchors {
+        assert!(headings.contains(a), "docs/troubleshooting.md has no heading for #{a} (headings: {headings:?})");
+    }
+}
