@@ -319,3 +319,33 @@ fn two_runs_onto_one_output_leave_one_runs_set() {
         assert!(xdmf.contains("r.h5:"), "pair {pair}: {xdmf}");
     }
 }
+
+/// The XDMF sidecar opened by a reader of its own (meshio, run/peer/xdmf_check.py): points,
+/// cells and every field of every step equal to the HDF5 file's — one step (1 rank), a load
+/// path of three steps (2 ranks, the parallel file) and 10-node tetrahedra on TFETI.
+#[test]
+fn the_xdmf_opens_in_meshio_with_the_hdf5_files_arrays() {
+    let dir = tmpdir("xdmf-meshio");
+    let seed = root().join("run/seed.toml");
+    let gmsh = std::fs::read_to_string(root().join("run/gmsh_blocks.toml")).unwrap().replace("\"../mesh/two_blocks.msh\"", &format!("\"{}\"", root().join("mesh/two_tet10_blocks.msh").display()));
+    let tet10 = dir.join("tet10.toml");
+    std::fs::write(&tet10, gmsh).unwrap();
+    let cases: [(&str, &Path, usize, &[&str], &str); 3] = [
+        ("one", &seed, 1, &["mesh.n=4"], "mesh: 128 points, 54 cells (hexahedron)"),
+        ("path", &seed, 2, &["mesh.n=4", "load.steps=3"], "step 3 (t = 3.0): 128 points"),
+        ("tet10", &tet10, 1, &["decomposition.subdomains=2"], "cells (tetra10)"),
+    ];
+    for (name, scene, ranks, sets, expect) in cases {
+        let out = dir.join(format!("{name}.h5"));
+        let mut args = vec!["solve", scene.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let o = if ranks == 1 { Command::new(BIN).args(&args).output().unwrap() } else { common::mpirun(ranks, &args) };
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/xdmf_check.py")).arg(out.with_extension("xdmf")).output().expect("python3 with meshio (run/install-deps)");
+        let text = String::from_utf8_lossy(&check.stdout);
+        assert!(check.status.success(), "{name}: {text}{}", String::from_utf8_lossy(&check.stderr));
+        assert!(text.contains(expect) && text.contains("equal to the HDF5 file's"), "{name}: {text}");
+    }
+}
