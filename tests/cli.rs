@@ -756,3 +756,43 @@ fn counters_mean_what_they_say() {
     let solver = text.lines().find(|l| l.starts_with("solver ")).unwrap();
     assert_eq!(n > 0, solver.contains(&format!("mixed precision ({n} products in single precision")), "{solver}");
 }
+
+/// `check --ranks P` predicts what `solve` picks under `mpirun -n P`: the same chosen
+/// candidate of the decomposition plan and the same dual (the seed at N = 16 and 24, the
+/// tutorial, the roller slabs; 2 ranks).
+#[test]
+fn check_with_ranks_predicts_the_decomposition_solve_picks() {
+    let dir = tmpdir("check-ranks");
+    for (name, scene, sets) in [("seed16", "run/seed.toml", vec!["mesh.n=16"]), ("seed24", "run/seed.toml", vec!["mesh.n=24"]), ("tutorial", "run/tutorial.toml", vec![]), ("slabs", "run/bench/plane_strain_rollers.toml", vec![])] {
+        let scene = root().join(scene);
+        let mut args = vec!["check", scene.to_str().unwrap(), "--ranks", "2"];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        let o = run(&args);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let chosen = text.lines().find(|l| l.ends_with("← chosen")).unwrap_or_else(|| panic!("{name}: {text}"));
+        let predicted = chosen.split_whitespace().take_while(|w| *w != "-" && w.parse::<f64>().is_err()).collect::<Vec<_>>().join(" ");
+        let dual = text.lines().find_map(|l| l.strip_prefix("dual: ")).unwrap().to_string();
+        let out = dir.join(format!("{name}.h5"));
+        let mut args = vec!["solve", scene.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        let o = mpirun(2, &args);
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
+        let plan = report["decomposition_plan"].as_array().unwrap_or_else(|| panic!("{name}: no plan in the report"));
+        let best = plan.iter().min_by(|a, b| a["time"].as_f64().unwrap().total_cmp(&b["time"].as_f64().unwrap())).unwrap();
+        let picked = if best["tfeti"].as_bool().unwrap() {
+            let p: Vec<String> = best["parts"].as_array().unwrap().iter().map(|v| v.to_string()).collect();
+            format!("TFETI {}", p.join("/"))
+        } else {
+            "monolithic".to_string()
+        };
+        assert_eq!(predicted, picked, "{name}: check predicted `{chosen}`");
+        let problem = report["problem"].as_str().unwrap();
+        assert!(problem.contains(&format!("({} dual)", if dual == "TFETI" { "TFETI" } else { "monolithic" })), "{name}: check said dual {dual}, solve: {problem}");
+    }
+}

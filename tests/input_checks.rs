@@ -341,3 +341,16 @@ fn a_body_too_thin_for_its_elements_is_refused_naming_it() {
     assert_clean_failure("thin", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000000001]"], &["body[0].box", "body \"upper\"", "thinner than the element can represent"]);
     check_ok("thin-ok", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000001]"]);
 }
+
+/// The `max_overlap` boundary: the seed at N = 4 with the upper block lowered by δ, the corner
+/// slave node's element size √(its area) = √(2/36) = 0.2357: δ = 2.30e-4 (under 1e-3 of it) is
+/// an initial interference the solution removes, δ = 2.40e-4 is refused naming the node and
+/// the key, and max_overlap = 1e-2 takes it again.
+#[test]
+fn max_overlap_is_a_sharp_boundary() {
+    let lowered = |d: &str| format!("body.0.box.min=[0.0, 0.0, {d}]");
+    let inside = check_ok("overlap-inside", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99977")]);
+    assert!(inside.contains("initial interference: 16 slave nodes start inside the master, at most 2.300e-4 m deep"), "{inside}");
+    assert_clean_failure("overlap-beyond", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99976")], &["contact.pair[0]", "bodies overlap", "(0.000000, 0.000000, 0.999760)", "2.400e-4", "max_overlap = 1e-3", "2.357e-1"]);
+    check_ok("overlap-wider", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99976"), "--set", "contact.pair.0.max_overlap=1e-2"]);
+}
