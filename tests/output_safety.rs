@@ -221,6 +221,11 @@ fn full_disk(name: &str, size: &str, n: usize, checks: &[&str], rank_counts: &[u
 /// A run held at `TRESCA_FETI_PAUSE=<pause>` in `dir/o`, on 1 rank or under `mpirun -n 2`,
 /// signalled with SIGTERM once `ready` holds for the folder's file names; its output.
 fn signalled_at(dir: &Path, pause: &str, ranks: usize, ready: impl Fn(&[String]) -> bool) -> Output {
+    signalled_with(dir, pause, ranks, "-TERM", ready)
+}
+
+/// [`signalled_at`] with the signal `signal` (`-TERM`, `-INT`) for `kill`.
+fn signalled_with(dir: &Path, pause: &str, ranks: usize, signal: &str, ready: impl Fn(&[String]) -> bool) -> Output {
     let scene = root().join("run/seed.toml");
     let out = dir.join("o").join("r.h5");
     let args = ["solve", scene.to_str().unwrap(), "--set", "mesh.n=3", "--out", out.to_str().unwrap(), "-q"];
@@ -238,7 +243,7 @@ fn signalled_at(dir: &Path, pause: &str, ranks: usize, ready: impl Fn(&[String])
     }
     assert!(ready(&names(&dir.join("o"))), "the run never got there: {:?}", names(&dir.join("o")));
     std::thread::sleep(Duration::from_millis(300));
-    assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
+    assert!(Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap().success());
     let deadline = Instant::now() + Duration::from_secs(20);
     while child.try_wait().unwrap().is_none() {
         assert!(Instant::now() < deadline, "still running 20 s after SIGTERM");
@@ -348,4 +353,27 @@ fn the_xdmf_opens_in_meshio_with_the_hdf5_files_arrays() {
         assert!(check.status.success(), "{name}: {text}{}", String::from_utf8_lossy(&check.stderr));
         assert!(text.contains(expect) && text.contains("equal to the HDF5 file's"), "{name}: {text}");
     }
+}
+
+/// SIGINT (Ctrl-C) in the output phase: on one process exit status 130 (128 + 2) and the one
+/// line naming SIGINT; under `mpirun -n 2` (which passes the ranks a SIGTERM and exits with its
+/// own status) a non-zero exit and one line. No file is left either way.
+#[test]
+fn sigint_in_the_output_phase_exits_128_plus_the_signal() {
+    let temps = |names: &[String]| names.iter().filter(|n| n.ends_with(".tmp")).count() == 3;
+    let dir = tmpdir("sigint-1");
+    let o = signalled_with(&dir, "output", 1, "-INT", temps);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("interrupted by SIGINT") && stderr.contains("no result written"), "{stderr}");
+    assert!(names(&dir.join("o")).is_empty(), "left behind: {:?}", names(&dir.join("o")));
+    let dir = tmpdir("sigint-2");
+    let o = signalled_with(&dir, "output", 2, "-INT", temps);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let ours: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(ours.len(), 1, "{stderr}");
+    assert!(ours[0].contains("interrupted by SIG") && ours[0].contains("no result written"), "{}", ours[0]);
+    assert!(names(&dir.join("o")).is_empty(), "left behind: {:?}", names(&dir.join("o")));
 }

@@ -66,12 +66,15 @@ pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
     std::thread::Builder::new().name("signals".into()).spawn(move || {
         if let Some(sig) = signals.forever().next() {
             let files = list();
-            let removed = files.temps.iter().filter(|f| std::fs::remove_file(f).is_ok()).count();
+            // every rank removes the set's files (another rank may have been first)
+            for f in &files.temps {
+                let _ = std::fs::remove_file(f);
+            }
             let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
-            // nothing removed nor written: a rank that mpirun ends after another failed (its
+            // nothing staged nor written: a rank that mpirun ends after another failed (its
             // error is said)
-            if loud && removed > 0 {
-                eprintln!("error: interrupted by {name}; removed {removed} temporary file(s), no result written");
+            if loud && !files.temps.is_empty() {
+                eprintln!("error: interrupted by {name}; removed {} temporary file(s), no result written", files.temps.len());
             } else if loud && !files.written.is_empty() {
                 let names: Vec<String> = files.written.iter().map(|p| p.display().to_string()).collect();
                 eprintln!("error: interrupted by {name} after the results were written (complete): {}", names.join(", "));
