@@ -117,3 +117,35 @@ fn a_load_no_friction_can_hold_is_refused_before_the_solve_naming_body_and_direc
         assert!((f[0] + 0.55).abs() <= 1e-7 && (f[2] - 2.0).abs() <= 1e-7, "{name}: {f:?}");
     }
 }
+
+/// The guard's refusal end to end (a result that misses its check, injected on one rank with
+/// `TRESCA_FETI_FAULT=accuracy@<rank>`): exit 1 on every rank, one line naming the solver and
+/// the check, no result file — on one process (monolithic dual) and under mpirun -n 2 with the
+/// miss on rank 1 (TFETI).
+#[test]
+fn a_result_that_fails_its_check_is_refused_with_one_line_and_no_file() {
+    let dir = common::tmpdir("guard-refusal");
+    let seed = common::root().join("run/seed.toml");
+    for (name, ranks, fault, sets) in [("mono", 1, "accuracy@0", vec!["mesh.n=6"]), ("tfeti", 2, "accuracy@1", vec!["mesh.n=6", "decomposition.subdomains=2", "decomposition.tfeti=true"])] {
+        let out = dir.join(name).join("r.h5");
+        let mut args = vec!["solve", seed.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        let o = if ranks == 1 {
+            std::process::Command::new(common::BIN).args(&args).env("TRESCA_FETI_FAULT", fault).output().unwrap()
+        } else {
+            common::mpirun_cmd(ranks, &args).env("TRESCA_FETI_FAULT", fault).output().unwrap()
+        };
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name}: {stderr}");
+        if ranks == 1 {
+            assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
+        }
+        let ours: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(ours.len(), 1, "{name}: {stderr}");
+        assert!(ours[0].contains("the result fails its accuracy check") && ours[0].contains("the recovered equilibrium"), "{name}: {}", ours[0]);
+        let left: Vec<_> = std::fs::read_dir(dir.join(name)).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+        assert!(left.is_empty(), "{name}: files left behind: {left:?}");
+    }
+}

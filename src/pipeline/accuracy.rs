@@ -105,6 +105,12 @@ impl Verdict {
                 (excess, relative) = (e.excess(scale[0]), e.relative());
             }
         }
+        // `TRESCA_FETI_FAULT=accuracy@<rank>`: that rank's equilibrium reads as missed (to test
+        // the guard's refusal end to end)
+        let injected = std::env::var("TRESCA_FETI_FAULT").is_ok_and(|f| f.split_once('@').is_some_and(|(p, r)| p == "accuracy" && r.parse::<usize>().ok() == Some(comm.rank())));
+        if injected {
+            (excess, relative) = (f64::INFINITY, f64::INFINITY);
+        }
         let mut v = [excess, relative];
         comm.max_f64(&mut v);
         Verdict { excess: v[0], relative: v[1], kkt, eps }
