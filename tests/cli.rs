@@ -796,3 +796,37 @@ fn check_with_ranks_predicts_the_decomposition_solve_picks() {
         assert!(problem.contains(&format!("({} dual)", if dual == "TFETI" { "TFETI" } else { "monolithic" })), "{name}: check said dual {dual}, solve: {problem}");
     }
 }
+
+/// `check` refuses what `solve` refuses after the plan, with the same line: a load path
+/// without contact, an FCLIB export without a Coulomb pair, the monolithic dual's export on a
+/// TFETI scene (before, `check` passed them).
+#[test]
+fn check_refuses_what_solve_refuses() {
+    let dir = tmpdir("check-like-solve");
+    let seed = root().join("run/seed.toml");
+    let fclib = format!("output.export_fclib=\"{}\"", dir.join("f.h5").display());
+    let dual = format!("output.export_dual=\"{}\"", dir.join("d.h5").display());
+    for (sets, key) in [
+        (vec!["mesh.n=4", "contact.enabled=false", "load.steps=2"], "load.steps"),
+        (vec!["mesh.n=4", fclib.as_str()], "output.export_fclib"),
+        (vec!["mesh.n=4", dual.as_str(), "decomposition.subdomains=2", "decomposition.tfeti=true"], "output.export_dual"),
+    ] {
+        let mut lines = Vec::new();
+        for cmd in ["check", "solve"] {
+            let out = dir.join("r.h5");
+            let mut args = vec![cmd, seed.to_str().unwrap()];
+            if cmd == "solve" {
+                args.extend(["-q", "--out", out.to_str().unwrap()]);
+            }
+            for s in &sets {
+                args.extend(["--set", s]);
+            }
+            let o = run(&args);
+            let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
+            assert_eq!(o.status.code(), Some(1), "{cmd} {sets:?}: {err}");
+            assert!(err.lines().count() == 1 && err.starts_with(&format!("error: {key}:")), "{cmd} {sets:?}: {err}");
+            lines.push(err);
+        }
+        assert_eq!(lines[0], lines[1], "check and solve say the same");
+    }
+}

@@ -550,24 +550,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
-    for (key, set) in [("output.export_dual", ls.scene.output.export_dual.is_some()), ("output.export_fclib", ls.scene.output.export_fclib.is_some())] {
-        if !set {
-            continue;
-        }
-        let why = if tfeti {
-            Some("exports the monolithic dual; this scene is solved by TFETI (set decomposition.subdomains = 1)")
-        } else if !model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) {
-            Some("exports a Coulomb problem; the scene has no Coulomb pair")
-        } else {
-            None
-        };
-        if let Some(why) = why {
-            return Err(Error::scene(key, why));
-        }
-    }
-    if model.pairs.is_none() && model.path.is_path() {
-        return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
-    }
+    refusals_after_plan(&ls, &model, tfeti)?;
     let (sol, outcome) = match &model.pairs {
         _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o))),
@@ -615,6 +598,31 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     let files = staged.commit(comm)?;
     pause_for_tests("committed");
     Ok(Summary { report, files, solution: sol })
+}
+
+/// What `solve` refuses once the plan has chosen the dual (`tfeti`), and `check` with it: an
+/// export of the monolithic dual on a TFETI scene, an FCLIB export without a Coulomb pair, a
+/// load path without contact.
+fn refusals_after_plan(ls: &LoadedScene, model: &Model, tfeti: bool) -> Result<()> {
+    for (key, set) in [("output.export_dual", ls.scene.output.export_dual.is_some()), ("output.export_fclib", ls.scene.output.export_fclib.is_some())] {
+        if !set {
+            continue;
+        }
+        let why = if tfeti {
+            Some("exports the monolithic dual; this scene is solved by TFETI (set decomposition.subdomains = 1)")
+        } else if !model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) {
+            Some("exports a Coulomb problem; the scene has no Coulomb pair")
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            return Err(Error::scene(key, why));
+        }
+    }
+    if model.pairs.is_none() && model.path.is_path() {
+        return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
+    }
+    Ok(())
 }
 
 /// A scene with a body held by contact alone ([`Model::floating`]) is solved by TFETI with the
@@ -965,6 +973,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     let dec = &ls.scene.decomposition;
     preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
+    refusals_after_plan(&ls, &model, dec.is_tfeti(&body_dofs(&model)))?;
     if dec.is_tfeti(&body_dofs(&model)) {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = crate::feti::decomposition::decompose_each(mesh, &parts)?;
