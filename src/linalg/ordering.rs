@@ -46,10 +46,10 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
             iperm.as_mut_ptr(),
         )
     });
-    if status == metis_sys::rstatus_et_METIS_ERROR_MEMORY as i32 {
+    if status == metis_sys::rstatus_et_METIS_ERROR_MEMORY {
         return Err(Error::memory(METIS_MEMORY, format!("METIS ran out of memory ordering a graph of {n} nodes and {} edges", adjncy.len() / 2)));
     }
-    if status != metis_sys::rstatus_et_METIS_OK as i32 {
+    if status != metis_sys::rstatus_et_METIS_OK {
         return Err(Error::numerical("METIS ordering", format!("METIS_NodeND failed with status {status}")));
     }
     Ok(perm.into_iter().map(|v| v as usize).collect())
