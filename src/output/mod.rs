@@ -323,21 +323,6 @@ pub fn stage<C: Comm>(comm: &C, h5: &Path, data: &OutputData, xdmf: bool, report
     Ok(staged)
 }
 
-/// Replaces the JSON report beside `h5` (rank 0; written to a temporary file, then renamed):
-/// the report once the `output` phase it times is over.
-pub fn rewrite_report<C: Comm>(comm: &C, h5: &Path, report: &serde_json::Value) -> Result<()> {
-    comm.agree(if comm.is_root() {
-        let (path, temp) = (sibling(h5, "json"), staging(&sibling(h5, "json"), &tmpfiles::token()));
-        tmpfiles::track(&temp);
-        let r = write_json(&temp, &path, report).and_then(|()| rename_all(std::slice::from_ref(&temp), std::slice::from_ref(&path)));
-        let _ = std::fs::remove_file(&temp);
-        tmpfiles::untrack(&temp);
-        r
-    } else {
-        Ok(())
-    })
-}
-
 /// The JSON text of `report` into `temp` (`shown` names the result in messages).
 fn write_json(temp: &Path, shown: &Path, report: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(report).map_err(|e| Error::output(shown.display().to_string(), e.to_string()))?;
