@@ -19,6 +19,14 @@ press_fit_rings    a shrink fit, quarter model in plane strain: the ring "shaft"
                    hexahedra on the same 24 angular divisions (16 radial in the shaft, 24 in the
                    hub); surfaces "shaft_outer", "hub_inner", "<ring>_x0", "<ring>_y0" (the
                    symmetry planes) and "<ring>_z" (both z faces); ASCII only
+pipe / pipe_tet10  a thick-walled pipe under internal pressure, quarter model in plane strain:
+                   the ring "pipe" (radii 1 to 2, 0.1 thick in z), structured hexahedra on 8
+                   radial and 16 angular divisions, or the same divisions split into 10-node
+                   tetrahedra with curved (quadratic) arcs; surfaces "inner", "outer", "x0",
+                   "y0" and "z" (both z faces); ASCII only
+hollow_sphere_tet10  an octant of a hollow sphere, radii 1 to 2 (x, y, z > 0), in 10-node
+                   tetrahedra of size 0.3 with curved faces: body "shell", surfaces "inner",
+                   "outer", "x0", "y0", "z0"; ASCII only
 wedge_layer        the unit cube as one body "body": a boundary layer of wedges (triangles of
                    z = 0 extruded to z = 0.2 in 2 layers) under 4-node tetrahedra; its
                    sub-volumes are also "layer" and "core"; physical surfaces "bottom" (z = 0,
@@ -162,6 +170,63 @@ def press_fit_rings(name):
     gmsh.write(f"{name}.msh")
 
 
+def pipe(name, order):
+    gmsh.clear()
+    gmsh.model.add(name)
+    geo = gmsh.model.geo
+    c = geo.addPoint(0, 0, 0)
+    p = [geo.addPoint(1, 0, 0), geo.addPoint(2, 0, 0), geo.addPoint(0, 2, 0), geo.addPoint(0, 1, 0)]
+    lines = [geo.addLine(p[0], p[1]), geo.addCircleArc(p[1], c, p[2]), geo.addLine(p[2], p[3]), geo.addCircleArc(p[3], c, p[0])]
+    base = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    for line, n in zip(lines, (8, 16, 8, 16)):
+        geo.mesh.setTransfiniteCurve(line, n + 1)
+    geo.mesh.setTransfiniteSurface(base)
+    hex_ = order == 1
+    if hex_:
+        geo.mesh.setRecombine(2, base)
+    ext = geo.extrude([(2, base)], 0, 0, 0.1, numElements=[1], recombine=hex_)
+    geo.synchronize()
+    model = gmsh.model
+    y0, outer, x0, inner = [e[1] for e in ext[2:6]]
+    model.addPhysicalGroup(3, [ext[1][1]], name="pipe")
+    for tag, label in ((inner, "inner"), (outer, "outer"), (x0, "x0"), (y0, "y0")):
+        model.addPhysicalGroup(2, [tag], name=label)
+    model.addPhysicalGroup(2, [base, ext[0][1]], name="z")
+    model.mesh.generate(3)
+    if order > 1:
+        model.mesh.setOrder(order)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(f"{name}.msh")
+
+
+def hollow_sphere(name, size):
+    gmsh.clear()
+    gmsh.model.add(name)
+    occ = gmsh.model.occ
+    shell, _ = occ.cut([(3, occ.addSphere(0, 0, 0, 2))], [(3, occ.addSphere(0, 0, 0, 1))])
+    octant, _ = occ.intersect(shell, [(3, occ.addBox(0, 0, 0, 3, 3, 3))])
+    occ.synchronize()
+    model = gmsh.model
+    vol = octant[0][1]
+    model.addPhysicalGroup(3, [vol], name="shell")
+    faces = {"inner": [], "outer": [], "x0": [], "y0": [], "z0": []}
+    for _, t in model.getBoundary([(3, vol)], oriented=False):
+        x0, y0, z0, x1, y1, z1 = model.getBoundingBox(2, t)
+        if max(x1, y1, z1) > 1.5:
+            key = "outer" if min(x1 - x0, y1 - y0, z1 - z0) > 1e-6 else ("x0" if x1 < 1e-6 else "y0" if y1 < 1e-6 else "z0")
+        else:
+            key = "inner"
+        faces[key].append(t)
+    for key, tags in faces.items():
+        model.addPhysicalGroup(2, tags, name=key)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    model.mesh.generate(3)
+    model.mesh.setOrder(2)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(f"{name}.msh")
+
+
 gmsh.initialize()
 common_options()
 two_blocks("two_tet_blocks", 1, 0.4)
@@ -170,4 +235,7 @@ wedge_layer("wedge_layer", 0.3)
 sphere_on_block("sphere_on_block", 0.3)
 sphere_on_block("sphere_on_block_tet10", 0.5, 2)
 press_fit_rings("press_fit_rings")
+pipe("pipe", 1)
+pipe("pipe_tet10", 2)
+hollow_sphere("hollow_sphere_tet10", 0.3)
 gmsh.finalize()

@@ -9,7 +9,7 @@ use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact, SlipBound, Tied};
 use crate::qp::cone::Coefficient;
 use crate::error::{Error, Result};
-use crate::fem::assembly::add_traction;
+use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
@@ -304,7 +304,10 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, t) in scene.traction.iter().enumerate() {
         let f = &mesh.faces[face_index(&mesh, &faces, format!("traction[{i}].face"), &t.face)?];
         let mut unit = vec![0.0; loads.len()];
-        add_traction(&mesh, f, t.p, 0, &mut unit);
+        match t.pressure {
+            Some(p) => add_pressure(&mesh, f, p, 0, &mut unit),
+            None => add_traction(&mesh, f, t.p.unwrap_or_default(), 0, &mut unit),
+        }
         let fk = factors(&t.factors);
         for (l, u) in loads.iter_mut().zip(&unit) {
             *l += fk[steps - 1] * u;

@@ -411,8 +411,12 @@ fn all_components() -> Vec<Component> {
 #[serde(deny_unknown_fields)]
 pub struct Traction {
     pub face: String,
-    /// Surface traction (MPa), constant over the face.
-    pub p: [f64; 3],
+    /// Surface traction (MPa), constant over the face, in global axes; or
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub p: Option<[f64; 3]>,
+    /// a pressure (MPa) normal to each facet, positive into the body (give one of the two).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<f64>,
     /// `p` × f_k at load step k (default: the linear ramp k/K).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub factors: Option<Vec<f64>>,
@@ -1274,8 +1278,20 @@ impl Scene {
             }
         }
         for (i, t) in self.traction.iter().enumerate() {
-            finite(format!("traction[{i}].p"), &t.p)?;
-            carried(format!("traction[{i}].p"), "a nonzero traction", &t.p, " MPa")?;
+            match (&t.p, t.pressure) {
+                (Some(p), None) => {
+                    finite(format!("traction[{i}].p"), p)?;
+                    carried(format!("traction[{i}].p"), "a nonzero traction", p, " MPa")?;
+                }
+                (None, Some(p)) => {
+                    finite(format!("traction[{i}].pressure"), &[p])?;
+                    carried(format!("traction[{i}].pressure"), "a nonzero pressure", &[p], " MPa")?;
+                }
+                (p, _) => {
+                    let why = if p.is_some() { "give either `p` (a traction vector) or `pressure`, not both" } else { "give `p` (a traction vector) or `pressure` (normal, positive into the body)" };
+                    return Err(Error::scene(format!("traction[{i}].{}", if p.is_some() { "pressure" } else { "p" }), why));
+                }
+            }
         }
         for (i, t) in self.ties.iter().enumerate() {
             if t.slave == t.master {

@@ -5,7 +5,7 @@
 
 use std::ops::Range;
 
-use super::cell::{cell_min_jacobian, cell_stiffness, facet_nodal_areas};
+use super::cell::{cell_min_jacobian, cell_stiffness, facet_area_vector, facet_nodal_areas, facet_rule, facet_shape};
 use super::material::Lame;
 use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;
@@ -261,6 +261,23 @@ pub fn body_rhs(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f6
         lift(cell_stiffness(cell.kind, &mesh.cell_coords(e), lame).rows().1, &ld, dofs, &mut f);
     }
     f
+}
+
+/// Consistent nodal forces of a uniform pressure `p` on `face`, normal to it and positive into
+/// the body: −p ∫ N_a n dA per facet, n the outward normal of the facet's true (curved) map.
+pub fn add_pressure(mesh: &Mesh, face: &Face, p: f64, node0: usize, loads: &mut [f64]) {
+    for q in &face.facets {
+        let x = mesh.facet_coords(q);
+        for (xi, wq) in facet_rule(q.kind) {
+            let (n, d) = facet_shape(q.kind, xi);
+            let c = facet_area_vector(&x, &d);
+            for (a, &v) in q.nodes().iter().enumerate() {
+                for k in 0..3 {
+                    loads[3 * (v - node0) + k] -= p * wq * n[a] * c[k];
+                }
+            }
+        }
+    }
 }
 
 /// Consistent nodal forces of a uniform traction `p` on `face` (∫ N_a dA per facet), added into

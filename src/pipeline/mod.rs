@@ -929,7 +929,14 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     for (i, t) in ls.scene.traction.iter().enumerate() {
         let r = model.path.traction_resultant(i);
         let a = mesh.face(&t.face).map_or(f64::NAN, |f| crate::fem::cell::face_area(f, &mesh.nodes));
-        let _ = writeln!(s, "traction[{i}] on {}: p = ({}, {}, {}){stress} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, t.p[0], t.p[1], t.p[2], r[0], r[1], r[2]);
+        let load = match (t.p, t.pressure) {
+            (_, Some(p)) => format!("pressure {p}{stress}"),
+            (p, None) => {
+                let p = p.unwrap_or_default();
+                format!("p = ({}, {}, {}){stress}", p[0], p[1], p[2])
+            }
+        };
+        let _ = writeln!(s, "traction[{i}] on {}: {load} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, r[0], r[1], r[2]);
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
     let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e}){force}", load[0], load[1], load[2]);
