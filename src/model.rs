@@ -11,6 +11,7 @@ use crate::qp::cone::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::material::Lame;
+use crate::fem::cell::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
 use crate::scene::{Component, LoadedScene, Scene};
@@ -44,9 +45,49 @@ pub struct Model {
     pub tied_groups: Vec<Vec<usize>>,
     /// Why the slave of each pair given by `faces` is the one it is (pair index, words).
     pub slave_choice: Vec<(usize, String)>,
+    /// The faces `[[face]]` cut from others, in scene order.
+    pub cut_faces: Vec<CutFace>,
     /// Each body's node order for its factor, computed once: `[plain, contact nodes last]`
     /// (`pipeline::body_order`; the plan counts its fill, the factorization uses it).
     pub orders: Vec<[OnceLock<NodeOrder>; 2]>,
+}
+
+/// A face cut from another by a region: the facets whose centres lie in it.
+#[derive(Clone, Debug)]
+pub struct CutFace {
+    /// Its index in `mesh.faces`, and the face it is cut from.
+    pub face: usize,
+    pub from: usize,
+    /// The region, in words.
+    pub region: String,
+    /// The area of `from` inside the region (what the user means by the face).
+    pub region_area: f64,
+}
+
+/// How far a cut face's area may differ from its region's before `check` warns of a traction on it.
+pub const CUT_AREA_TOLERANCE: f64 = 0.02;
+
+/// The facets of `face` whose centres lie in `region`, and the area of `face` inside `region`
+/// (sampled where the region's boundary crosses a facet: [`facet_area_inside`]).
+fn cut(mesh: &Mesh, face: &Face, region: &crate::scene::Region) -> (Vec<crate::mesh::Facet>, f64) {
+    let mut kept = Vec::new();
+    let mut area = 0.0;
+    for q in &face.facets {
+        let x = mesh.facet_coords(q);
+        let centre = region.contains(facet_centre(q.kind, &x));
+        if centre {
+            kept.push(*q);
+        }
+        let inside = x.iter().filter(|&&p| region.contains(p)).count();
+        area += if inside == x.len() && centre {
+            facet_nodal_areas(q.kind, &x).iter().sum()
+        } else if inside == 0 && !centre {
+            0.0
+        } else {
+            facet_area_inside(q.kind, &x, |p| region.contains(p))
+        };
+    }
+    (kept, area)
 }
 
 /// Nodes and elements of the whole mesh.
@@ -223,6 +264,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (k, f) in mesh.faces.iter().enumerate() {
         faces.entry(f.name.clone()).or_insert(k);
     }
+    let mut cut_faces = Vec::with_capacity(scene.faces.len());
     for (i, f) in scene.faces.iter().enumerate() {
         let key = |k: &str| format!("face[{i}].{k}");
         let body = *body_index.get(f.body.as_str()).ok_or_else(|| Error::scene(key("body"), format!("unknown body \"{}\"", f.body)))?;
@@ -232,11 +274,12 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         let src = face_index(&mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
         let region = f.region(i)?;
-        let facets: Vec<_> = mesh.faces[src].facets.iter().filter(|q| q.nodes().iter().all(|&v| region.contains(mesh.nodes[v]))).copied().collect();
+        let (facets, region_area) = cut(&mesh, &mesh.faces[src], &region);
         if facets.is_empty() {
-            return Err(Error::scene(format!("face[{i}]"), format!("no facet of \"{}\" lies inside {}", mesh.faces[src].name, region.describe())));
+            return Err(Error::scene(format!("face[{i}]"), format!("no facet of \"{}\" has its centre inside {}", mesh.faces[src].name, region.describe())));
         }
         faces.insert(full.clone(), mesh.faces.len());
+        cut_faces.push(CutFace { face: mesh.faces.len(), from: src, region: region.describe(), region_area });
         mesh.faces.push(Face { name: full, body, facets });
     }
 
@@ -457,7 +500,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
     let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
     let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, orders })
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, cut_faces, orders })
 }
 
 /// The slave rule in words, as `check` prints it and the docs state it ([`choose_slave`]).

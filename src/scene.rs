@@ -248,7 +248,7 @@ pub struct GmshDef {
     pub translate: Option<[f64; 3]>,
 }
 
-/// `name` becomes the face `<body>.<name>`: the facets of `<body>.<from>` whose nodes all lie in
+/// `name` becomes the face `<body>.<name>`: the facets of `<body>.<from>` whose centres lie in
 /// one region: the box `[min, max]`, a ball, an infinite cylinder, or a half-space.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

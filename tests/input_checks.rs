@@ -268,26 +268,37 @@ fn every_scene_in_run_still_checks() {
     }
 }
 
-/// `[[face]]` regions: a box, a ball, a cylinder and a half-space cut the facets whose nodes all
-/// lie in them; `check` prints each face's area and each traction's resultant (a pressure on a
-/// cut face carries its area, not the region's). Two regions, a radius ≤ 0 or a zero normal are
-/// refused naming the key. Before: boxes only, and no area or resultant printed.
+/// `[[face]]` regions: a box, a ball, a cylinder and a half-space cut the facets whose centres
+/// lie in them; `check` prints each face's area next to the area of its source face inside the
+/// region, each traction's resultant (a traction on a cut face carries the facets' area), and a
+/// warning where the two areas differ by more than 2 %. Two regions, a radius ≤ 0 or a zero
+/// normal are refused naming the key. Before: facets whose nodes all lay inside (the ball kept
+/// 10/9 of its 1.38), no region area and no warning.
 #[test]
 fn faces_are_cut_by_boxes_balls_cylinders_and_half_spaces_with_their_areas_printed() {
     // the seed's upper zmax face (z = 2) is 2 × 1 on 4 × 4 nodes: facets 2/3 × 1/3
     let region = |r: &str| format!("[[face]]\nname = \"patch\"\nbody = \"upper\"\nfrom = \"zmax\"\n{r}\n");
+    // (region, the facets' area, the region's area on the face: the quarter disc of radius 1.5
+    // on the 2 × 1 face is ∫₀¹ √(2.25 − y²) dy)
+    let disc = 0.5 * 1.25f64.sqrt() + 1.125 * (1.0f64 / 1.5).asin();
     let cases = [
-        ("box", "min = [0.0, 0.0, 1.9]\nmax = [1.4, 1.0, 2.1]", 4.0 / 3.0),
-        ("sphere", "sphere = { centre = [0.0, 0.0, 2.0], radius = 1.5 }", 2.0 / 3.0 * 2.0 / 3.0 * 2.0 + 2.0 / 3.0 * 1.0 / 3.0),
-        ("cylinder", "cylinder = { point = [0.0, 0.0, 2.0], axis = [0.0, 1.0, 0.0], radius = 1.4 }", 4.0 / 3.0),
-        ("half_space", "half_space = { point = [1.3, 0.0, 0.0], normal = [1.0, 0.0, 0.0] }", 2.0 / 3.0),
+        ("box", "min = [0.0, 0.0, 1.9]\nmax = [1.4, 1.0, 2.1]", 4.0 / 3.0, 1.4),
+        ("sphere", "sphere = { centre = [0.0, 0.0, 2.0], radius = 1.5 }", 4.0 / 3.0, disc),
+        ("cylinder", "cylinder = { point = [0.0, 0.0, 2.0], axis = [0.0, 1.0, 0.0], radius = 1.4 }", 4.0 / 3.0, 1.4),
+        ("half_space", "half_space = { point = [1.3, 0.0, 0.0], normal = [1.0, 0.0, 0.0] }", 2.0 / 3.0, 0.7),
+        ("exact", "min = [0.0, 0.0, 1.9]\nmax = [1.3333333333333333, 1.0, 2.1]", 4.0 / 3.0, 4.0 / 3.0),
     ];
-    for (name, r, area) in cases {
+    for (name, r, area, region_area) in cases {
         let scene = format!("{}\n{}\n[[traction]]\nface = \"upper.patch\"\np = [0.0, 0.0, -3.0]\n", SEED, region(r));
         let out = check_ok(name, &scene, &["--set", "mesh.n=4"]);
         let line = out.lines().find(|l| l.starts_with("  upper.patch:")).unwrap_or_else(|| panic!("{name}: {out}"));
-        let printed: f64 = line.rsplit("area ").next().unwrap().split_whitespace().next().unwrap().parse().unwrap();
+        let printed: f64 = line.split("area ").nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap();
         assert!((printed - area).abs() <= 1e-6 * area, "{name}: area {printed} ≠ {area} ({line})");
+        let covers: f64 = line.split("the region covers ").nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap();
+        // the facets the region's edge crosses are sampled to 2⁻⁹ of their size
+        assert!((covers - region_area).abs() <= 1e-3 * region_area, "{name}: the region's area {covers} ≠ {region_area} ({line})");
+        let warned = out.lines().any(|l| l.starts_with("warning: traction[2] on upper.patch: the face's facets cover"));
+        assert_eq!(warned, (area / region_area - 1.0).abs() > 0.02, "{name}: {out}");
         let t = out.lines().find(|l| l.starts_with("traction[2] on upper.patch")).unwrap_or_else(|| panic!("{name}: {out}"));
         let fz: f64 = t.split("resultant (").nth(1).unwrap().split(')').next().unwrap().split(", ").nth(2).unwrap().parse().unwrap();
         assert!((fz + 3.0 * area).abs() <= 1e-6 * area, "{name}: resultant {fz} ≠ −3 × {area} ({t})");

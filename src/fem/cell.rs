@@ -182,6 +182,70 @@ pub fn facet_nodal_areas(kind: FacetKind, x: &[[f64; 3]]) -> Vec<f64> {
     w
 }
 
+/// The point of a facet's map at reference point `xi`.
+pub fn facet_point(kind: FacetKind, x: &[[f64; 3]], xi: [f64; 2]) -> [f64; 3] {
+    let n = facet_shape(kind, xi).0;
+    std::array::from_fn(|k| x.iter().zip(&n).map(|(p, w)| w * p[k]).sum())
+}
+
+/// The image of the reference centre (a triangle's centroid, a quadrilateral's (0, 0)).
+pub fn facet_centre(kind: FacetKind, x: &[[f64; 3]]) -> [f64; 3] {
+    let xi = match kind {
+        FacetKind::Tri3 | FacetKind::Tri6 => [1.0 / 3.0; 2],
+        FacetKind::Quad4 | FacetKind::Quad8 => [0.0; 2],
+    };
+    facet_point(kind, x, xi)
+}
+
+/// The area of the part of a facet where `inside` holds: the reference domain is split in four
+/// (a triangle by its edge midpoints) at least twice, and on to 2⁻⁹ of its size where the
+/// region's edge crosses a part (its corners and centre disagree); each part is integrated by
+/// its centre. Within about 10⁻³ of the facet's size times the cut's length.
+pub fn facet_area_inside(kind: FacetKind, x: &[[f64; 3]], inside: impl Fn([f64; 3]) -> bool) -> f64 {
+    const MIN_DEPTH: usize = 2;
+    const MAX_DEPTH: usize = 9;
+    let density = |xi: [f64; 2]| {
+        let c = facet_area_vector(x, &facet_shape(kind, xi).1);
+        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    let is_in = |xi: [f64; 2]| inside(facet_point(kind, x, xi));
+    let mid = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    // a part: its corners (3 or 4) in the reference domain
+    let mut stack: Vec<(Vec<[f64; 2]>, usize)> = match kind {
+        FacetKind::Tri3 | FacetKind::Tri6 => vec![(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 0)],
+        FacetKind::Quad4 | FacetKind::Quad8 => vec![(vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]], 0)],
+    };
+    let mut area = 0.0;
+    while let Some((p, depth)) = stack.pop() {
+        let n = p.len() as f64;
+        let centre = [p.iter().map(|v| v[0]).sum::<f64>() / n, p.iter().map(|v| v[1]).sum::<f64>() / n];
+        let c_in = is_in(centre);
+        let uniform = depth >= MIN_DEPTH && p.iter().all(|&v| is_in(v) == c_in);
+        if uniform || depth == MAX_DEPTH {
+            if c_in {
+                // the reference area of the part: a triangle's half cross product, a
+                // parallelogram's cross product
+                let cross = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+                area += density(centre) * if p.len() == 3 { 0.5 * cross.abs() } else { cross.abs() };
+            }
+            continue;
+        }
+        if p.len() == 3 {
+            let (a, b, c) = (p[0], p[1], p[2]);
+            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+            for t in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+                stack.push((t.to_vec(), depth + 1));
+            }
+        } else {
+            let m = [mid(p[0], p[1]), mid(p[1], p[2]), mid(p[2], p[3]), mid(p[3], p[0])];
+            for q in [[p[0], m[0], centre, m[3]], [m[0], p[1], m[1], centre], [centre, m[1], p[2], m[2]], [m[3], centre, m[2], p[3]]] {
+                stack.push((q.to_vec(), depth + 1));
+            }
+        }
+    }
+    area
+}
+
 /// The area-weighted outward normal of a facet, ∫ n dA (its length is the area).
 pub fn facet_normal_area(kind: FacetKind, x: &[[f64; 3]]) -> [f64; 3] {
     let mut s = [0.0; 3];

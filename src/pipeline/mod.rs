@@ -923,8 +923,19 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         );
     }
     let _ = writeln!(s, "faces:");
-    for f in &mesh.faces {
-        let _ = writeln!(s, "  {}: {}, {} nodes, area {:.6e}{area}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len(), crate::fem::cell::face_area(f, &mesh.nodes));
+    for (k, f) in mesh.faces.iter().enumerate() {
+        let a = crate::fem::cell::face_area(f, &mesh.nodes);
+        let cut = model.cut_faces.iter().find(|c| c.face == k).map_or(String::new(), |c| {
+            format!(
+                " (cut from {} by {}: the facets whose centres lie in it; the region covers {:.6e}{area} of {}, {:+.1} %)",
+                mesh.faces[c.from].name,
+                c.region,
+                c.region_area,
+                mesh.faces[c.from].name,
+                100.0 * (a / c.region_area - 1.0)
+            )
+        });
+        let _ = writeln!(s, "  {}: {}, {} nodes, area {a:.6e}{area}{cut}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len());
     }
     for (i, t) in ls.scene.traction.iter().enumerate() {
         let r = model.path.traction_resultant(i);
@@ -937,6 +948,18 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
             }
         };
         let _ = writeln!(s, "traction[{i}] on {}: {load} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, r[0], r[1], r[2]);
+        if let Some(c) = mesh.faces.iter().position(|f| f.name == t.face).and_then(|k| model.cut_faces.iter().find(|c| c.face == k)) {
+            if (a / c.region_area - 1.0).abs() > crate::model::CUT_AREA_TOLERANCE {
+                let _ = writeln!(
+                    s,
+                    "warning: traction[{i}] on {}: the face's facets cover {a:.6e}{area}, its region {:.6e}{area} of {} ({:+.1} %); the load is the traction over the facets: refine the mesh where the region's edge cuts the face, or make the face a surface of the mesh",
+                    t.face,
+                    c.region_area,
+                    mesh.faces[c.from].name,
+                    100.0 * (a / c.region_area - 1.0)
+                );
+            }
+        }
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
     let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e}){force}", load[0], load[1], load[2]);
