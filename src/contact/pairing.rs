@@ -667,6 +667,41 @@ mod tests {
         })
     }
 
+    /// The slave nodes "over" the master (the warning's candidates) are those inside the master's
+    /// outline, not its bounding box: an L-shaped master leaves its missing quadrant out, and a
+    /// hole in it stays inside. Before: every node within the bounding box.
+    #[test]
+    fn over_the_master_means_inside_its_outline() {
+        let m = blocks(9, 9, [0.0; 3], I);
+        let face = |n: &str| m.faces.iter().find(|f| f.name == n).unwrap();
+        let (slave, full) = (face("upper.zmin"), face("lower.zmax"));
+        let centre = |q: &crate::mesh::Facet| {
+            let x = m.facet_coords(q);
+            [0.25 * x.iter().map(|p| p[0]).sum::<f64>(), 0.25 * x.iter().map(|p| p[1]).sum::<f64>()]
+        };
+        // the 2 × 1 face (facets 0.25 × 0.125) less its quadrant x > 1, y > 0.5, and for the
+        // second master less the four facets about (0.5, 0.25) too
+        let l_shape = |hole: bool| Face {
+            name: "lower.l".into(),
+            body: 1,
+            facets: full
+                .facets
+                .iter()
+                .filter(|q| {
+                    let c = centre(q);
+                    (c[0] < 1.0 || c[1] < 0.5) && !(hole && (c[0] - 0.5).abs() < 0.25 && (c[1] - 0.25).abs() < 0.125)
+                })
+                .copied()
+                .collect(),
+        };
+        let at = |x: f64, y: f64| slave.nodes().into_iter().find(|&v| (m.nodes[v][0] - x).abs() < 1e-9 && (m.nodes[v][1] - y).abs() < 1e-9).unwrap();
+        let (quadrant, over) = (at(1.5, 0.75), at(0.5, 0.25));
+        for hole in [false, true] {
+            let o = Outside::new(&m, slave, &l_shape(hole), vec![quadrant, over], 0.2);
+            assert_eq!(o.over, vec![over], "hole {hole}");
+        }
+    }
+
     fn seed_pair(friction: Friction) -> ContactPair {
         ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: false, faces: None }
     }
@@ -823,6 +858,66 @@ pub struct Outside {
     pub first: [Option<[f64; 3]>; 2],
 }
 
+/// The outer boundary of a face seen along a direction (`project` maps a point to the plane
+/// normal to it): its boundary edges (those of one facet only; through the edge nodes of
+/// quadratic facets) chained into loops, the loop of the largest projected area. Holes are
+/// inner loops, so a point over a hole lies inside the outline.
+fn outline(mesh: &Mesh, face: &Face, project: impl Fn([f64; 3]) -> [f64; 2]) -> Vec<[f64; 2]> {
+    // each facet edge as (corner a, corner b, edge node), a → b along the facet
+    let mut edges: HashMap<(usize, usize), (usize, Option<usize>, usize)> = HashMap::new();
+    for q in &face.facets {
+        let (nodes, c) = (q.nodes(), q.corners().len());
+        for i in 0..c {
+            let (a, b) = (nodes[i], nodes[(i + 1) % c]);
+            let mid = (nodes.len() > c).then(|| nodes[c + i]);
+            edges.entry((a.min(b), a.max(b))).and_modify(|e| e.2 += 1).or_insert((a, mid, 1));
+        }
+    }
+    let mut next: HashMap<usize, Vec<(usize, Option<usize>)>> = HashMap::new();
+    for (&(lo, hi), &(a, mid, count)) in &edges {
+        if count == 1 {
+            let b = if a == lo { hi } else { lo };
+            next.entry(a).or_default().push((b, mid));
+        }
+    }
+    let mut starts: Vec<usize> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let (mut best, mut best_area) = (Vec::new(), 0.0f64);
+    for start in starts {
+        let mut polygon = Vec::new();
+        let mut at = start;
+        while let Some((b, mid)) = next.get_mut(&at).and_then(Vec::pop) {
+            polygon.push(project(mesh.nodes[at]));
+            if let Some(m) = mid {
+                polygon.push(project(mesh.nodes[m]));
+            }
+            at = b;
+            if at == start {
+                break;
+            }
+        }
+        let n = polygon.len();
+        let area = 0.5 * (0..n).map(|i| polygon[i][0] * polygon[(i + 1) % n][1] - polygon[(i + 1) % n][0] * polygon[i][1]).sum::<f64>().abs();
+        if area > best_area {
+            (best, best_area) = (polygon, area);
+        }
+    }
+    best
+}
+
+/// Whether `p` lies strictly inside the polygon (crossings of a ray along +x).
+fn inside_polygon(polygon: &[[f64; 2]], p: [f64; 2]) -> bool {
+    let n = polygon.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1]) && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
 impl Outside {
     fn new(mesh: &Mesh, slave: &Face, master: &Face, nodes: Vec<usize>, search: f64) -> Self {
         let first = nodes.first().map(|&v| mesh.nodes[v]);
@@ -839,13 +934,12 @@ impl Outside {
         let nm = mean.map(|v| v / len);
         let e1 = tangent(nm, [1.0, 0.0, 0.0]).or_else(|| tangent(nm, [0.0, 1.0, 0.0])).expect("x and y cannot both be normal");
         let e2 = cross(nm, e1);
-        let (mut lo, mut hi, mut level) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], [f64::INFINITY, f64::NEG_INFINITY]);
+        let mut level = [f64::INFINITY, f64::NEG_INFINITY];
         for v in master.nodes() {
-            let x = mesh.nodes[v];
-            let p = [dot(x, e1), dot(x, e2)];
-            (0..2).for_each(|d| (lo[d], hi[d]) = (lo[d].min(p[d]), hi[d].max(p[d])));
-            level = [level[0].min(dot(x, nm)), level[1].max(dot(x, nm))];
+            let h = dot(mesh.nodes[v], nm);
+            level = [level[0].min(h), level[1].max(h)];
         }
+        let outline = outline(mesh, master, |x| [dot(x, e1), dot(x, e2)]);
         // the outside nodes' normals, area-weighted over their slave facets
         let mut normals: HashMap<usize, [f64; 3]> = out.nodes.iter().map(|&v| (v, [0.0; 3])).collect();
         for f in &slave.facets {
@@ -862,8 +956,7 @@ impl Outside {
             .copied()
             .filter(|v| {
                 let (x, n) = (mesh.nodes[*v], normals[v]);
-                let p = [dot(x, e1), dot(x, e2)];
-                let inside = (0..2).all(|d| p[d] > lo[d] && p[d] < hi[d]);
+                let inside = inside_polygon(&outline, [dot(x, e1), dot(x, e2)]);
                 let h = dot(x, nm);
                 // well within reach (a node near the search distance may miss it along its
                 // facets' slanted normals)
