@@ -118,12 +118,37 @@ pub struct LoadPath {
     dirichlet: Vec<Vec<f64>>,
     /// f_k of every traction, and its nonzero nodal forces at factor 1.
     traction: Vec<(Vec<f64>, Vec<(usize, f64)>)>,
+    /// A path cut short before a step without equilibrium ([`Model::check_held`]): `steps`
+    /// are the steps before it.
+    pub stopped: Option<Stopped>,
+}
+
+/// Where a load path stops: the step that has no equilibrium, of how many, and why (the body or
+/// group, and the reason).
+#[derive(Clone, Debug)]
+pub struct Stopped {
+    pub at: usize,
+    pub of: usize,
+    pub what: String,
+    pub why: String,
+}
+
+impl Stopped {
+    /// The attribute and report text: "step 5/5: body \"block\": no equilibrium …".
+    pub fn describe(&self) -> String {
+        format!("stopped before load step {}/{}: {}: {}", self.at, self.of, self.what, self.why)
+    }
 }
 
 impl LoadPath {
     /// Whether there is more than one load state.
     pub fn is_path(&self) -> bool {
-        self.steps > 1
+        self.steps > 1 || self.stopped.is_some()
+    }
+
+    /// The number of steps the scene asked for (more than `steps` where the path stopped).
+    pub fn asked(&self) -> usize {
+        self.stopped.as_ref().map_or(self.steps, |s| s.of)
     }
 
     /// The resultant force of traction entry `i` at factor 1 (the sum of its nodal forces).
@@ -675,10 +700,12 @@ impl Model {
 }
 
 impl Model {
-    /// Refuses a load that contact and friction cannot hold on the bodies held by contact
-    /// alone ([`crate::contact::hold`]): at every load step, before anything is solved. The
-    /// whole mesh and load vector must still be there (before TFETI releases them).
-    pub fn check_held(&self) -> Result<()> {
+    /// Checks that contact and friction can hold the bodies held by contact alone
+    /// ([`crate::contact::hold`]) at every load step, before anything is solved: a load they
+    /// cannot hold at the first step is refused; at a later step k the path is cut to the steps
+    /// before k ([`LoadPath::stopped`]: they are solved and written, and the run ends with the
+    /// reason). The whole mesh and load vector must still be there (before TFETI releases them).
+    pub fn check_held(&mut self) -> Result<()> {
         let Some(c) = self.pairs.as_ref().filter(|_| !self.floating.is_empty()) else { return Ok(()) };
         let by_body = constraints_by_body(&self.mesh, &self.constraints);
         let free: Vec<FreeBody> = self
@@ -696,7 +723,16 @@ impl Model {
         for k in 1..=self.path.steps {
             let loads = if k == self.path.steps { std::borrow::Cow::Borrowed(&self.loads) } else { std::borrow::Cow::Owned(self.state(k).1) };
             if let Some(unheld) = hold::check(&self.mesh, c, &free, &loads)? {
-                return Err(unheld.error(&self.mesh, self.path.is_path().then_some((k, self.path.steps))));
+                let e = unheld.error(&self.mesh, self.path.is_path().then_some((k, self.path.steps)));
+                let Error::Numerical { what, reason } = &e else { return Err(e) };
+                if k == 1 {
+                    return Err(e);
+                }
+                let (constraints, loads) = self.state(k - 1);
+                (self.constraints, self.loads) = (constraints, loads);
+                self.path.stopped = Some(Stopped { at: k, of: self.path.steps, what: what.clone(), why: reason.clone() });
+                self.path.steps = k - 1;
+                return Ok(());
             }
         }
         Ok(())

@@ -145,3 +145,49 @@ fn reversed_tangential_load_slides_both_ways_on_both_duals() {
         assert_eq!(steps[0].slip + steps[1].slip, 0, "sticks while |Fx| < μFz");
     }
 }
+
+/// A path that ends above the friction limit (`run/validation/floating_block.toml`: N = 2,
+/// μ = 0.3, the push along x at 0, 0.5, 0.9, 0.99 and 1.1 × μN): steps 1–4 are solved and
+/// written whole (`/steps/0001…0004`, `/fields` = step 4, the attribute `path_stopped`), the run
+/// exits 1 with one line naming step 5 and the limit μN = 0.6 — the same limit whatever the
+/// applied load. `check` says where the path stops. Before: the whole path refused, nothing
+/// written, and a "capacity" that grew with the load (the nearest point of a cone problem).
+#[test]
+fn a_path_past_the_friction_limit_writes_the_steps_before_it() {
+    let dir = tmpdir("path-past-limit");
+    let scene = std::fs::read_to_string(root().join("run/validation/floating_block.toml"))
+        .unwrap()
+        .replace("n = 7", "n = 5")
+        .replace("p = [0.0, 0.0, -1.0]\n", "p = [0.0, 0.0, -1.0]\nfactors = [1.0, 1.0, 1.0, 1.0, 1.0]\n")
+        .replace("p = [0.3, 0.0, 0.0]\n", "p = [0.6, 0.0, 0.0]\nfactors = [0.0, 0.5, 0.9, 0.99, 1.1]\n")
+        + "\n[load]\nsteps = 5\n";
+    let path = dir.join("past.toml");
+    std::fs::write(&path, scene).unwrap();
+    let out = dir.join("out").join("past.h5");
+    let o = common::run(&["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for want in ["body \"upper\": no equilibrium exists at load step 5/5", "the applied force along x is 6.6000e-1", "hold at most 6.0000e-1 along it", "steps 1–4 are solved and written to"] {
+        assert!(err.contains(want), "`{want}` not in {err}");
+    }
+    let f = fields(&out);
+    assert_eq!(f.steps.len(), 4);
+    let u = |fs: &[tresca_feti::output::Field]| match &fs.iter().find(|x| x.name == "displacement").unwrap().values {
+        Values::F64(v) => v.clone(),
+        _ => panic!("displacement"),
+    };
+    assert_eq!(u(&f.fields), u(&f.steps[3].fields), "/fields is the last solved step");
+    let stopped = f.attributes.iter().find(|a| a.0 == "path_stopped").map(|a| a.1.clone()).unwrap_or_default();
+    assert!(stopped.starts_with("stopped before load step 5/5: body \"upper\": no equilibrium exists"), "{stopped}");
+    let left: Vec<_> = std::fs::read_dir(out.parent().unwrap()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert!(left.iter().all(|n| !n.contains(".tmp")), "no staging names left: {left:?}");
+    // the limit stays μN = 0.6 however far the last step goes past it; check says where it stops
+    for (last, applied) in [("1.02", "6.1200e-1"), ("10.0", "6.0000e0")] {
+        let o = common::run(&["check", path.to_str().unwrap(), "--set", &format!("traction.1.factors=[0.0, 0.5, 0.9, 0.99, {last}]")]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let line = text.lines().find(|l| l.starts_with("warning: load path stopped before load step 5/5")).unwrap_or_else(|| panic!("{text}"));
+        assert!(line.contains(&format!("applied force along x is {applied}")) && line.contains("hold at most 6.0000e-1 along it") && line.contains("solve writes steps 1–4"), "{line}");
+    }
+}

@@ -11,8 +11,9 @@
 //! (Clarabel) decides it: the distance min_{λ ∈ Λ} ‖e_f − G_f λ‖ from the load to what the
 //! contact can supply. Where it is not 0, e_f − G_f λ* is the unbalanced part of the load and
 //! its direction d the motion it drives; the error names the natural motion (a translation or
-//! a rotation about an axis) that carries most of it, with the load's and G_f λ*'s components
-//! along it: what is applied and what contact and friction carry of it.
+//! a rotation about an axis) that carries most of it, the load's component along it, and the
+//! limit: the largest load along that motion, the other components as applied, for which a
+//! λ ∈ Λ exists (a second cone program).
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SecondOrderConeT, SolverStatus, SupportedConeT, ZeroConeT};
@@ -32,31 +33,35 @@ pub struct FreeBody {
 
 /// What the contact cannot hold: the body (or tied group), the motion, and along the natural
 /// motion `natural` (0–2: translation along x, y, z; 3–5: rotation about them) that carries most
-/// of the unbalanced load, the applied load (a force, or a moment about the centroid) and what
-/// contact and friction carry of it at the equilibrium nearest to the load.
+/// of the unbalanced load, the applied load (a force, or a moment about the centroid) and the
+/// most contact and friction can carry along it with the load's other components as applied
+/// (μN for a frictional hold; None: they cannot hold those components either).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Unheld {
     pub bodies: Vec<usize>,
     pub motion: String,
     pub natural: usize,
     pub load: f64,
-    pub supply: f64,
+    pub supply: Option<f64>,
 }
 
 impl Unheld {
     /// The one-line reason, naming the body or the tied group.
     pub fn error(&self, mesh: &Mesh, step: Option<(usize, usize)>) -> Error {
         let at = step.map_or(String::new(), |(k, n)| format!(" at load step {k}/{n}"));
-        let (load, held) = (self.load, self.supply.max(0.0));
+        let load = self.load;
         let axis = ["x", "y", "z"][self.natural % 3];
         let what = if self.natural < 3 { format!("force along {axis}") } else { format!("moment about {axis} (through the centroid)") };
-        let carry = if held > 0.0 { format!("contact and friction carry at most {held:.3e} of it") } else { "contact and friction carry none of it".into() };
+        let carry = match self.supply.map(|h| h.max(0.0)) {
+            Some(held) if held > 0.0 => format!("with its other components as applied, contact and friction hold at most {held:.4e} along it, {:.3e} less", load - held),
+            Some(_) => "contact and friction hold none of it".into(),
+            None => "contact and friction cannot hold its other components either".into(),
+        };
         Error::numerical(
             group_name(mesh, &self.bodies),
             format!(
-                "no equilibrium exists{at}: along the motion the load drives ({}) the applied {what} is {load:.3e}; {carry}, {:.3e} unbalanced; held by contact alone, {} would slide away",
+                "no equilibrium exists{at}: along the motion the load drives ({}) the applied {what} is {load:.4e}; {carry}; held by contact alone, {} would slide away",
                 self.motion,
-                load - held,
                 if self.bodies.len() > 1 { "the group" } else { "the body" }
             ),
         )
@@ -160,7 +165,63 @@ pub fn check(mesh: &Mesh, contact: &Contact, free: &[FreeBody], loads: &[f64]) -
     let q = (0..6).fold(0, |a, q| if r[q].abs() > r[a].abs() { q } else { a });
     let unit = scale * if q < 3 { 1.0 } else { rigid::Frame::of(mesh, bodies).size };
     let sign = if l[q] != 0.0 { l[q].signum() } else { r[q].signum() };
-    Ok(Some(Unheld { bodies: bodies.to_vec(), motion: rigid::dominant(&r), natural: q, load: sign * l[q] * unit, supply: sign * c[q] * unit }))
+    // the limit: the largest load along the driven motion, the other components as applied —
+    // e + t u with u the natural motion's part in this body's rows
+    let u: Vec<f64> = rows.owner.iter().map(|(b, m)| if b.as_slice() == bodies { sign * m[q] } else { 0.0 }).collect();
+    let uu: f64 = u.iter().map(|v| v * v).sum();
+    let limit = if uu > 0.0 { largest(&rows.g, &e, &u, n, &cones) } else { Limit::Unknown };
+    let supply = match limit {
+        Limit::At(t) => Some((sign * l[q] + t * uu) * unit),
+        Limit::Nowhere => None,
+        Limit::Unknown => Some(sign * c[q] * unit),
+    };
+    Ok(Some(Unheld { bodies: bodies.to_vec(), motion: rigid::dominant(&r), natural: q, load: sign * l[q] * unit, supply }))
+}
+
+/// The largest t with e + t u = G λ for some λ ∈ Λ.
+enum Limit {
+    At(f64),
+    /// No t: the load's other components cannot be held either.
+    Nowhere,
+    /// Clarabel did not decide it.
+    Unknown,
+}
+
+/// max t subject to G λ − t u = e, λ ∈ Λ (one second-order cone program).
+fn largest(g: &[Vec<(usize, f64)>], e: &[f64], u: &[f64], n: usize, cones: &Cones) -> Limit {
+    let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
+    for &(r, j, v) in &cones.a {
+        (ai.push(r), aj.push(j), av.push(v));
+    }
+    let r0 = cones.h.len();
+    for (r, row) in g.iter().enumerate() {
+        for &(j, v) in row {
+            (ai.push(r0 + r), aj.push(j), av.push(v));
+        }
+        if u[r] != 0.0 {
+            (ai.push(r0 + r), aj.push(n), av.push(-u[r]));
+        }
+    }
+    let a = CscMatrix::new_from_triplets(r0 + g.len(), n + 1, ai, aj, av);
+    let p = CscMatrix::new_from_triplets(n + 1, n + 1, vec![], vec![], vec![]);
+    let mut q = vec![0.0; n + 1];
+    q[n] = -1.0;
+    let h: Vec<f64> = cones.h.iter().copied().chain(e.iter().copied()).collect();
+    let mut kinds: Vec<SupportedConeT<f64>> = Vec::new();
+    if cones.zero > 0 {
+        kinds.push(ZeroConeT(cones.zero));
+    }
+    kinds.push(NonnegativeConeT(cones.nonneg));
+    kinds.extend((0..cones.socs).map(|_| SecondOrderConeT(3)));
+    kinds.push(ZeroConeT(g.len()));
+    let settings = DefaultSettings { verbose: false, max_iter: 200, max_threads: 1, ..DefaultSettings::default() };
+    let Ok(mut solver) = DefaultSolver::new(&p, &q, &a, &h, &kinds, settings) else { return Limit::Unknown };
+    solver.solve();
+    match solver.solution.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => Limit::At(solver.solution.x[n]),
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => Limit::Nowhere,
+        _ => Limit::Unknown,
+    }
 }
 
 /// One body's (or group's) part of the unbalanced load: its bodies, Σ d², and its unbalanced,

@@ -540,7 +540,7 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         output::guard::check(&ls, out_key)?;
         Ok(ls)
     })?;
-    let mut model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|m| m.check_held().map(|()| m)))?;
+    let mut model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|mut m| m.check_held().map(|()| m)))?;
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
@@ -597,6 +597,10 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     }
     let files = staged.commit(comm)?;
     pause_for_tests("committed");
+    if let Some(stop) = &model.path.stopped {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        return Err(Error::numerical(&stop.what, format!("{}; the path stops there: steps 1–{} are solved and written to {}", stop.why, stop.at - 1, names.join(", "))));
+    }
     Ok(Summary { report, files, solution: sol })
 }
 
@@ -802,6 +806,7 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         memory: None,
         decomposition_plan: None,
         load_path: outcome.filter(|o| !o.steps.is_empty()).map(|o| o.steps.iter().map(|s| s.report.clone()).collect()),
+        path_stopped: model.path.stopped.as_ref().map(crate::model::Stopped::describe),
         output_verified_values: None,
         single_precision_error: sol.single_precision_error,
         explicit_products: sol.explicit_products,
@@ -835,6 +840,9 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
         ("report".into(), report.to_string()),
         ("ranks".into(), comm.size().to_string()),
     ];
+    if let Some(stop) = &model.path.stopped {
+        attributes.push(("path_stopped".into(), stop.describe()));
+    }
     let mut steps = Vec::new();
     if let (Some(o), Some(c)) = (outcome, &model.pairs) {
         // the contact state is whole on every rank: rank 0 writes its rows
@@ -881,7 +889,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     use std::fmt::Write;
     let mut ls = crate::scene::load(scene_path, overrides)?;
     memory::check_before_mesh(comm, &ls)?;
-    let model = model::build(&ls)?;
+    let mut model = model::build(&ls)?;
     model.check_held()?;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let mut chosen = None;
@@ -962,6 +970,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         }
     }
     let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
+    if let Some(stop) = &model.path.stopped {
+        let _ = writeln!(s, "warning: load path {}; solve writes steps 1–{} and exits with this reason", stop.describe(), stop.at - 1);
+    }
     let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e}){force}", load[0], load[1], load[2]);
     let _ = writeln!(s, "DOFs: n = {} ({} free after Dirichlet elimination)", model.ndof(), free_total);
     for (i, &(sl, ma)) in model.contact.iter().enumerate() {

@@ -22,6 +22,8 @@ use super::report::UnitsReport;
 /// the path), and the steps' records.
 pub struct Walk {
     pub steps: usize,
+    /// The steps the scene asked for (more than `steps` on a path stopped short), for messages.
+    of: usize,
     /// More than one step: the load is set every step and every step is recorded.
     pub on_path: bool,
     pub y: Vec<f64>,
@@ -38,7 +40,7 @@ pub struct Walk {
 impl Walk {
     /// Before the first step, on a dual of length `dim`.
     pub fn new(path: &LoadPath, dim: usize, params: &Params, units: Option<UnitsReport>) -> Self {
-        Walk { steps: path.steps, on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), units, records: vec![], tightenings: vec![], start: Instant::now() }
+        Walk { steps: path.steps, of: path.asked(), on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), units, records: vec![], tightenings: vec![], start: Instant::now() }
     }
 
     /// Step k begins (its time starts).
@@ -56,7 +58,7 @@ impl Walk {
         }
         if let (true, Some((c, o))) = (self.on_path, contact) {
             let rec = StepOutput::new(k, solution, c, o, self.start.elapsed().as_secs_f64());
-            live.line(&rec.line(self.steps, self.units.as_ref()));
+            live.line(&rec.line(self.of, self.units.as_ref()));
             self.records.push(rec);
         }
         if k == self.steps {
@@ -74,7 +76,7 @@ impl Walk {
 
     /// The solver's name in an error, with the load step on a path.
     pub fn name(&self, name: &str, k: usize) -> String {
-        if self.on_path { format!("{} (load step {k}/{})", name.to_uppercase(), self.steps) } else { name.to_uppercase() }
+        if self.on_path { format!("{} (load step {k}/{})", name.to_uppercase(), self.of) } else { name.to_uppercase() }
     }
 }
 

@@ -42,6 +42,10 @@ pub struct Report {
     /// Every step of a load path (`[load] steps` > 1); `solver` and `contact` are the last's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub load_path: Option<Vec<super::path::StepReport>>,
+    /// A load path cut short: the step without equilibrium and why (the steps before it are
+    /// `load_path`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_stopped: Option<String>,
     /// Values read back and checked (`output.verify`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_verified_values: Option<u64>,
