@@ -40,7 +40,10 @@
 //!   dual Lagrange multipliers", CMAME 200; Popp, Wohlmuth, Gee, Wall 2012/2013), so that
 //!   biorthogonality, D_ii = ∫_covered φᵢ dA > 0 and the reproduction of linear gaps hold there
 //!   too; the coefficients −M_ij/D_ii then extrapolate from the covered part to the node and grow
-//!   as the covered part shrinks (see [`MortarParams::min_coverage`]).
+//!   as the covered part shrinks (see [`MortarParams::min_coverage`]). A node beyond the
+//!   master's edge (its normal line misses the master, less than half its support covered)
+//!   keeps no row: its unnormalized row is shared among its neighbours that keep theirs, a
+//!   modified dual basis at the boundary of the contact zone ([`MortarParams::trim_edge`]).
 //! - Normals: the unit average of the slave facet normals around the node, weighted by the
 //!   facet areas.
 //!
@@ -109,6 +112,14 @@ pub struct MortarParams {
     /// D_ii/∫ φᵢ dA ≈ c² and master coefficients growing like 1/c, so this bounds the rows
     /// there; the default 10⁻⁸ keeps every row but true slivers.
     pub min_coverage: f64,
+    /// The edge of the contact zone: a covered slave node whose normal line misses every master
+    /// facet and whose support is less than half covered (it lies beyond the master's edge)
+    /// gets no row of its own; its row, unnormalized
+    /// (D_ii × the row: D_ii ψᵢ's constraint), is added in equal shares to the rows of its
+    /// neighbours on the slave face that keep theirs, as a modified dual basis ψ̃_j = ψ_j +
+    /// ψᵢ/k at the boundary of the contact zone. Off: every covered node keeps its row, whose
+    /// master coefficients grow as 1/c on a sliver of coverage c.
+    pub trim_edge: bool,
 }
 
 impl Default for MortarParams {
@@ -118,6 +129,7 @@ impl Default for MortarParams {
             min_opposition: 0.0,
             allow_uncovered: false,
             min_coverage: 1e-8,
+            trim_edge: true,
         }
     }
 }
@@ -131,8 +143,11 @@ pub struct MortarInfo {
     pub candidate_pairs: usize,
     /// Pairs with an overlap of positive area that were integrated.
     pub segments: usize,
-    /// Covered slave nodes without a row (D_ii ≤ `min_coverage` · ∫ φᵢ dA).
+    /// Covered slave nodes without a row (D_ii ≤ `min_coverage` · ∫ φᵢ dA, or beyond the
+    /// master's edge under [`MortarParams::trim_edge`]).
     pub rows_dropped: usize,
+    /// Of those, the rows handed on to their neighbours ([`MortarParams::trim_edge`]).
+    pub rows_handed_on: usize,
     /// Slave nodes with no overlap at all, dropped under [`MortarParams::allow_uncovered`].
     pub nodes_uncovered: usize,
     /// Wall time of the call.
@@ -911,6 +926,8 @@ struct NodeAcc {
     /// The master facets its facets overlap (for the geometric gap).
     masters: Vec<usize>,
     covered: bool,
+    /// The other nodes of its slave facets.
+    neighbours: Vec<usize>,
 }
 
 /// The integrals of one (slave facet, master facet) segment: D_ii and M_ij in local numbering.
@@ -997,6 +1014,7 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
             let node = acc.entry(s.f.nodes[a]).or_default();
             node.nominal += s.d[a];
             axpy(&mut node.normal, 1.0, s.weighted_normal);
+            node.neighbours.extend(s.f.nodes[..s.f.n()].iter().filter(|&&v| v != s.f.nodes[a]));
         }
         for &(e, a, b) in s.f.kind.edges() {
             let edge = Some((
@@ -1174,23 +1192,54 @@ fn finish(
     }
     info.nodes_uncovered = uncovered.len();
     let mut rows = MortarRows { uncovered, ..Default::default() };
-    for (node, a) in acc.into_iter().filter(|(_, a)| a.covered) {
+    // each covered node's row unnormalized (D_ii × the row), its normal and geometric gap
+    struct Raw {
+        d: f64,
+        row: BTreeMap<usize, f64>,
+        n: V3,
+        geometric: f64,
+    }
+    let mut raw: BTreeMap<usize, Raw> = BTreeMap::new();
+    let mut beyond = Vec::new();
+    for (node, a) in acc.iter().filter(|(_, a)| a.covered) {
         if a.d <= params.min_coverage * a.nominal {
             info.rows_dropped += 1;
             continue;
         }
         let n = scale(a.normal, 1.0 / norm(a.normal));
-        let mut row = slave_part(node, a.edge);
-        row.extend(
-            a.m.iter()
-                .filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d)
-                .map(|(&j, m)| (j, -m / a.d)),
-        );
-        let gap = -row.iter().map(|&(k, c)| c * dot(coords[k], n)).sum::<f64>();
-        rows.geometric_gap.push(geometric_gap(coords[node], n, a.masters.iter().map(|&k| &masters[k].0)));
+        let mut row: BTreeMap<usize, f64> = slave_part(*node, a.edge).into_iter().map(|(k, c)| (k, c * a.d)).collect();
+        for (&j, &m) in a.m.iter().filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d) {
+            *row.entry(j).or_default() -= m;
+        }
+        let geometric = geometric_gap(coords[*node], n, a.masters.iter().map(|&k| &masters[k].0));
+        if params.trim_edge && geometric.is_nan() && a.d < 0.5 * a.nominal {
+            beyond.push(*node);
+        }
+        raw.insert(*node, Raw { d: a.d, row, n, geometric });
+    }
+    // the edge of the contact zone: a node beyond the master's edge hands its (unnormalized)
+    // row to its neighbours that keep theirs, in equal shares
+    for i in beyond {
+        let Some(r) = raw.remove(&i) else { continue };
+        let takers: Vec<usize> = acc[&i].neighbours.iter().copied().filter(|j| raw.get(j).is_some_and(|x| !x.geometric.is_nan())).collect();
+        info.rows_dropped += 1;
+        info.rows_handed_on += usize::from(!takers.is_empty());
+        let share = 1.0 / takers.len().max(1) as f64;
+        for j in takers {
+            let t = raw.get_mut(&j).expect("a taker keeps its row");
+            t.d += share * r.d;
+            for (&k, &c) in &r.row {
+                *t.row.entry(k).or_default() += share * c;
+            }
+        }
+    }
+    for (node, r) in raw {
+        let row: Vec<(usize, f64)> = r.row.iter().filter(|(_, c)| c.abs() > PRUNE_FRACTION * r.d).map(|(&k, &c)| (k, c / r.d)).collect();
+        let gap = -row.iter().map(|&(k, c)| c * dot(coords[k], r.n)).sum::<f64>();
+        rows.geometric_gap.push(r.geometric);
         rows.node.push(node);
-        rows.normal.push(n);
-        rows.area.push(a.d);
+        rows.normal.push(r.n);
+        rows.area.push(r.d);
         rows.coupling.push(row);
         rows.gap.push(gap);
     }
