@@ -1192,12 +1192,14 @@ fn finish(
     }
     info.nodes_uncovered = uncovered.len();
     let mut rows = MortarRows { uncovered, ..Default::default() };
-    // each covered node's row unnormalized (D_ii × the row), its normal and geometric gap
+    // each covered node's row, its normal and geometric gap, and what neighbours beyond the
+    // master's edge handed on to it (ΣD, and Σ D × their rows)
     struct Raw {
         d: f64,
-        row: BTreeMap<usize, f64>,
+        row: Vec<(usize, f64)>,
         n: V3,
         geometric: f64,
+        handed: Option<(f64, BTreeMap<usize, f64>)>,
     }
     let mut raw: BTreeMap<usize, Raw> = BTreeMap::new();
     let mut beyond = Vec::new();
@@ -1207,40 +1209,45 @@ fn finish(
             continue;
         }
         let n = scale(a.normal, 1.0 / norm(a.normal));
-        let mut row: BTreeMap<usize, f64> = slave_part(*node, a.edge).into_iter().map(|(k, c)| (k, c * a.d)).collect();
-        for (&j, &m) in a.m.iter().filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d) {
-            *row.entry(j).or_default() -= m;
-        }
+        let mut row = slave_part(*node, a.edge);
+        row.extend(a.m.iter().filter(|(_, m)| m.abs() > PRUNE_FRACTION * a.d).map(|(&j, m)| (j, -m / a.d)));
         let geometric = geometric_gap(coords[*node], n, a.masters.iter().map(|&k| &masters[k].0));
         if params.trim_edge && geometric.is_nan() && a.d < 0.5 * a.nominal {
             beyond.push(*node);
         }
-        raw.insert(*node, Raw { d: a.d, row, n, geometric });
+        raw.insert(*node, Raw { d: a.d, row, n, geometric, handed: None });
     }
-    // the edge of the contact zone: a node beyond the master's edge hands its (unnormalized)
-    // row to its neighbours that keep theirs, in equal shares
+    // the edge of the contact zone: a node beyond the master's edge hands its row, times its
+    // D_ii, to its neighbours that keep theirs, in equal shares
     for i in beyond {
         let Some(r) = raw.remove(&i) else { continue };
         let takers: Vec<usize> = acc[&i].neighbours.iter().copied().filter(|j| raw.get(j).is_some_and(|x| !x.geometric.is_nan())).collect();
         info.rows_dropped += 1;
         info.rows_handed_on += usize::from(!takers.is_empty());
-        let share = 1.0 / takers.len().max(1) as f64;
+        let share = r.d / takers.len().max(1) as f64;
         for j in takers {
-            let t = raw.get_mut(&j).expect("a taker keeps its row");
-            t.d += share * r.d;
-            for (&k, &c) in &r.row {
-                *t.row.entry(k).or_default() += share * c;
+            let (d, sum) = raw.get_mut(&j).expect("a taker keeps its row").handed.get_or_insert_with(Default::default);
+            *d += share;
+            for &(k, c) in &r.row {
+                *sum.entry(k).or_default() += share * c;
             }
         }
     }
-    for (node, r) in raw {
-        let row: Vec<(usize, f64)> = r.row.iter().filter(|(_, c)| c.abs() > PRUNE_FRACTION * r.d).map(|(&k, &c)| (k, c / r.d)).collect();
-        let gap = -row.iter().map(|&(k, c)| c * dot(coords[k], r.n)).sum::<f64>();
+    for (node, mut r) in raw {
+        if let Some((extra, mut sum)) = r.handed.take() {
+            // (D_jj row_j + Σ shares) / (D_jj + Σ D shares), the row's own entries first
+            let d = r.d + extra;
+            let mut row: Vec<(usize, f64)> = r.row.iter().map(|&(k, c)| (k, (r.d * c + sum.remove(&k).unwrap_or(0.0)) / d)).collect();
+            row.extend(sum.into_iter().map(|(k, c)| (k, c / d)));
+            row.retain(|(_, c)| c.abs() > PRUNE_FRACTION);
+            (r.row, r.d) = (row, d);
+        }
+        let gap = -r.row.iter().map(|&(k, c)| c * dot(coords[k], r.n)).sum::<f64>();
         rows.geometric_gap.push(r.geometric);
         rows.node.push(node);
         rows.normal.push(r.n);
         rows.area.push(r.d);
-        rows.coupling.push(row);
+        rows.coupling.push(r.row);
         rows.gap.push(gap);
     }
     Ok(rows)
@@ -1791,7 +1798,7 @@ mod tests {
         let m = patch(&mut coords, 9, 7, false, false, &|u, v| {
             [1.1 * u, v, f_lin(1.1 * u, v)]
         });
-        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        let rows = run(&coords, &s, &m, &MortarParams { trim_edge: false, ..params(0.05) }).unwrap();
         assert_eq!((rows.len(), rows.info.rows_dropped), (30, 0));
         let areas = nodal_areas(&coords, &s);
         let total: f64 = rows.area.iter().sum();
@@ -1814,11 +1821,30 @@ mod tests {
         }
         let p = MortarParams {
             min_coverage: 0.2,
+            trim_edge: false,
             ..params(0.05)
         };
         let rows = run(&coords, &s, &m, &p).unwrap();
         assert_eq!((rows.len(), rows.info.rows_dropped), (25, 5));
         assert!(rows.node.iter().all(|&n| coords[n][0] < 1.2));
+        // by default the 5 nodes beyond the master's edge (x = 1.25 > 1.1) hand their rows to
+        // the nodes at x = 1: Σ D_ii stays the covered area, every row still sums to 0 (a rigid
+        // translation of the master moves no gap), and the rows at x ≤ 0.75 are untouched
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!((rows.len(), rows.info.rows_dropped, rows.info.rows_handed_on), (25, 5, 5));
+        let total: f64 = rows.area.iter().sum();
+        assert!((total - 1.1).abs() < 1e-13, "Σ D_ii = {total}");
+        for r in 0..rows.len() {
+            let x = coords[rows.node[r]];
+            let sum: f64 = rows.coupling[r].iter().map(|(_, c)| c).sum();
+            assert!(sum.abs() < 1e-12 && rows.coupling[r][0] == (rows.node[r], rows.coupling[r][0].1), "row {r}: Σ c = {sum}");
+            if x[0] < 0.75 + 1e-12 {
+                assert!((rows.gap[r] - f_lin(x[0], x[1])).abs() < 1e-12);
+            }
+            if x[0] > 1.0 - 1e-12 {
+                assert!(rows.coupling[r].iter().any(|&(k, _)| coords[k][0] > 1.2), "row {r} took its neighbour's");
+            }
+        }
     }
 
     /// A quadratic structured patch (tri6 or quad8) on the (2nx + 1) × (2ny + 1) lattice of
