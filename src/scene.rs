@@ -496,10 +496,67 @@ pub struct ContactPair {
     /// unless `interference`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_overlap: Option<f64>,
-    /// A press fit: the bodies overlap as meshed by design, and the solution removes the
-    /// overlap (any depth within the search distance).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub interference: bool,
+    /// A press fit: `true`, the bodies overlap as meshed by design and the solution removes the
+    /// overlap (any depth within the search distance); a length δ, every slave node of the
+    /// pair starts δ inside the master whatever the meshed gap (two faceted meshes of one
+    /// curved face differ by their chords' sagittas).
+    #[serde(default, skip_serializing_if = "Fit::is_none")]
+    pub interference: Fit,
+}
+
+/// `contact.pair.interference`: none, as meshed (`true`), or a stated radial interference δ.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Fit {
+    #[default]
+    None,
+    Meshed,
+    Stated(f64),
+}
+
+impl Fit {
+    pub fn is_none(&self) -> bool {
+        *self == Fit::None
+    }
+
+    /// Whether the bodies may overlap as meshed.
+    pub fn allows_overlap(&self) -> bool {
+        !self.is_none()
+    }
+}
+
+impl Serialize for Fit {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match *self {
+            Fit::None => s.serialize_bool(false),
+            Fit::Meshed => s.serialize_bool(true),
+            Fit::Stated(d) => s.serialize_f64(d),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Fit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Fit;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("true, false or an interference length")
+            }
+            fn visit_bool<E: serde::de::Error>(self, b: bool) -> std::result::Result<Fit, E> {
+                Ok(if b { Fit::Meshed } else { Fit::None })
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> std::result::Result<Fit, E> {
+                Ok(Fit::Stated(x))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> std::result::Result<Fit, E> {
+                Ok(Fit::Stated(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> std::result::Result<Fit, E> {
+                Ok(Fit::Stated(x as f64))
+            }
+        }
+        d.deserialize_f64(V)
+    }
 }
 
 /// The default largest initial overlap taken as touching: 10⁻³ of the local element size
@@ -1337,6 +1394,11 @@ impl Scene {
             if let Some(t) = p.max_overlap {
                 if !(0.0..1.0).contains(&t) {
                     return Err(Error::scene(k("max_overlap"), format!("a fraction of the element size in [0, 1), got {t}")));
+                }
+            }
+            if let Fit::Stated(d) = p.interference {
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(Error::scene(k("interference"), format!("true, false or a length > 0, got {d}")));
                 }
             }
             match &p.friction {

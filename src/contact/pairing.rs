@@ -531,12 +531,14 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             // an overlap within the matching tolerance, or a gap of round-off, is touching: gap 0
             let gap = if quadratic { measured } else { row.gap };
             let gap = if (gap < 0.0 && gap >= -tol) || gap.abs() <= roundoff { 0.0 } else { gap };
+            // a stated interference replaces the meshed gap
+            let gap = if let crate::scene::Fit::Stated(delta) = p.interference { -delta } else { gap };
             let h = row.area.max(0.0).sqrt();
-            if measured < -tol.max(fraction * h) && !p.interference {
+            if measured < -tol.max(fraction * h) && !p.interference.allows_overlap() {
                 return Err(Error::scene(
                     &key,
                     format!(
-                        "bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}, more than max_overlap = {fraction:.0e} of its element size {h:.3e} (a press fit: set interference = true)",
+                        "bodies overlap: the slave node at ({:.6}, {:.6}, {:.6}) of {} lies {:.3e} inside {}, more than max_overlap = {fraction:.0e} of its element size {h:.3e} (a press fit: set interference = true, or state it as a length, interference = δ)",
                         xs[0],
                         xs[1],
                         xs[2],
@@ -703,7 +705,7 @@ mod tests {
     }
 
     fn seed_pair(friction: Friction) -> ContactPair {
-        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: false, faces: None }
+        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: crate::scene::Fit::None, faces: None }
     }
 
     fn faces(m: &Mesh, s: &str, ma: &str) -> Vec<(usize, usize)> {
@@ -837,7 +839,7 @@ mod tests {
         let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
-        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: false, faces: None };
+        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: crate::scene::Fit::None, faces: None };
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
