@@ -422,7 +422,9 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let mut pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
     if let Some(c) = pairs.as_mut() {
         let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
-        c.void_held_tangents(|v, k| held.contains(&(v, k)));
+        // held at 0 at every step (a symmetry plane's rollers), not driven
+        let still: std::collections::HashSet<(usize, usize)> = constraints.iter().zip(&path.constraint_entry).filter(|(_, e)| e.1 == 0.0).map(|(&(v, k, _), _)| (v, k)).collect();
+        c.void_held_tangents(|v, k| held.contains(&(v, k)), |v, k| still.contains(&(v, k)));
     }
     let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
 

@@ -38,6 +38,11 @@ use crate::scene::{default_search_distance, ContactPair, Discretization, Frictio
 /// Dirichlet conditions: its row is left empty ([`Contact::void_held_tangents`]).
 pub const VOID_FREE_PART: f64 = 0.05;
 
+/// On a slave node on rollers (a symmetry plane), a tangent within about 11° of the plane's
+/// normal (its free part at most this) is the plane's normal direction: the averaged normal of
+/// an unstructured face tilts there by a few degrees.
+pub const VOID_ROLLER_PART: f64 = 0.2;
+
 /// Slip bound of one pair, as a nodal force.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SlipBound {
@@ -109,9 +114,13 @@ impl Contact {
     /// plane's rollers, where friction along the plane's normal is zero by symmetry. Node to
     /// node such a row is zero anyway; a mortar row keeps small coefficients on master nodes off
     /// the plane, and neighbouring rows that reach the same few master DOFs make B
-    /// rank-deficient. A held slave node over a free master node (a clamped face's edge on the
-    /// contact) keeps its rows: friction acts on the master there.
-    pub fn void_held_tangents(&mut self, held: impl Fn(usize, usize) -> bool) {
+    /// rank-deficient. A slave node on rollers (held at 0 along the tangent, free in another
+    /// component; `still`: held at 0 at every step) is on a symmetry plane: its row is void whatever the master side (on an
+    /// unstructured mesh the master part is mostly free, and the row nearly a combination of
+    /// the rollers' Dirichlet rows: TFETI's BΔBᵀ nearly singular). A clamped slave node (all
+    /// three held) over a free master node (a clamped face's edge on the contact) keeps its
+    /// rows: friction acts on the master there.
+    pub fn void_held_tangents(&mut self, held: impl Fn(usize, usize) -> bool, still: impl Fn(usize, usize) -> bool) {
         if !self.has_friction() {
             return;
         }
@@ -123,7 +132,11 @@ impl Contact {
                 [self.t1[i], self.t2[i]].map(|t| {
                     let master = self.coupling[i].iter().filter(|e| e.0 != self.slave[i]);
                     let (total, loose) = master.fold((0.0, 0.0), |(a, b), &(v, c)| (a + c.abs(), b + c.abs() * free(v, t)));
-                    free(self.slave[i], t) <= VOID_FREE_PART && loose <= 0.5 * total
+                    // a slave node on rollers (some component free) lies on a symmetry plane:
+                    // friction along the plane's normal is zero there whatever the master side
+                    let v = self.slave[i];
+                    let roller = (0..3).any(|k| !held(v, k)) && (0..3).all(|k| !held(v, k) || still(v, k));
+                    if roller { free(self.slave[i], t) <= VOID_ROLLER_PART } else { free(self.slave[i], t) <= VOID_FREE_PART && loose <= 0.5 * total }
                 })
             })
             .collect();
