@@ -966,7 +966,7 @@ pub const MAX_BODY_NODES: usize = i32::MAX as usize / 3;
 pub const MAX_LOAD_STEPS: usize = 10_000;
 
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
-pub const FIELDS: [&str; 10] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_traction", "gap", "slip"];
+pub const FIELDS: [&str; 12] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_pressure_smooth", "contact_traction", "contact_traction_smooth", "gap", "slip"];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

@@ -86,6 +86,10 @@ pub struct Contact {
     /// tangent are all prescribed (a symmetry plane's rollers), so friction along it means
     /// nothing there ([`Contact::void_held_tangents`]). Empty: none.
     pub void: Vec<[bool; 2]>,
+    /// The smoothed pressure of each row's slave node as weights on the rows of its entry:
+    /// p̄ᵢ = Σ_j w_ij p_j, the area-weighted average over the node's slave facets of each
+    /// facet's mean nodal pressure ([`Contact::smooth`]).
+    pub smoothing: Vec<Vec<(usize, f64)>>,
 }
 
 impl Contact {
@@ -522,6 +526,7 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
         let fraction = p.max_overlap.unwrap_or(crate::scene::DEFAULT_MAX_OVERLAP);
         let mut fit = Interference::default();
+        let first_row = c.len();
         let (sn, mn) = (node_normals(mesh, slave), node_normals(mesh, master));
         let (sk, mk) = (node_curvatures(mesh, slave, &sn), node_curvatures(mesh, master, &mn));
         for row in rows {
@@ -597,8 +602,44 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             c.entry.push(k);
         }
         c.interference.push(fit);
+        smoothing_weights(mesh, slave, first_row, &mut c);
     }
     Ok(c)
+}
+
+/// The weights of [`Contact::smoothing`] for the rows `first..` (one entry, slave face `slave`):
+/// each slave facet spreads its area over its nodes' rows (a node without a row, outside the
+/// contact zone, counts as pressure 0).
+fn smoothing_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
+    let row_of: HashMap<usize, usize> = (first..c.len()).map(|i| (c.slave[i], i)).collect();
+    let mut acc: Vec<(f64, HashMap<usize, f64>)> = vec![(0.0, HashMap::new()); c.len() - first];
+    for q in &slave.facets {
+        let x: Vec<[f64; 3]> = q.nodes().iter().map(|&v| mesh.nodes[v]).collect();
+        let a = facet_nodal_areas(q.kind, &x).iter().sum::<f64>().abs();
+        let share = a / q.nodes().len() as f64;
+        for v in q.nodes() {
+            let Some(&i) = row_of.get(v) else { continue };
+            let (total, w) = &mut acc[i - first];
+            *total += a;
+            for u in q.nodes() {
+                if let Some(&j) = row_of.get(u) {
+                    *w.entry(j).or_default() += share;
+                }
+            }
+        }
+    }
+    for (total, w) in acc {
+        let mut w: Vec<(usize, f64)> = w.into_iter().map(|(j, x)| (j, x / total)).collect();
+        w.sort_unstable_by_key(|e| e.0);
+        c.smoothing.push(w);
+    }
+}
+
+impl Contact {
+    /// The smoothed value of a nodal field given per row (`values[i]` of row i).
+    pub fn smooth<const K: usize>(&self, values: &[[f64; K]]) -> Vec<[f64; K]> {
+        self.smoothing.iter().map(|w| std::array::from_fn(|k| w.iter().map(|&(j, x)| x * values[j][k]).sum())).collect()
+    }
 }
 
 /// The initial interference of one contact entry: its slave nodes that start inside the master

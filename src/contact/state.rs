@@ -114,6 +114,17 @@ pub fn contact_fields(contact: &Contact, state: &ContactState, pairs: &[usize], 
     if want("contact_traction") {
         fields.push(vector("contact_traction", &|i| state.tangential_force[i].map(|f| f / contact.area[i])));
     }
+    if want("contact_pressure_smooth") || want("contact_traction_smooth") {
+        let p: Vec<[f64; 1]> = (0..contact.len()).map(|i| [state.normal_force[i] / contact.area[i]]).collect();
+        let t: Vec<[f64; 3]> = (0..contact.len()).map(|i| state.tangential_force[i].map(|f| f / contact.area[i])).collect();
+        let (ps, ts) = (contact.smooth(&p), contact.smooth(&t));
+        if want("contact_pressure_smooth") {
+            fields.push(scalar("contact_pressure_smooth", &|i| ps[i][0]));
+        }
+        if want("contact_traction_smooth") {
+            fields.push(vector("contact_traction_smooth", &|i| ts[i]));
+        }
+    }
     if want("gap") {
         fields.push(scalar("gap", &|i| state.gap[i]));
     }
