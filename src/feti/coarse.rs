@@ -434,6 +434,12 @@ impl Coarse {
     /// row k, t) of `slides`, nothing for the others (global row indices). `None` if singular.
     /// Collective (the first call gathers the pattern).
     pub fn restricted<C: Comm>(&self, dist: &Distribution<'_, C>, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Cholesky> {
+        self.restricted_shifted(dist, free, slides, 0.0)
+    }
+
+    /// [`Coarse::restricted`] of G Π Gᵀ + τ·max diag·I: for a rigid motion the kept rows barely
+    /// determine (a cylinder touching along one line), the shift picks the smallest amplitudes.
+    pub fn restricted_shifted<C: Comm>(&self, dist: &Distribution<'_, C>, free: &[bool], slides: &[(usize, [f64; 2])], tau: f64) -> Option<Cholesky> {
         let pat = self.pattern(dist);
         let mut c = pat.c.clone();
         let mut add = |list: &[(usize, f64)]| {
@@ -460,7 +466,19 @@ impl Coarse {
             }
             add(&merged.into_iter().collect::<Vec<_>>());
         }
+        if tau > 0.0 {
+            let diag: Vec<usize> = (0..c.n).map(|i| c.position(i, i).expect("GGᵀ's diagonal")).collect();
+            let max = diag.iter().fold(0.0f64, |a, &p| a.max(c.values[p]));
+            diag.iter().for_each(|&p| c.values[p] += tau * max);
+        }
         Cholesky::with_symbolic(pat.symbolic.clone(), &c).ok()
+    }
+
+    /// The rows' residual once the rigid amplitudes α close them: w − Gᵀα on owned vectors.
+    pub fn residual_after<C: Comm>(&self, dist: &Distribution<'_, C>, alpha: &[f64], w: &[f64]) -> Vec<f64> {
+        let mut r = w.to_vec();
+        self.sub_gt(dist, alpha, &mut r, Self::owned_rows(dist), false);
+        r
     }
 
     /// x ← x − Gᵀ(GΠGᵀ)⁻¹ G x on owned vectors, with `chol` from [`Coarse::restricted`].

@@ -62,6 +62,14 @@ pub struct TfetiDual<'c, C: Comm> {
     single_now: std::cell::Cell<bool>,
 }
 
+/// The relative shift of G Π Gᵀ that picks the smallest rigid amplitudes where the kept rows
+/// barely determine them ([`TfetiDual::recover_with`]).
+const SHIFT: f64 = 1e-10;
+
+/// A contact row not kept may end this far inside the master (relative to the largest residual
+/// of the rows) before the recovery takes the shifted α.
+const PENETRATION: f64 = 1e-6;
+
 impl<'c, C: Comm> TfetiDual<'c, C> {
     /// The operator over this rank's factorized pieces `pieces` (ascending global index
     /// `sys.index`, as in `dist`; `cons`: the rows of B per piece), and b̃ on the owned rows.
@@ -224,14 +232,30 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
                 (pw[k], pw[k + 1]) = (t[0] * s, t[1] * s);
             }
             let (free_all, slides_all) = self.global_pi(&free, &slides);
-            let chol = self.coarse.restricted(&self.dist, &free_all, &slides_all);
-            // every rank must agree: a rank without the factor makes all of them fail
-            let mut bad = [f64::from(u8::from(chol.is_none()))];
-            self.dist.comm().max_f64(&mut bad);
-            if bad[0] > 0.0 {
-                return None;
+            // α from the kept rows; where they barely fix a rigid motion (a body touching along
+            // one line) the exact α may drive the other contact rows deep into the master: then
+            // the smallest amplitudes that close the kept rows (a shifted G Π Gᵀ) are taken
+            let mut alpha = None;
+            for tau in [0.0, SHIFT] {
+                let chol = self.coarse.restricted_shifted(&self.dist, &free_all, &slides_all, tau);
+                // every rank must agree: a rank without the factor makes all of them fail
+                let mut bad = [f64::from(u8::from(chol.is_none()))];
+                self.dist.comm().max_f64(&mut bad);
+                if bad[0] > 0.0 {
+                    return None;
+                }
+                let a = self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw);
+                let r = self.coarse.residual_after(&self.dist, &a, &w);
+                // the deepest penetration of a contact row not kept, against the largest |w|
+                let mut worst = [(0..l.m).filter(|&i| !free[l.normal(i)]).map(|i| -r[l.normal(i)]).fold(0.0f64, f64::max), w.iter().fold(0.0f64, |m, v| m.max(v.abs()))];
+                let comm = self.dist.comm();
+                comm.max_f64(&mut worst);
+                alpha = Some(a);
+                if worst[0] <= PENETRATION * worst[1] {
+                    break;
+                }
             }
-            self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw)
+            alpha.expect("one try at least")
         };
         for (s, us) in self.pieces.iter().zip(&mut u) {
             s.sys.add_r_mul(&alpha[self.coarse.range(s.sys.index)], us);
