@@ -376,6 +376,39 @@ fn quadratic_faces_measure_their_gap_on_the_true_geometry() {
     }
 }
 
+/// The tutorial's punch (Young's modulus `e_punch`, ν = 0.3) on its block (E = 7e4, ν = 0.33),
+/// the block clamped at its bottom, the punch's top moved 1e-4 down; `pair`: the contact pair's
+/// keys.
+fn punch_on_block(e_punch: f64, pair: &str) -> String {
+    format!(
+        r#"[[material]]
+name = "punch"
+E = {e_punch:?}
+nu = 0.3
+[[material]]
+name = "block"
+E = 70000.0
+nu = 0.33
+[[body]]
+name = "punch"
+material = "punch"
+gmsh = {{ file = "{m}", volume = "punch" }}
+[[body]]
+name = "block"
+material = "block"
+gmsh = {{ file = "{m}", volume = "block" }}
+[[dirichlet]]
+face = "block.block_bottom"
+[[dirichlet]]
+face = "punch.punch_top"
+value = [0.0, 0.0, -1e-4]
+[[contact.pair]]
+{pair}
+"#,
+        m = root().join("mesh/tutorial.msh").display()
+    )
+}
+
 /// The slave chosen by the rule where a pair names only its two faces: a flat punch 1000× stiffer
 /// than the block (the tutorial's mesh) gets the soft block as slave — every slave node under the
 /// punch closed, in few products — and `check` says which and why; a face named as `slave`
@@ -384,34 +417,7 @@ fn quadratic_faces_measure_their_gap_on_the_true_geometry() {
 #[test]
 fn the_slave_of_two_named_faces_is_the_softer_and_finer_side() {
     let dir = tmpdir("slave-rule");
-    let scene = format!(
-        r#"[[material]]
-name = "stiff"
-E = 70000000.0
-nu = 0.3
-[[material]]
-name = "soft"
-E = 70000.0
-nu = 0.33
-[[body]]
-name = "punch"
-material = "stiff"
-gmsh = {{ file = "{m}", volume = "punch" }}
-[[body]]
-name = "block"
-material = "soft"
-gmsh = {{ file = "{m}", volume = "block" }}
-[[dirichlet]]
-face = "block.block_bottom"
-[[dirichlet]]
-face = "punch.punch_top"
-value = [0.0, 0.0, -1e-4]
-[[contact.pair]]
-faces = ["punch.punch_bottom", "block.block_top"]
-friction = {{ type = "coulomb", mu = 0.3 }}
-"#,
-        m = root().join("mesh/tutorial.msh").display()
-    );
+    let scene = punch_on_block(7e7, "faces = [\"punch.punch_bottom\", \"block.block_top\"]\nfriction = { type = \"coulomb\", mu = 0.3 }");
     let path = dir.join("punch.toml");
     std::fs::write(&path, &scene).unwrap();
     let o = common::run(&["check", path.to_str().unwrap()]);
@@ -506,35 +512,7 @@ fn the_mortar_patch_test_holds_at_any_stiffness() {
 #[test]
 fn slave_nodes_beyond_the_master_edge_are_not_held() {
     let dir = tmpdir("contact-edge");
-    let msh = root().join("mesh/tutorial.msh");
-    let scene = format!(
-        r#"[[material]]
-name = "steel"
-E = 210000.0
-nu = 0.3
-[[material]]
-name = "aluminium"
-E = 70000.0
-nu = 0.33
-[[body]]
-name = "punch"
-material = "steel"
-gmsh = {{ file = "{m}", volume = "punch" }}
-[[body]]
-name = "block"
-material = "aluminium"
-gmsh = {{ file = "{m}", volume = "block" }}
-[[dirichlet]]
-face = "block.block_bottom"
-[[dirichlet]]
-face = "punch.punch_top"
-value = [0.0, 0.0, -1e-4]
-[[contact.pair]]
-slave = "block.block_top"
-master = "punch.punch_bottom"
-"#,
-        m = msh.display()
-    );
+    let scene = punch_on_block(210000.0, "slave = \"block.block_top\"\nmaster = \"punch.punch_bottom\"");
     let path = dir.join("edge.toml");
     std::fs::write(&path, scene).unwrap();
     let block = solve(&path, &[], &dir.join("block.h5"));
