@@ -191,15 +191,21 @@ enum Limit {
 fn largest(g: &[Vec<(usize, f64)>], e: &[f64], u: &[f64], n: usize, cones: &Cones) -> Limit {
     let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
     for &(r, j, v) in &cones.a {
-        (ai.push(r), aj.push(j), av.push(v));
+        ai.push(r);
+        aj.push(j);
+        av.push(v);
     }
     let r0 = cones.h.len();
     for (r, row) in g.iter().enumerate() {
         for &(j, v) in row {
-            (ai.push(r0 + r), aj.push(j), av.push(v));
+            ai.push(r0 + r);
+        aj.push(j);
+        av.push(v);
         }
         if u[r] != 0.0 {
-            (ai.push(r0 + r), aj.push(n), av.push(-u[r]));
+            ai.push(r0 + r);
+        aj.push(n);
+        av.push(-u[r]);
         }
     }
     let a = CscMatrix::new_from_triplets(r0 + g.len(), n + 1, ai, aj, av);
@@ -299,13 +305,19 @@ fn nearest(g: &[Vec<(usize, f64)>], e: &[f64], n: usize, cones: &Cones) -> Optio
     let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
     // the cones of Λ first (s = h − A x), then (t, e − Gλ) ∈ SOC
     for &(r, j, v) in &cones.a {
-        (ai.push(r), aj.push(j), av.push(v));
+        ai.push(r);
+        aj.push(j);
+        av.push(v);
     }
     let r0 = cones.h.len();
-    (ai.push(r0), aj.push(n), av.push(-1.0));
+    ai.push(r0);
+        aj.push(n);
+        av.push(-1.0);
     for (r, row) in g.iter().enumerate() {
         for &(j, v) in row {
-            (ai.push(r0 + 1 + r), aj.push(j), av.push(v));
+            ai.push(r0 + 1 + r);
+        aj.push(j);
+        av.push(v);
         }
     }
     let rows = r0 + 1 + g.len();

@@ -167,6 +167,50 @@ fn llt_solve<T: faer::traits::ComplexField>(sym: &SymbolicCholesky<usize>, value
     LltRef::new(sym, values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
 }
 
+
+/// The trailing nb × nb block of the factor L whose values `values` follow the structure `sym`
+/// (supernodal: read supernode by supernode; simplicial: column by column).
+pub(crate) fn trailing_block(sym: &SymbolicCholesky<usize>, values: &[f64], nb: usize) -> Mat<f64> {
+    let n = sym.nrows();
+    let ni = n - nb;
+    let mut l = Mat::<f64>::zeros(nb, nb);
+    match sym.raw() {
+        SymbolicCholeskyRaw::Supernodal(sn) => {
+            let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+            let (rptr, vptr, rows) = (sn.col_ptr_for_row_idx(), sn.col_ptr_for_val(), sn.row_idx());
+            for s in 0..sn.n_supernodes() {
+                let (b0, e0) = (begin[s], end[s]);
+                if e0 <= ni {
+                    continue;
+                }
+                let ncols = e0 - b0;
+                let pattern = &rows[rptr[s]..rptr[s + 1]];
+                let nrows = ncols + pattern.len();
+                let block = &values[vptr[s]..vptr[s + 1]];
+                for jc in 0..ncols {
+                    let c = b0 + jc;
+                    if c < ni {
+                        continue;
+                    }
+                    for r in jc..nrows {
+                        let row = if r < ncols { b0 + r } else { pattern[r - ncols] };
+                        l[(row - ni, c - ni)] = block[r + jc * nrows];
+                    }
+                }
+            }
+        }
+        SymbolicCholeskyRaw::Simplicial(sp) => {
+            let (ptr, rows) = (sp.col_ptr(), sp.row_idx());
+            for c in ni..n {
+                for p in ptr[c]..ptr[c + 1] {
+                    l[(rows[p] - ni, c - ni)] = values[p];
+                }
+            }
+        }
+    }
+    l
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -231,47 +275,4 @@ pub(crate) mod tests {
         let e = Cholesky::factorize(&a, Ordering::Amd).err().unwrap();
         assert!(e.to_string().contains("not positive definite"), "{e}");
     }
-}
-
-/// The trailing nb × nb block of the factor L whose values `values` follow the structure `sym`
-/// (supernodal: read supernode by supernode; simplicial: column by column).
-pub(crate) fn trailing_block(sym: &SymbolicCholesky<usize>, values: &[f64], nb: usize) -> Mat<f64> {
-    let n = sym.nrows();
-    let ni = n - nb;
-    let mut l = Mat::<f64>::zeros(nb, nb);
-    match sym.raw() {
-        SymbolicCholeskyRaw::Supernodal(sn) => {
-            let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-            let (rptr, vptr, rows) = (sn.col_ptr_for_row_idx(), sn.col_ptr_for_val(), sn.row_idx());
-            for s in 0..sn.n_supernodes() {
-                let (b0, e0) = (begin[s], end[s]);
-                if e0 <= ni {
-                    continue;
-                }
-                let ncols = e0 - b0;
-                let pattern = &rows[rptr[s]..rptr[s + 1]];
-                let nrows = ncols + pattern.len();
-                let block = &values[vptr[s]..vptr[s + 1]];
-                for jc in 0..ncols {
-                    let c = b0 + jc;
-                    if c < ni {
-                        continue;
-                    }
-                    for r in jc..nrows {
-                        let row = if r < ncols { b0 + r } else { pattern[r - ncols] };
-                        l[(row - ni, c - ni)] = block[r + jc * nrows];
-                    }
-                }
-            }
-        }
-        SymbolicCholeskyRaw::Simplicial(sp) => {
-            let (ptr, rows) = (sp.col_ptr(), sp.row_idx());
-            for c in ni..n {
-                for p in ptr[c]..ptr[c + 1] {
-                    l[(rows[p] - ni, c - ni)] = values[p];
-                }
-            }
-        }
-    }
-    l
 }

@@ -293,7 +293,7 @@ pub(crate) fn pcg<A: Operator>(
     g: &mut [f64],
     threshold: impl FnOnce(f64) -> f64,
     mut each: impl FnMut(f64),
-    mut bank: Option<&mut Recycle>,
+    bank: Option<&mut Recycle>,
 ) -> Result<PcgInfo, QpError> {
     let a = qp.a;
     let sp = a.space();
@@ -461,7 +461,7 @@ pub(crate) fn pcg<A: Operator>(
         // the last residual's preconditioning counts too (as it always did: one per iteration + 1)
         debug_assert_eq!(applications, it + 1);
     }
-    if let Some(b) = bank.as_deref_mut() {
+    if let Some(b) = bank {
         for (d, ad) in kept {
             b.push(d, ad);
         }

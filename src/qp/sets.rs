@@ -1314,8 +1314,8 @@ mod tests {
         v
     }
 
-    /// Cost per call (`cargo test --release --lib qp::sets::tests::timing -- --ignored
-    /// --nocapture`): about 8 ns for a disc, 70–90 ns for an ellipse (2/3 of the points outside).
+    // Cost per call (`cargo test --release --lib qp::sets::tests::timing -- --ignored
+    // --nocapture`): about 8 ns for a disc, 70–90 ns for an ellipse (2/3 of the points outside).
 
     /// Random ellipses (axis ratio up to 1e8, size 1e-100…1e100) and points at all distances:
     /// the projection satisfies the optimality conditions that characterize it (on the boundary,

@@ -501,7 +501,7 @@ mod recycle_tests {
         let (mut x, mut g) = (vec![0.0; 60], vec![-1.0; 60]);
         let info = pcg(&qp, &opts, &mut x, &mut g, |_| 0.0, |_| {}, None).expect("SPD");
         let kappa = info.kappa.expect("30 iterations");
-        assert!(kappa <= 1000.0 * (1.0 + 1e-9) && kappa >= 500.0, "κ estimate {kappa}");
+        assert!((500.0..=1000.0 * (1.0 + 1e-9)).contains(&kappa), "κ estimate {kappa}");
     }
 
     #[test]

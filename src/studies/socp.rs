@@ -165,7 +165,7 @@ impl PrimalSocp {
             tol_gap_abs: tol,
             tol_gap_rel: tol,
             tol_feas: tol,
-            tol_ktratio: tol.max(1e-10).min(1e-6),
+            tol_ktratio: tol.clamp(1e-10, 1e-6),
             max_iter: 200,
             max_threads: 1,
             // faer's supernodal LDLᵀ: 3D stiffness fill makes QDLDL (the default) 20× slower
