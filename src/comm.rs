@@ -4,9 +4,9 @@
 //! reduced values ([`Comm::agree`]) so that all ranks follow the same path.
 
 use mpi::datatype::{Partition, PartitionMut};
-use mpi::Count;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use mpi::Count;
 
 use crate::error::{Error, Result};
 
@@ -177,13 +177,7 @@ impl Comm for MpiComm {
                 let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
                 r.gather_varcount_into_root(local, &mut part);
             }
-            Some(
-                counts
-                    .iter()
-                    .zip(&displs)
-                    .map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec())
-                    .collect(),
-            )
+            Some(counts.iter().zip(&displs).map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec()).collect())
         } else {
             r.gather_into(&count[..]);
             r.gather_varcount_into(local);
@@ -194,7 +188,14 @@ impl Comm for MpiComm {
         let count = |n: usize| Count::try_from(n).expect("all_gather_f64: more than 2^31 values");
         let mut counts = vec![0 as Count; self.size()];
         self.world.all_gather_into(&count(local.len()), &mut counts[..]);
-        let displs: Vec<Count> = counts.iter().scan(0usize, |acc, &n| { let d = *acc; *acc += n as usize; Some(count(d)) }).collect();
+        let displs: Vec<Count> = counts
+            .iter()
+            .scan(0usize, |acc, &n| {
+                let d = *acc;
+                *acc += n as usize;
+                Some(count(d))
+            })
+            .collect();
         let total: usize = counts.iter().map(|&n| n as usize).sum();
         if total == 0 {
             return vec![Vec::new(); self.size()];
@@ -212,8 +213,7 @@ impl Comm for MpiComm {
             for (q, buf) in recv.iter_mut() {
                 recvs.push(self.world.process_at_rank(*q as i32).immediate_receive_into(scope, &mut buf[..]));
             }
-            let sends: Vec<_> =
-                send.iter().map(|(q, buf)| self.world.process_at_rank(*q as i32).immediate_send(scope, &buf[..])).collect();
+            let sends: Vec<_> = send.iter().map(|(q, buf)| self.world.process_at_rank(*q as i32).immediate_send(scope, &buf[..])).collect();
             for r in recvs {
                 r.wait();
             }
@@ -229,7 +229,15 @@ impl Comm for MpiComm {
         let scounts: Vec<Count> = send.iter().map(|v| count(v.len())).collect();
         let mut rcounts = vec![0 as Count; p];
         self.world.all_to_all_into(&scounts[..], &mut rcounts[..]);
-        let displs = |c: &[Count]| -> Vec<Count> { c.iter().scan(0usize, |acc, &n| { let d = *acc; *acc += n as usize; Some(count(d)) }).collect() };
+        let displs = |c: &[Count]| -> Vec<Count> {
+            c.iter()
+                .scan(0usize, |acc, &n| {
+                    let d = *acc;
+                    *acc += n as usize;
+                    Some(count(d))
+                })
+                .collect()
+        };
         let (sdispls, rdispls) = (displs(&scounts), displs(&rcounts));
         let rtotal: usize = rcounts.iter().map(|&n| n as usize).sum();
         count(send.iter().map(Vec::len).sum());

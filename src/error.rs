@@ -96,5 +96,9 @@ impl Error {
 /// A byte count for messages: `61.2 GB`, `512 MB`, `3.4 kB`, `12 B` (decimal units).
 pub fn human_bytes(b: f64) -> String {
     let (v, unit) = [(1e12, "TB"), (1e9, "GB"), (1e6, "MB"), (1e3, "kB")].into_iter().find(|&(u, _)| b >= u).map_or((b, "B"), |(u, n)| (b / u, n));
-    if unit == "B" || v >= 100.0 { format!("{v:.0} {unit}") } else { format!("{v:.1} {unit}") }
+    if unit == "B" || v >= 100.0 {
+        format!("{v:.0} {unit}")
+    } else {
+        format!("{v:.1} {unit}")
+    }
 }

@@ -323,7 +323,16 @@ fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::studies::work_precision
         |p| {
             if root {
                 let setup = if p.subdomains == 0 { "assembly + factorization" } else { "TFETI set-up" };
-                println!("N = {}, {}: n = {}, m = {}, {setup} {:.2} s, reference {}/{} nA", p.n, wp::dual_label(p.subdomains), p.dofs, p.pairs, p.factorize_s, p.reference.iterations, p.reference.n_a);
+                println!(
+                    "N = {}, {}: n = {}, m = {}, {setup} {:.2} s, reference {}/{} nA",
+                    p.n,
+                    wp::dual_label(p.subdomains),
+                    p.dofs,
+                    p.pairs,
+                    p.factorize_s,
+                    p.reference.iterations,
+                    p.reference.n_a
+                );
             }
         },
         |pt| {
@@ -470,13 +479,19 @@ fn main() -> ExitCode {
 fn launched_by_mpi() -> bool {
     let set = |v: &str| std::env::var_os(v).is_some();
     let several_tasks = std::env::var("SLURM_NTASKS").ok().and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n > 1) && set("SLURM_PROCID");
-    std::env::var("TRESCA_FETI_MPI").is_ok_and(|v| v == "1") || several_tasks || ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK", "MPI_LOCALNRANKS", "ALPS_APP_PE"].iter().any(|v| set(v))
+    std::env::var("TRESCA_FETI_MPI").is_ok_and(|v| v == "1")
+        || several_tasks
+        || ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMI_RANK", "PMIX_RANK", "MPI_LOCALNRANKS", "ALPS_APP_PE"].iter().any(|v| set(v))
 }
 
 /// Whether this process is the first of its launch (or not launched by MPI at all), from the
 /// rank a launcher puts in the environment before MPI starts: Open MPI, MPICH/PMI, PMIx, Slurm.
 fn first_rank(var: impl Fn(&str) -> Option<String>) -> bool {
-    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID"].iter().find_map(|v| var(v)).and_then(|r| r.trim().parse::<u64>().ok()).is_none_or(|r| r == 0)
+    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID"]
+        .iter()
+        .find_map(|v| var(v))
+        .and_then(|r| r.trim().parse::<u64>().ok())
+        .is_none_or(|r| r == 0)
 }
 
 /// Open MPI's point-to-point layer for a run whose ranks all share one host, unless the user
@@ -523,7 +538,20 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
             table1(comm, &args)
         }
         Cmd::WorkPrecision { scene, set, sizes, subdomains, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
-            let args = tresca_feti::studies::work_precision::Args { scene, sets: set, sizes, subdomains, eps, clarabel_eps, solvers, csv: Some(csv), reference_eps, max_products, max_seconds, targets };
+            let args = tresca_feti::studies::work_precision::Args {
+                scene,
+                sets: set,
+                sizes,
+                subdomains,
+                eps,
+                clarabel_eps,
+                solvers,
+                csv: Some(csv),
+                reference_eps,
+                max_products,
+                max_seconds,
+                targets,
+            };
             work_precision(comm, &args)
         }
         Cmd::Stability { dir, set, out, kkt_factor } => stability(comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
@@ -570,7 +598,8 @@ fn bench_coarse<C: Comm>(comm: &C, args: &tresca_feti::studies::coarse_cost::Arg
     }
     println!("{head}");
     tresca_feti::studies::coarse_cost::run(args, |r| {
-        let mut line = format!("{:>6} {:>7} {:>11} {:>10} {:>10} {:>10.3} {:>18.3}", r.subdomains, r.pieces, r.dim, r.nnz_c, r.nnz_l, r.build_s, 1e3 * r.factor_solve_s);
+        let mut line =
+            format!("{:>6} {:>7} {:>11} {:>10} {:>10} {:>10.3} {:>18.3}", r.subdomains, r.pieces, r.dim, r.nnz_c, r.nnz_l, r.build_s, 1e3 * r.factor_solve_s);
         for &(setup, product, bytes) in &r.rows {
             line += &format!(" | {:>19.2} {:>9.3} {:>12.4}", bytes as f64 / 1e6, setup, 1e3 * product);
         }
@@ -622,7 +651,10 @@ fn print_summary(s: &pipeline::Summary) {
         let kkt = if r.contact.is_some() { format!(", KKT residual {:.1e}", sv.kkt_worst) } else { String::new() };
         let fp = if i.fixed_point_iterations > 0 { format!("{} Coulomb fixed-point steps, ", i.fixed_point_iterations) } else { String::new() };
         // announced only where a product was taken in single precision
-        let mut mixed = r.single_precision_error.filter(|_| i.inexact_products > 0).map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
+        let mut mixed = r
+            .single_precision_error
+            .filter(|_| i.inexact_products > 0)
+            .map_or(String::new(), |e| format!(", mixed precision ({} products in single precision, η = {e:.1e})", i.inexact_products));
         if let Some(n) = r.explicit_products {
             mixed += &format!(", explicit products (trailing blocks of {n} contact DOFs)");
         }

@@ -7,13 +7,13 @@ use std::sync::OnceLock;
 
 use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact, SlipBound, Tied};
-use crate::qp::cone::Coefficient;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{add_pressure, add_traction};
-use crate::fem::material::Lame;
 use crate::fem::cell::{facet_area_inside, facet_centre, facet_nodal_areas};
+use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
+use crate::qp::cone::Coefficient;
 use crate::scene::{Component, LoadedScene, Scene};
 
 /// Mesh + boundary conditions, ready for assembly.
@@ -220,9 +220,7 @@ pub fn constraints_by_body(mesh: &Mesh, constraints: &[(usize, usize, f64)]) -> 
 type FaceIndex = HashMap<String, usize>;
 
 fn face_index(mesh: &Mesh, faces: &FaceIndex, key: String, name: &str) -> Result<usize> {
-    faces.get(name).copied().ok_or_else(|| {
-        Error::scene(key, format!("unknown face \"{name}\"; known faces: {}", mesh.face_names().join(", ")))
-    })
+    faces.get(name).copied().ok_or_else(|| Error::scene(key, format!("unknown face \"{name}\"; known faces: {}", mesh.face_names().join(", "))))
 }
 
 /// The component's letter.
@@ -248,7 +246,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
             (Some(bx), _) => {
-                let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
+                let mut geom =
+                    boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
                 if let Some(side) = bx.curved_side() {
                     // the curved side moves out by the bulge, the nodes between in proportion
                     let (lo, hi) = (bx.min[2], bx.max[2]);
@@ -273,7 +272,11 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                     if far > crate::scene::range::MAX {
                         return Err(Error::scene(
                             format!("body[{i}].gmsh.translate"),
-                            format!("moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)", b.name, crate::scene::range::MAX),
+                            format!(
+                                "moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)",
+                                b.name,
+                                crate::scene::range::MAX
+                            ),
                         ));
                     }
                 }
@@ -389,7 +392,10 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     for (i, p) in scene.contact.pair.iter().enumerate() {
         let (s, m) = match &p.faces {
             None => {
-                let (s, m) = (face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?, face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?);
+                let (s, m) = (
+                    face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?,
+                    face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?,
+                );
                 if let Some(w) = stiff_slave(&mesh, &young, s, m, i) {
                     slave_choice.push((i, w));
                 }
@@ -423,7 +429,8 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     if let Some(c) = pairs.as_mut() {
         let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
         // held at 0 at every step (a symmetry plane's rollers), not driven
-        let still: std::collections::HashSet<(usize, usize)> = constraints.iter().zip(&path.constraint_entry).filter(|(_, e)| e.1 == 0.0).map(|(&(v, k, _), _)| (v, k)).collect();
+        let still: std::collections::HashSet<(usize, usize)> =
+            constraints.iter().zip(&path.constraint_entry).filter(|(_, e)| e.1 == 0.0).map(|(&(v, k, _), _)| (v, k)).collect();
         c.void_held_tangents(|v, k| held.contains(&(v, k)), |v, k| still.contains(&(v, k)));
     }
     let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
@@ -516,7 +523,10 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             } else {
                 " (frictionless contact does not hold a sliding motion)"
             };
-            return Err(Error::scene("dirichlet", format!("{name}: {its} rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", unheld.join(", "))));
+            return Err(Error::scene(
+                "dirichlet",
+                format!("{name}: {its} rigid motions {} are held by neither Dirichlet conditions nor contact{hint}", unheld.join(", ")),
+            ));
         }
         floating.push(group.clone());
     }
@@ -544,18 +554,34 @@ fn overlapping_rows(mesh: &Mesh, ties: &[(usize, usize)], contact: &[(usize, usi
     for (j, &(s, m)) in ties.iter().enumerate() {
         for (i, &(si, mi)) in ties[..j].iter().enumerate() {
             if same_faces((s, m), (si, mi)) {
-                return Err(Error::scene(format!("tie[{j}]"), format!("ties {} and {} again, as tie[{i}] does: each pair of faces is tied once; remove one", name(s), name(m))));
+                return Err(Error::scene(
+                    format!("tie[{j}]"),
+                    format!("ties {} and {} again, as tie[{i}] does: each pair of faces is tied once; remove one", name(s), name(m)),
+                ));
             }
             if s == si {
-                return Err(Error::scene(format!("tie[{j}].slave"), format!("{} is already the slave of tie[{i}]: a slave face is tied once (its nodes would carry two sets of tie rows)", name(s))));
+                return Err(Error::scene(
+                    format!("tie[{j}].slave"),
+                    format!("{} is already the slave of tie[{i}]: a slave face is tied once (its nodes would carry two sets of tie rows)", name(s)),
+                ));
             }
         }
         for (i, &(cs, cm)) in contact.iter().enumerate() {
             if same_faces((s, m), (cs, cm)) {
-                return Err(Error::scene(format!("tie[{j}]"), format!("ties {} and {}, which contact.pair[{i}] puts in contact: faces are either tied or in contact; remove the tie or the pair", name(s), name(m))));
+                return Err(Error::scene(
+                    format!("tie[{j}]"),
+                    format!(
+                        "ties {} and {}, which contact.pair[{i}] puts in contact: faces are either tied or in contact; remove the tie or the pair",
+                        name(s),
+                        name(m)
+                    ),
+                ));
             }
             if s == cs {
-                return Err(Error::scene(format!("tie[{j}].slave"), format!("{} is also the slave of contact.pair[{i}]: a slave face carries either tie rows or contact rows", name(s))));
+                return Err(Error::scene(
+                    format!("tie[{j}].slave"),
+                    format!("{} is also the slave of contact.pair[{i}]: a slave face carries either tie rows or contact rows", name(s)),
+                ));
             }
         }
     }
@@ -611,7 +637,14 @@ fn choose_slave(mesh: &Mesh, e: &[f64], a: usize, b: usize, p: &crate::scene::Co
         (false, true) => "the finer side",
         (false, false) => "the first of `faces`",
     };
-    (s, m, format!("slave {} chosen by {SLAVE_RULE}: E·h {ks:.3e} (E {:.3e}, facets {hs:.3e}) against {km:.3e} (E {:.3e}, facets {hm:.3e}) of {}: {side}", fs.name, e[fs.body], e[fm.body], fm.name))
+    (
+        s,
+        m,
+        format!(
+            "slave {} chosen by {SLAVE_RULE}: E·h {ks:.3e} (E {:.3e}, facets {hs:.3e}) against {km:.3e} (E {:.3e}, facets {hm:.3e}) of {}: {side}",
+            fs.name, e[fs.body], e[fm.body], fm.name
+        ),
+    )
 }
 
 /// Whether pair `i`'s friction can carry a tangential force along t₁ and t₂: its slip bound

@@ -343,12 +343,17 @@ impl FaceDef {
     /// value finite, radii > 0, directions nonzero).
     pub fn region(&self, i: usize) -> Result<Region> {
         let key = |k: &str| format!("face[{i}].{k}");
-        let finite = |k: &str, v: &[f64]| if v.iter().all(|x| x.is_finite()) { Ok(()) } else { Err(Error::scene(key(k), format!("must be finite, got {v:?}"))) };
+        let finite =
+            |k: &str, v: &[f64]| if v.iter().all(|x| x.is_finite()) { Ok(()) } else { Err(Error::scene(key(k), format!("must be finite, got {v:?}"))) };
         let positive = |k: &str, r: f64| if r.is_finite() && r > 0.0 { Ok(()) } else { Err(Error::scene(key(k), format!("must be > 0, got {r}"))) };
         let nonzero = |k: &str, v: [f64; 3]| {
             finite(k, &v)?;
             let l = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if l > 0.0 && l.is_finite() { Ok(()) } else { Err(Error::scene(key(k), format!("must be a nonzero direction, got {v:?}"))) }
+            if l > 0.0 && l.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::scene(key(k), format!("must be a nonzero direction, got {v:?}")))
+            }
         };
         let given = [self.min.is_some() || self.max.is_some(), self.sphere.is_some(), self.cylinder.is_some(), self.half_space.is_some()];
         if given.iter().filter(|&&g| g).count() != 1 {
@@ -727,7 +732,10 @@ impl SolverSettings {
         if let (true, Some(key)) = (auto, own.keys().next()) {
             return Err(Error::scene(
                 format!("solver.{key}"),
-                format!("not a setting every method reads ({}); name the method whose setting it is (solver.method), the automatic choice takes its defaults", common_keys.join(", ")),
+                format!(
+                    "not a setting every method reads ({}); name the method whose setting it is (solver.method), the automatic choice takes its defaults",
+                    common_keys.join(", ")
+                ),
             ));
         }
         let common: qp::Common = value("", toml::Value::Table(common))?;
@@ -831,10 +839,20 @@ fn unit() -> f64 {
     1.0
 }
 
-
 impl Default for DecompositionSettings {
     fn default() -> Self {
-        DecompositionSettings { subdomains: None, target_dofs: None, tfeti: false, gluing: Default::default(), dirichlet: Default::default(), projector: Default::default(), penalty: 1.0, projected_cg: true, subdomains_per_cluster: 1, coarse_solve: CoarseSolve::Factor }
+        DecompositionSettings {
+            subdomains: None,
+            target_dofs: None,
+            tfeti: false,
+            gluing: Default::default(),
+            dirichlet: Default::default(),
+            projector: Default::default(),
+            penalty: 1.0,
+            projected_cg: true,
+            subdomains_per_cluster: 1,
+            coarse_solve: CoarseSolve::Factor,
+        }
     }
 }
 
@@ -966,7 +984,20 @@ pub const MAX_BODY_NODES: usize = i32::MAX as usize / 3;
 pub const MAX_LOAD_STEPS: usize = 10_000;
 
 /// Output fields a scene can ask for (the contact ones are written only when contact is solved).
-pub const FIELDS: [&str; 12] = ["displacement", "von_mises", "body", "subdomain", "rank", "contact_status", "contact_pressure", "contact_pressure_smooth", "contact_traction", "contact_traction_smooth", "gap", "slip"];
+pub const FIELDS: [&str; 12] = [
+    "displacement",
+    "von_mises",
+    "body",
+    "subdomain",
+    "rank",
+    "contact_status",
+    "contact_pressure",
+    "contact_pressure_smooth",
+    "contact_traction",
+    "contact_traction_smooth",
+    "gap",
+    "slip",
+];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -1039,10 +1070,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedScene> {
 
 /// Parses scene text (`file` is only used in messages).
 pub fn parse(text: &str, file: &str, overrides: &[String]) -> Result<Scene> {
-    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::Parse {
-        file: file.into(),
-        msg: one_line_toml_error(text, &e),
-    })?;
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::Parse { file: file.into(), msg: one_line_toml_error(text, &e) })?;
     for o in overrides {
         apply_override(&mut table, o)?;
     }
@@ -1213,7 +1241,10 @@ impl Scene {
                         }
                         let (h, t) = (0.5 * (bx.max[0] - bx.min[0]), bx.max[2] - bx.min[2]);
                         if !(c.radius.is_finite() && c.radius >= h) {
-                            return Err(Error::scene(k("box.cylinder.radius"), format!("must be finite and at least the half-width {h} of the box in x, got {}", c.radius)));
+                            return Err(Error::scene(
+                                k("box.cylinder.radius"),
+                                format!("must be finite and at least the half-width {h} of the box in x, got {}", c.radius),
+                            ));
                         }
                         if !range::carries(c.radius, false) {
                             return Err(Error::scene(k("box.cylinder.radius"), out_of_range("radius", c.radius, " m")));
@@ -1237,7 +1268,10 @@ impl Scene {
                         }
                         let h = s.reach(bx);
                         if !(s.radius.is_finite() && s.radius > h) {
-                            return Err(Error::scene(k("box.sphere.radius"), format!("must be finite and exceed the distance {h} from the pole to the side's farthest corner, got {}", s.radius)));
+                            return Err(Error::scene(
+                                k("box.sphere.radius"),
+                                format!("must be finite and exceed the distance {h} from the pole to the side's farthest corner, got {}", s.radius),
+                            ));
                         }
                         if !range::carries(s.radius, false) {
                             return Err(Error::scene(k("box.sphere.radius"), out_of_range("radius", s.radius, " m")));
@@ -1271,7 +1305,14 @@ impl Scene {
                         }
                         let far = bx.min.iter().chain(&bx.max).fold(0.0f64, |a, v| a.max(v.abs()));
                         if far > range::MAX {
-                            return Err(Error::scene(k("box"), format!("body \"{}\": coordinates up to {far:.3e} m lie outside ±{:e} m; move the box nearer the origin or scale the units", b.name, range::MAX)));
+                            return Err(Error::scene(
+                                k("box"),
+                                format!(
+                                    "body \"{}\": coordinates up to {far:.3e} m lie outside ±{:e} m; move the box nearer the origin or scale the units",
+                                    b.name,
+                                    range::MAX
+                                ),
+                            ));
                         }
                         let total: f64 = n.iter().map(|&v| v as f64).product();
                         if total > MAX_BODY_NODES as f64 {
@@ -1345,7 +1386,11 @@ impl Scene {
                     carried(format!("traction[{i}].pressure"), "a nonzero pressure", &[p], " MPa")?;
                 }
                 (p, _) => {
-                    let why = if p.is_some() { "give either `p` (a traction vector) or `pressure`, not both" } else { "give `p` (a traction vector) or `pressure` (normal, positive into the body)" };
+                    let why = if p.is_some() {
+                        "give either `p` (a traction vector) or `pressure`, not both"
+                    } else {
+                        "give `p` (a traction vector) or `pressure` (normal, positive into the body)"
+                    };
                     return Err(Error::scene(format!("traction[{i}].{}", if p.is_some() { "pressure" } else { "p" }), why));
                 }
             }
@@ -1364,7 +1409,12 @@ impl Scene {
             let k = |f: &str| format!("contact.pair[{i}].{f}");
             match (&p.faces, p.slave.is_empty(), p.master.is_empty()) {
                 (None, false, false) => {}
-                (None, _, _) => return Err(Error::scene(k(if p.slave.is_empty() { "slave" } else { "master" }), "name both `slave` and `master`, or the two faces as `faces = [\"a.x\", \"b.y\"]`")),
+                (None, _, _) => {
+                    return Err(Error::scene(
+                        k(if p.slave.is_empty() { "slave" } else { "master" }),
+                        "name both `slave` and `master`, or the two faces as `faces = [\"a.x\", \"b.y\"]`",
+                    ))
+                }
                 (Some(f), s, m) => {
                     if f[0] == f[1] {
                         return Err(Error::scene(k("faces"), "the two faces must be different"));
@@ -1423,7 +1473,11 @@ impl Scene {
                 }
                 Friction::Coulomb { mu, mu1, mu2, direction } => {
                     let coef = |name: &str, v: f64| {
-                        if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(Error::scene(k(&format!("friction.{name}")), format!("friction coefficient must be finite and ≥ 0, got {v}"))) }
+                        if v.is_finite() && v >= 0.0 {
+                            Ok(())
+                        } else {
+                            Err(Error::scene(k(&format!("friction.{name}")), format!("friction coefficient must be finite and ≥ 0, got {v}")))
+                        }
                     };
                     match (mu, mu1, mu2, direction) {
                         (Some(m), None, None, None) => coef("mu", *m)?,

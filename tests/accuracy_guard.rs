@@ -77,10 +77,7 @@ fn pushed(push: f64, friction: &str) -> String {
 fn a_load_no_friction_can_hold_is_refused_before_the_solve_naming_body_and_direction() {
     // before: "SMALSE-M (SSN-BICGSTAB): no convergence in 10 outer iterations, 2015 A-products"
     let dir = tmpdir("unheld");
-    let cases = [
-        ("coulomb", pushed(0.7, "friction = { type = \"coulomb\", mu = 0.3 }")),
-        ("tresca", pushed(0.7, "friction = { type = \"tresca\", g = 0.3 }")),
-    ];
+    let cases = [("coulomb", pushed(0.7, "friction = { type = \"coulomb\", mu = 0.3 }")), ("tresca", pushed(0.7, "friction = { type = \"tresca\", g = 0.3 }"))];
     for (name, scene) in &cases {
         let path = dir.join(format!("{name}.toml"));
         std::fs::write(&path, scene).unwrap();
@@ -107,7 +104,12 @@ fn a_load_no_friction_can_hold_is_refused_before_the_solve_naming_body_and_direc
     let path = dir.join("tresca.toml");
     let o = Command::new(BIN).args(["check", path.to_str().unwrap()]).output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("the applied force along x is 7.0000e-1; with its other components as applied, contact and friction hold at most 6.0000e-1 along it, 1.000e-1 less"), "{stderr}");
+    assert!(
+        stderr.contains(
+            "the applied force along x is 7.0000e-1; with its other components as applied, contact and friction hold at most 6.0000e-1 along it, 1.000e-1 less"
+        ),
+        "{stderr}"
+    );
     // below the limit both solve (T = 0.55 < 0.6)
     for (name, friction) in [("coulomb", "friction = { type = \"coulomb\", mu = 0.3 }"), ("tresca", "friction = { type = \"tresca\", g = 0.3 }")] {
         let path = dir.join(format!("{name}-held.toml"));
@@ -126,7 +128,9 @@ fn a_load_no_friction_can_hold_is_refused_before_the_solve_naming_body_and_direc
 fn a_result_that_fails_its_check_is_refused_with_one_line_and_no_file() {
     let dir = common::tmpdir("guard-refusal");
     let seed = common::root().join("run/seed.toml");
-    for (name, ranks, fault, sets) in [("mono", 1, "accuracy@0", vec!["mesh.n=6"]), ("tfeti", 2, "accuracy@1", vec!["mesh.n=6", "decomposition.subdomains=2", "decomposition.tfeti=true"])] {
+    for (name, ranks, fault, sets) in
+        [("mono", 1, "accuracy@0", vec!["mesh.n=6"]), ("tfeti", 2, "accuracy@1", vec!["mesh.n=6", "decomposition.subdomains=2", "decomposition.tfeti=true"])]
+    {
         let out = dir.join(name).join("r.h5");
         let mut args = vec!["solve", seed.to_str().unwrap(), "-q", "--out", out.to_str().unwrap()];
         for s in &sets {

@@ -5,13 +5,13 @@
 
 use std::path::Path;
 
-use tresca_feti::dual::DualProblem;
 use tresca_feti::comm::SerialComm;
+use tresca_feti::contact::state::{contact_state, OPEN, SLIP, STICK};
 use tresca_feti::dual::monolithic::MonolithicDual;
+use tresca_feti::dual::DualProblem;
 use tresca_feti::model;
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
 use tresca_feti::qp::{self, Method, Operator, Params, Qp, Silent, Space};
-use tresca_feti::contact::state::{contact_state, OPEN, SLIP, STICK};
 use tresca_feti::scene::{self, OrderingKind};
 use tresca_feti::studies::socp::PrimalSocp;
 
@@ -34,7 +34,17 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
     let (m, nd) = (layout.m, layout.dim());
 
     // ours, at a tight tolerance (the symmetrized methods converge only linearly there: room)
-    let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; nd], &{ let mut p = Params::new(method).with_eps(1e-11); p.common.max_outer = 5000; p }, &mut Silent).unwrap();
+    let sol = qp::solve(
+        &Qp::new(&dual, &b, &set),
+        &vec![0.0; nd],
+        &{
+            let mut p = Params::new(method).with_eps(1e-11);
+            p.common.max_outer = 5000;
+            p
+        },
+        &mut Silent,
+    )
+    .unwrap();
     let u_ours = dual.recover(&sol.lambda).u;
 
     // the independent solution (src/studies/socp.rs)
@@ -55,9 +65,8 @@ fn compare(n: usize, method: Method, sets: &[&str]) -> Compared {
         let mut f = [0.0; 3];
         for i in 0..m {
             for k in 0..3 {
-                f[k] += lam[layout.normal(i)] * contact.normal[i][k]
-                    + lam[layout.tangent(i, 0)] * contact.t1[i][k]
-                    + lam[layout.tangent(i, 1)] * contact.t2[i][k];
+                f[k] +=
+                    lam[layout.normal(i)] * contact.normal[i][k] + lam[layout.tangent(i, 0)] * contact.t1[i][k] + lam[layout.tangent(i, 1)] * contact.t2[i][k];
             }
         }
         f

@@ -36,26 +36,54 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("nan-load", &seed_with("p = [0.0, 0.0, -1.0]", "p = [0.0, nan, -1.0]"), &off, &["traction[0].p", "finite"]);
     assert_clean_failure("inf-coord", &seed_with("max = [2.0, 1.0, 2.0]", "max = [2.0, inf, 2.0]"), &off, &["body[0].box.max", "finite"]);
     assert_clean_failure("zero-subdomains", SEED, &["--set", "decomposition.subdomains=0"], &["decomposition.subdomains"]);
-    assert_clean_failure("both-subdomains-and-target", SEED, &["--set", "decomposition.subdomains=2", "--set", "decomposition.target_dofs=1000"], &["decomposition.target_dofs", "not both"]);
+    assert_clean_failure(
+        "both-subdomains-and-target",
+        SEED,
+        &["--set", "decomposition.subdomains=2", "--set", "decomposition.target_dofs=1000"],
+        &["decomposition.target_dofs", "not both"],
+    );
     assert_clean_failure("bad-penalty", SEED, &["--set", "decomposition.penalty=-1"], &["decomposition.penalty"]);
     assert_clean_failure("bad-clusters", SEED, &["--set", "decomposition.subdomains_per_cluster=0"], &["decomposition.subdomains_per_cluster"]);
     // a cluster whose dense corner problem would be too large: refused before any factorization
-    assert_clean_failure("huge-cluster", SEED, &["--set", "mesh.n=16", "--set", "decomposition.subdomains=512", "--set", "decomposition.subdomains_per_cluster=512"], &["decomposition.subdomains_per_cluster", "smaller clusters"]);
+    assert_clean_failure(
+        "huge-cluster",
+        SEED,
+        &["--set", "mesh.n=16", "--set", "decomposition.subdomains=512", "--set", "decomposition.subdomains_per_cluster=512"],
+        &["decomposition.subdomains_per_cluster", "smaller clusters"],
+    );
     assert_clean_failure("bad-coarse-solve", SEED, &["--set", "decomposition.coarse_solve=\"fast\""], &["decomposition.coarse_solve", "explicit"]);
     assert_clean_failure("bad-projector", SEED, &["--set", "decomposition.projector=\"skew\""], &["decomposition.projector"]);
-    assert_clean_failure("too-many-subdomains", SEED, &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"], &["decomposition.subdomains", "exceed"]);
+    assert_clean_failure(
+        "too-many-subdomains",
+        SEED,
+        &["--set", "decomposition.subdomains=100000", "--set", "mesh.n=4"],
+        &["decomposition.subdomains", "exceed"],
+    );
     assert_clean_failure("bad-set", SEED, &["--set", "mesh.n"], &["--set mesh.n", "key=value"]);
     assert_clean_failure("floating", &seed_with("face = \"lower.xmin\"", "face = \"upper.xmin\""), &off, &["lower", "floats"]);
-    assert_clean_failure("rollers-only", SEED, &["--set", "dirichlet.0.components=[\"z\"]", "--set", "contact.enabled=false"], &["dirichlet", "body \"upper\"", "translation along x", "rotation about z", "rotation about an axis along y", "held by no Dirichlet condition"]);
-    assert_clean_failure("held-by-nothing", SEED, &["--set", "dirichlet.0.face=\"lower.xmin\"", "--set", "contact.pair.0.friction={type=\"none\"}"], &["dirichlet", "body \"upper\"", "translation along x", "translation along y", "rotation about z", "neither Dirichlet conditions nor contact"]);
-    assert_clean_failure("load-factors", SEED, &["--set", "load.steps=2", "--set", "traction.1.factors=[1.0]"], &["traction[1].factors", "one factor per load step"]);
+    assert_clean_failure(
+        "rollers-only",
+        SEED,
+        &["--set", "dirichlet.0.components=[\"z\"]", "--set", "contact.enabled=false"],
+        &["dirichlet", "body \"upper\"", "translation along x", "rotation about z", "rotation about an axis along y", "held by no Dirichlet condition"],
+    );
+    assert_clean_failure(
+        "held-by-nothing",
+        SEED,
+        &["--set", "dirichlet.0.face=\"lower.xmin\"", "--set", "contact.pair.0.friction={type=\"none\"}"],
+        &["dirichlet", "body \"upper\"", "translation along x", "translation along y", "rotation about z", "neither Dirichlet conditions nor contact"],
+    );
+    assert_clean_failure(
+        "load-factors",
+        SEED,
+        &["--set", "load.steps=2", "--set", "traction.1.factors=[1.0]"],
+        &["traction[1].factors", "one factor per load step"],
+    );
     assert_clean_failure("load-steps", SEED, &["--set", "load.steps=0"], &["load.steps"]);
     assert_clean_failure("bad-friction", &seed_with("type = \"tresca\"", "type = \"glue\""), &off, &["friction", "glue"]);
     assert_clean_failure("bad-field", SEED, &["--set", "output.fields=[\"stress\"]"], &["output.fields[0]", "stress"]);
     // meshes
-    let gmsh_body = |file: &str| {
-        seed_with("box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }", &format!("gmsh = {{ file = \"{file}\" }}"))
-    };
+    let gmsh_body = |file: &str| seed_with("box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }", &format!("gmsh = {{ file = \"{file}\" }}"));
     assert_clean_failure("missing-mesh", &gmsh_body("/nonexistent/blocks.msh"), &off, &["/nonexistent/blocks.msh"]);
     // a tetrahedral mesh is read: what fails is the scene's face on it (tet.msh names `top` only)
     assert_clean_failure("tet-mesh", &gmsh_body(&abs_mesh("tet.msh")), &off, &["dirichlet[1].face", "unknown face \"lower.xmin\"", "lower.top"]);
@@ -69,23 +97,119 @@ fn bad_input_gives_one_line_and_no_file() {
     assert_clean_failure("inner-tol", SEED, &["--set", "mesh.n=3", "--set", "solver.inner_tol=2.0"], &["solver.inner_tol"]);
     assert_clean_failure("cg-stop", SEED, &["--set", "mesh.n=3", "--set", "solver.cg_stop=\"never\""], &["solver.cg_stop"]);
     // a key the method does not read, and a preconditioner where none applies (one place decides)
-    assert_clean_failure("key-of-another-method", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"gimssn\"", "--set", "solver.forcing=2"], &["solver.forcing", "not a setting of method \"gimssn\""]);
-    assert_clean_failure("mssn-reads-no-rtol", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"mssn\"", "--set", "solver.rtol=0.3"], &["solver.rtol", "mssn"]);
-    assert_clean_failure("preconditioner-monolithic", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"dirichlet\""], &["solver.preconditioner", "monolithic"]);
-    assert_clean_failure("preconditioner-imssn", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"imssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2"], &["solver.preconditioner", "\"imssn\" takes none"]);
-    assert_clean_failure("preconditioner-orthogonal", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"mssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projector=\"orthogonal\""], &["solver.preconditioner", "\"mssn\" takes none"]);
-    assert_clean_failure("preconditioner-unprojected", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2", "--set", "decomposition.projected_cg=false"], &["solver.preconditioner", "projected_cg"]);
+    assert_clean_failure(
+        "key-of-another-method",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "solver.method=\"gimssn\"", "--set", "solver.forcing=2"],
+        &["solver.forcing", "not a setting of method \"gimssn\""],
+    );
+    assert_clean_failure(
+        "mssn-reads-no-rtol",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "solver.method=\"mssn\"", "--set", "solver.rtol=0.3"],
+        &["solver.rtol", "mssn"],
+    );
+    assert_clean_failure(
+        "preconditioner-monolithic",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.preconditioner=\"dirichlet\""],
+        &["solver.preconditioner", "monolithic"],
+    );
+    assert_clean_failure(
+        "preconditioner-imssn",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "solver.method=\"imssn\"", "--set", "solver.preconditioner=\"lumped\"", "--set", "decomposition.subdomains=2"],
+        &["solver.preconditioner", "\"imssn\" takes none"],
+    );
+    assert_clean_failure(
+        "preconditioner-orthogonal",
+        SEED,
+        &[
+            "--set",
+            "mesh.n=3",
+            "--set",
+            "solver.method=\"mssn\"",
+            "--set",
+            "solver.preconditioner=\"lumped\"",
+            "--set",
+            "decomposition.subdomains=2",
+            "--set",
+            "decomposition.projector=\"orthogonal\"",
+        ],
+        &["solver.preconditioner", "\"mssn\" takes none"],
+    );
+    assert_clean_failure(
+        "preconditioner-unprojected",
+        SEED,
+        &[
+            "--set",
+            "mesh.n=3",
+            "--set",
+            "solver.method=\"tssn\"",
+            "--set",
+            "solver.preconditioner=\"lumped\"",
+            "--set",
+            "decomposition.subdomains=2",
+            "--set",
+            "decomposition.projected_cg=false",
+        ],
+        &["solver.preconditioner", "projected_cg"],
+    );
     assert_clean_failure("tssn-patience", SEED, &["--set", "mesh.n=3", "--set", "solver.method=\"tssn\"", "--set", "solver.patience=-1"], &["solver.patience"]);
-    assert_clean_failure("coulomb-mixed", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3, mu1=0.2}"], &["contact.pair[0].friction", "mu1"]);
-    assert_clean_failure("coulomb-negative", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=-1.0}"], &["contact.pair[0].friction.mu"]);
+    assert_clean_failure(
+        "coulomb-mixed",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3, mu1=0.2}"],
+        &["contact.pair[0].friction", "mu1"],
+    );
+    assert_clean_failure(
+        "coulomb-negative",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=-1.0}"],
+        &["contact.pair[0].friction.mu"],
+    );
     assert_clean_failure("export-tresca", SEED, &["--set", "mesh.n=3", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "Coulomb"]);
-    assert_clean_failure("export-tfeti", SEED, &["--set", "mesh.n=3", "--set", "decomposition.subdomains=2", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.3}", "--set", "output.export_dual=\"x.h5\""], &["output.export_dual", "TFETI"]);
-    assert_clean_failure("cylinder-side", SEED, &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"ymin\", radius=4.0}"], &["body[0].box.cylinder.side"]);
-    assert_clean_failure("cylinder-radius", SEED, &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"zmin\", radius=0.5}"], &["body[0].box.cylinder.radius"]);
-    assert_clean_failure("coulomb-empty", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\"}"], &["contact.pair[0].friction", "mu"]);
+    assert_clean_failure(
+        "export-tfeti",
+        SEED,
+        &[
+            "--set",
+            "mesh.n=3",
+            "--set",
+            "decomposition.subdomains=2",
+            "--set",
+            "contact.pair.0.friction={type=\"coulomb\", mu=0.3}",
+            "--set",
+            "output.export_dual=\"x.h5\"",
+        ],
+        &["output.export_dual", "TFETI"],
+    );
+    assert_clean_failure(
+        "cylinder-side",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"ymin\", radius=4.0}"],
+        &["body[0].box.cylinder.side"],
+    );
+    assert_clean_failure(
+        "cylinder-radius",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"zmin\", radius=0.5}"],
+        &["body[0].box.cylinder.radius"],
+    );
+    assert_clean_failure(
+        "coulomb-empty",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"coulomb\"}"],
+        &["contact.pair[0].friction", "mu"],
+    );
     assert_clean_failure("auto-own-key", SEED, &["--set", "mesh.n=3", "--set", "solver.rtol=0.3"], &["solver.rtol", "solver.method"]);
     // a solver that cannot reach ε within its iterations says so
-    assert_clean_failure("no-convergence", SEED, &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"], &["TSSN", "no convergence"]);
+    assert_clean_failure(
+        "no-convergence",
+        SEED,
+        &["--set", "mesh.n=4", "--set", "solver.max_outer=2", "--set", "solver.eps=1e-12"],
+        &["TSSN", "no convergence"],
+    );
 }
 
 const GMSH: &str = include_str!("../run/gmsh_blocks.toml");
@@ -154,7 +278,8 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("face-like-box-face", &seed_plus(&face("zmin", "upper", "zmax")), &off, &["face[0].name", "upper.zmin", "already exists"]);
     bad.add("face-unknown-body", &seed_plus(&face("patch", "middle", "zmax")), &off, &["face[0].body", "middle"]);
     bad.add("face-unknown-from", &seed_plus(&face("patch", "upper", "top")), &off, &["face[0].from", "upper.top"]);
-    let empty = face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [5.0, 0.0, 0.0]").replace("max = [1.0, 1.0, 2.0]", "max = [6.0, 1.0, 2.0]");
+    let empty =
+        face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [5.0, 0.0, 0.0]").replace("max = [1.0, 1.0, 2.0]", "max = [6.0, 1.0, 2.0]");
     bad.add("face-empty-box", &seed_plus(&empty), &off, &["face[0]", "upper.zmax", "no facet", "the box"]);
     let lower_body = "[[body]]\nname = \"lower\"\nmaterial = \"lower\"";
     let dup_body = seed_with(lower_body, "[[body]]\nname = \"upper\"\nmaterial = \"lower\"");
@@ -169,7 +294,12 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("pair-zmin-zmin", &pair("upper.zmin", "lower.zmin"), &n4, &["contact.pair[0]", "do not face each other"]);
     // opposite normals but the master lies behind the slave: no slave node finds a master facet
     // in front (mortar, the default where the nodes do not match): an error naming both faces
-    bad.add("pair-xmin-xmax", &pair("upper.xmin", "lower.xmax"), &n4, &["contact.pair[0]", "upper.xmin", "lower.xmax", "no slave node", "finds a master facet"]);
+    bad.add(
+        "pair-xmin-xmax",
+        &pair("upper.xmin", "lower.xmax"),
+        &n4,
+        &["contact.pair[0]", "upper.xmin", "lower.xmax", "no slave node", "finds a master facet"],
+    );
     bad.add("pair-same-body", &pair("upper.zmin", "upper.zmax"), &n4, &["contact.pair[0]", "same body"]);
     bad.add("pair-unknown-body", &pair("upper.zmin", "ground.zmax"), &n4, &["contact.pair[0].master", "ground.zmax"]);
     // non-matching faces refused where node-to-node is asked for (mortar takes them)
@@ -179,8 +309,11 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     let more_nodes = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [5, 4, 4] }");
     bad.add("pair-node-count", &n2n(more_nodes), &n4, &["contact.pair[0]", "16 nodes", "20", "node-to-node"]);
     // the same node count (5 × 4) on both faces, but in other places
-    let crossed = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [4, 5, 4] }")
-        .replacen(upper_box, "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = [5, 4, 4] }", 1);
+    let crossed = seed_with(lower_box, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0], nodes = [4, 5, 4] }").replacen(
+        upper_box,
+        "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0], nodes = [5, 4, 4] }",
+        1,
+    );
     bad.add("pair-crossed-grids", &n2n(crossed), &n4, &["contact.pair[0]", "do not match node to node"]);
     // shifted sideways by half an element (h = 2/3 at N = 4)
     let shifted = seed_with(upper_box, "box = { min = [0.3333333333333333, 0.0, 1.0], max = [2.3333333333333333, 1.0, 2.0] }");
@@ -221,7 +354,12 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     let nan_face = face("patch", "upper", "zmax").replace("min = [0.0, 0.0, 0.0]", "min = [0.0, nan, 0.0]");
     bad.add("nan-face-min", &seed_plus(&nan_face), &off, &["face[0].min", "finite"]);
     // finite ends whose difference is not
-    bad.add("box-overflow", SEED, &["--set", "mesh.n=3", "--set", "body.1.box.min=[-1e308, 0.0, 0.0]", "--set", "body.1.box.max=[1e308, 1.0, 1.0]"], &["body[1].box", "overflows"]);
+    bad.add(
+        "box-overflow",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "body.1.box.min=[-1e308, 0.0, 0.0]", "--set", "body.1.box.max=[1e308, 1.0, 1.0]"],
+        &["body[1].box", "overflows"],
+    );
     let dir = tmpdir("bad-meshes");
     let inf_translate = gmsh_scene(&root().join("mesh/two_blocks.msh")).replacen("volume = \"upper\"", "volume = \"upper\", translate = [0.0, inf, 0.0]", 1);
     bad.add("inf-translate", &inf_translate, &[], &["body[0].gmsh.translate", "finite"]);
@@ -234,7 +372,12 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     bad.add("box-nodes-negative", SEED, &["--set", "body.0.box.nodes=[3, -3, 3]"], &["body[0].box.nodes[1]", "-3"]);
     bad.add("subdomains-negative", SEED, &["--set", "decomposition.subdomains=-2"], &["decomposition.subdomains", "-2"]);
     bad.add("target-dofs-zero", SEED, &["--set", "decomposition.target_dofs=0"], &["decomposition.target_dofs", "at least 24"]);
-    bad.add("subdomains-exceed-n6", SEED, &["--set", "mesh.n=6", "--set", "decomposition.subdomains=126"], &["decomposition.subdomains", "126", "125 elements"]);
+    bad.add(
+        "subdomains-exceed-n6",
+        SEED,
+        &["--set", "mesh.n=6", "--set", "decomposition.subdomains=126"],
+        &["decomposition.subdomains", "126", "125 elements"],
+    );
     // as many subdomains as elements: METIS leaves a part empty
     bad.add("subdomains-empty-part", SEED, &["--set", "mesh.n=6", "--set", "decomposition.subdomains=125"], &["upper", "empty", "fewer subdomains"]);
     for (name, set, key) in [
@@ -247,7 +390,11 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
         ("g-negative", "contact.pair.0.friction.g=-0.09", "contact.pair[0].friction.g"),
         ("g1-negative", "contact.pair.0.friction={type=\"orthotropic\", g1=-0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}", "contact.pair[0].friction.g1"),
         ("direction-zero", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 0.0]}", "contact.pair[0].friction.direction"),
-        ("direction-normal", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}", "contact.pair[0].friction.direction"),
+        (
+            "direction-normal",
+            "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}",
+            "contact.pair[0].friction.direction",
+        ),
         ("tolerance-negative", "contact.pair.0.tolerance=-1.0", "contact.pair[0].tolerance"),
         ("dirichlet-missing-face", "dirichlet.0.face=\"upper.nope\"", "dirichlet[0].face"),
         ("dirichlet-no-components", "dirichlet.0.components=[]", "dirichlet[0].components"),
@@ -257,7 +404,12 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     ] {
         bad.add(name, SEED, &["--set", "mesh.n=3", "--set", set], &[key]);
     }
-    bad.add("direction-normal-named", SEED, &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}"], &["normal to the contact face upper.zmin"]);
+    bad.add(
+        "direction-normal-named",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[0.0, 0.0, 1.0]}"],
+        &["normal to the contact face upper.zmin"],
+    );
 
     // .msh files
     let full = std::fs::read_to_string(root().join("mesh/two_blocks.msh")).unwrap();
@@ -281,7 +433,11 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
         ("no-end-entities.msh", without("$EndEntities"), vec!["expected $EndEntities"]),
         ("no-end-names.msh", without("$EndPhysicalNames"), vec!["expected $EndPhysicalNames"]),
         ("unknown-type.msh", msh_with("\n3 2 5 54\n", "\n3 2 1000 54\n"), vec!["unknown element type", "value 1000", "line 721"]),
-        ("hex-undefined-node.msh", msh_with("189 88 184 224 164 15 64 144 66 ", "189 88 184 224 164 15 64 144 999 "), vec!["hexahedron 189", "node 999", "not in $Nodes"]),
+        (
+            "hex-undefined-node.msh",
+            msh_with("189 88 184 224 164 15 64 144 66 ", "189 88 184 224 164 15 64 144 999 "),
+            vec!["hexahedron 189", "node 999", "not in $Nodes"],
+        ),
         ("quad-undefined-node.msh", msh_with("\n2 23 89 90 24 \n", "\n2 23 89 90 999 \n"), vec!["quadrangle 2", "node 999", "not in $Nodes"]),
         ("dup-node.msh", msh_with("0 2 0 1\n2\n0 0 1\n", "0 2 0 1\n1\n0 0 1\n"), vec!["node 1 is defined twice"]),
         ("nan-node.msh", msh_with("0 2 0 1\n2\n0 0 1\n", "0 2 0 1\n2\n0 nan 1\n"), vec!["node 2", "non-finite coordinate", "NaN"]),
@@ -300,7 +456,12 @@ fn malformed_meshes_and_geometry_give_one_line_and_no_file() {
     }
     let ok = dir.join("ok.msh");
     std::fs::write(&ok, &full).unwrap();
-    bad.add("no-volume", &gmsh_scene(&ok).replacen("volume = \"upper\"", "volume = \"nope\"", 1), &[], &["ok.msh", "no physical volume named \"nope\"", "\"upper\", \"lower\""]);
+    bad.add(
+        "no-volume",
+        &gmsh_scene(&ok).replacen("volume = \"upper\"", "volume = \"nope\"", 1),
+        &[],
+        &["ok.msh", "no physical volume named \"nope\"", "\"upper\", \"lower\""],
+    );
     let tet = gmsh_scene(&root().join("mesh/tet.msh")).replacen("volume = \"upper\"", "volume = \"body\"", 1);
     // the upper body, physical volume "body" of tetrahedra, is read; the lower one is not there
     bad.add("tet-volume", &tet, &[], &["tet.msh", "no physical volume named \"lower\"", "(known: \"body\")"]);
@@ -319,7 +480,10 @@ fn tetrahedral_gmsh_meshes_are_read_and_solved() {
     let dir = tmpdir("tet-gmsh");
     let reference = common::solve(&root().join("run/seed.toml"), &["mesh.n=16"], &dir.join("seed16.h5"));
     let (ref_f, ref_u) = (reference.report.contact.as_ref().unwrap().total_force_on_slave[2], reference.report.results.max_displacement);
-    for (file, kind, cells, topology, tol_f, tol_u) in [("two_tet_blocks.msh", tresca_feti::mesh::CellKind::Tet4, 532, "Tetrahedron", 0.025, 0.35), ("two_tet10_blocks.msh", tresca_feti::mesh::CellKind::Tet10, 289, "Tetrahedron_10", 0.003, 0.04)] {
+    for (file, kind, cells, topology, tol_f, tol_u) in [
+        ("two_tet_blocks.msh", tresca_feti::mesh::CellKind::Tet4, 532, "Tetrahedron", 0.025, 0.35),
+        ("two_tet10_blocks.msh", tresca_feti::mesh::CellKind::Tet10, 289, "Tetrahedron_10", 0.003, 0.04),
+    ] {
         let scene = dir.join(format!("{file}.toml"));
         std::fs::write(&scene, gmsh_scene(&root().join("mesh").join(file))).unwrap();
         let out = dir.join(format!("{file}.h5"));
@@ -333,7 +497,11 @@ fn tetrahedral_gmsh_meshes_are_read_and_solved() {
         let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
         let fz = report["contact"]["total_force_on_slave"][2].as_f64().unwrap();
         let umax = report["results"]["max_displacement"].as_f64().unwrap();
-        eprintln!("{file}: F_z {fz:.5} against {ref_f:.5} ({:+.2} %), max |u| {umax:.4e} against {ref_u:.4e} ({:+.1} %)", 100.0 * (fz / ref_f - 1.0), 100.0 * (umax / ref_u - 1.0));
+        eprintln!(
+            "{file}: F_z {fz:.5} against {ref_f:.5} ({:+.2} %), max |u| {umax:.4e} against {ref_u:.4e} ({:+.1} %)",
+            100.0 * (fz / ref_f - 1.0),
+            100.0 * (umax / ref_u - 1.0)
+        );
         assert!((fz / ref_f - 1.0).abs() <= tol_f, "{file}: contact force {fz} against {ref_f}");
         assert!((umax / ref_u - 1.0).abs() <= tol_u, "{file}: max |u| {umax:e} against {ref_u:e}");
     }
@@ -364,7 +532,12 @@ fn degenerate_but_valid_friction_still_solves() {
     let segment = u_of("g1-zero", "{type=\"orthotropic\", g1=0.0, g2=0.03, direction=[1.0, 0.0, 0.0]}");
     let ellipse = u_of("g1-009", "{type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}");
     let ux = |u: &[[f64; 3]]| u.iter().fold(0.0f64, |a, v| a.max(v[0].abs()));
-    assert!(segment.iter().flatten().all(|v| v.is_finite()) && ux(&segment) > ux(&ellipse), "g1 = 0: max |u_x| {:.4e} against {:.4e} with g1 = 0.09", ux(&segment), ux(&ellipse));
+    assert!(
+        segment.iter().flatten().all(|v| v.is_finite()) && ux(&segment) > ux(&ellipse),
+        "g1 = 0: max |u_x| {:.4e} against {:.4e} with g1 = 0.09",
+        ux(&segment),
+        ux(&ellipse)
+    );
 }
 
 /// The live monitor: each phase as it starts and one line per outer iteration on stdout, in
@@ -403,7 +576,16 @@ fn the_benchmark_scenes_check() {
 
 #[test]
 fn unwritable_output_is_one_line() {
-    let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=3", "--set", "contact.enabled=false", "--out", "/proc/no/such/dir/r.h5"]);
+    let o = run(&[
+        "solve",
+        root().join("run/seed.toml").to_str().unwrap(),
+        "--set",
+        "mesh.n=3",
+        "--set",
+        "contact.enabled=false",
+        "--out",
+        "/proc/no/such/dir/r.h5",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.trim().lines().count(), 1, "{e}");
@@ -476,7 +658,9 @@ fn on_1_2_3_ranks_of(scene: &Path, name: &str, sets: &[&str], tol: f64) -> Vec<(
             assert_eq!(a.name, b.name);
             if a.values != b.values {
                 let d = match (&a.values, &b.values) {
-                    (Values::F64(x), Values::F64(y)) => x.iter().zip(y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max) / x.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs())),
+                    (Values::F64(x), Values::F64(y)) => {
+                        x.iter().zip(y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max) / x.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()))
+                    }
                     _ => f64::NAN,
                 };
                 assert!(d <= tol, "{name}: field {} differs between rank counts (max difference {d:.2e} relative)", a.name);
@@ -595,7 +779,8 @@ fn failure_on_one_rank_or_no_convergence_stops_all_ranks() {
         for ext in ["h5", "xdmf", "json"] {
             assert!(!out.with_extension(ext).exists(), "{case}: {ext} left behind");
         }
-        let temps: Vec<_> = std::fs::read_dir(out.parent().unwrap()).into_iter().flatten().flatten().filter(|e| e.file_name().to_string_lossy().ends_with(".tmp")).collect();
+        let temps: Vec<_> =
+            std::fs::read_dir(out.parent().unwrap()).into_iter().flatten().flatten().filter(|e| e.file_name().to_string_lossy().ends_with(".tmp")).collect();
         assert!(temps.is_empty(), "{case}: temporary files left behind");
     }
 }
@@ -608,7 +793,8 @@ fn bench_coarse_prints_one_row_per_subdomain_count() {
     let o = run(&["bench-coarse", "--scene", scene.to_str().unwrap(), "--set", "mesh.n=8", "--subdomains", "4,16", "--pieces", "1,4", "--repeat", "2"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows: Vec<Vec<f64>> = stdout.lines().skip(1).map(|l| l.split(|c: char| c.is_whitespace() || c == '|').filter_map(|x| x.parse().ok()).collect()).collect();
+    let rows: Vec<Vec<f64>> =
+        stdout.lines().skip(1).map(|l| l.split(|c: char| c.is_whitespace() || c == '|').filter_map(|x| x.parse().ok()).collect()).collect();
     assert_eq!(rows.len(), 2, "{stdout}");
     // S, pieces, dim, nnz(C), nnz(L), build, factor solve, then (MB, setup, product) per pieces
     assert!(rows.iter().all(|r| r.len() == 13), "{stdout}");
@@ -624,7 +810,19 @@ fn table1_prints_the_table_and_writes_the_csv() {
     let dir = tmpdir("table1");
     let csv = dir.join("t.csv");
     let scene = root().join("run/seed.toml");
-    let o = run(&["table1", "--scene", scene.to_str().unwrap(), "--sizes", "4,5", "--eps", "1e-6", "--solvers", "gimssn,imssn:paper,ssn-bicgstab", "--csv", csv.to_str().unwrap()]);
+    let o = run(&[
+        "table1",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--sizes",
+        "4,5",
+        "--eps",
+        "1e-6",
+        "--solvers",
+        "gimssn,imssn:paper,ssn-bicgstab",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("imssn:paper") && stdout.contains("paper IMSSN"), "{stdout}");
@@ -736,7 +934,11 @@ fn counters_mean_what_they_say() {
     assert!(open > 0 && slip > 0 && bound <= slip, "{c}");
     let line = text.lines().find(|l| l.starts_with("contact: ")).unwrap();
     assert!(line.contains(&format!("{slip} slip; ")), "{line}");
-    assert!(line.contains("every slipping pair on the slip bound") || line.contains(&format!("of the slipping pairs {bound} on the slip bound, {} sliding within ε inside it", slip - bound)), "{line}");
+    assert!(
+        line.contains("every slipping pair on the slip bound")
+            || line.contains(&format!("of the slipping pairs {bound} on the slip bound, {} sliding within ε inside it", slip - bound)),
+        "{line}"
+    );
     // a body held by contact alone, solved by SSN-BiCGSTAB on exact products only
     let out = dir.join("floating.h5");
     let o = run(&["solve", root().join("run/validation/floating_block.toml").to_str().unwrap(), "-q", "--out", out.to_str().unwrap()]);
@@ -748,7 +950,17 @@ fn counters_mean_what_they_say() {
     assert!(!solver.contains("mixed precision"), "{solver}");
     // and where products were single precision, it is said with their count
     let out = dir.join("tfeti.h5");
-    let o = run(&["solve", root().join("run/seed.toml").to_str().unwrap(), "--set", "mesh.n=8", "--set", "decomposition.subdomains=2", "-q", "--out", out.to_str().unwrap()]);
+    let o = run(&[
+        "solve",
+        root().join("run/seed.toml").to_str().unwrap(),
+        "--set",
+        "mesh.n=8",
+        "--set",
+        "decomposition.subdomains=2",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("tfeti.json")).unwrap()).unwrap();
@@ -763,7 +975,12 @@ fn counters_mean_what_they_say() {
 #[test]
 fn check_with_ranks_predicts_the_decomposition_solve_picks() {
     let dir = tmpdir("check-ranks");
-    for (name, scene, sets) in [("seed16", "run/seed.toml", vec!["mesh.n=16"]), ("seed24", "run/seed.toml", vec!["mesh.n=24"]), ("tutorial", "run/tutorial.toml", vec![]), ("slabs", "run/bench/plane_strain_rollers.toml", vec![])] {
+    for (name, scene, sets) in [
+        ("seed16", "run/seed.toml", vec!["mesh.n=16"]),
+        ("seed24", "run/seed.toml", vec!["mesh.n=24"]),
+        ("tutorial", "run/tutorial.toml", vec![]),
+        ("slabs", "run/bench/plane_strain_rollers.toml", vec![]),
+    ] {
         let scene = root().join(scene);
         let mut args = vec!["check", scene.to_str().unwrap(), "--ranks", "2"];
         for s in &sets {
@@ -793,7 +1010,10 @@ fn check_with_ranks_predicts_the_decomposition_solve_picks() {
         };
         assert_eq!(predicted, picked, "{name}: check predicted `{chosen}`");
         let problem = report["problem"].as_str().unwrap();
-        assert!(problem.contains(&format!("({} dual)", if dual == "TFETI" { "TFETI" } else { "monolithic" })), "{name}: check said dual {dual}, solve: {problem}");
+        assert!(
+            problem.contains(&format!("({} dual)", if dual == "TFETI" { "TFETI" } else { "monolithic" })),
+            "{name}: check said dual {dual}, solve: {problem}"
+        );
     }
 }
 

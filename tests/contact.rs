@@ -8,8 +8,8 @@ use tresca_feti::dual::monolithic::MonolithicDual;
 use tresca_feti::dual::DualProblem;
 use tresca_feti::model::{self, Model};
 use tresca_feti::pipeline::{assemble_and_factorize, Timings};
-use tresca_feti::qp::{self, kkt, Method, Operator, Params, Qp, Silent, Space};
 use tresca_feti::qp::sets::ConvexSet;
+use tresca_feti::qp::{self, kkt, Method, Operator, Params, Qp, Silent, Space};
 use tresca_feti::scene::{self, OrderingKind};
 
 /// The seed scene at N = n with extra `--set` overrides.
@@ -30,7 +30,10 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     let params = Params::new(Method::Gimssn).with_eps(1e-10);
     let sol = qp::solve(&Qp::new(&dual, &b, &set), &vec![0.0; dual.dim()], &params, &mut Silent).unwrap();
     let (lam, info) = (sol.lambda, sol.info);
-    eprintln!("GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}", info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err);
+    eprintln!(
+        "GIMSSN N=8 ε=1e-10: {} outer, nA {} (+{} power), inner {}, err {:.2e}",
+        info.iterations, info.n_a, info.n_a_power, info.inner_iterations, info.err
+    );
     assert!(info.err <= 1e-10);
     // every iterate in Λ (the last one checked here; CGMfeas keeps them all there) and q monotone
     assert!(set.contains(&lam, 1e-14));
@@ -77,13 +80,8 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
     // DESIGN §4 sanity figures for N = 8
     assert_eq!((carrying, sliding), (32, 48));
     let u = dual.recover(&lam).u;
-    let umax = dual
-        .blocks
-        .iter()
-        .zip(&u)
-        .flat_map(|(blk, ub)| blk.local.dofs.expand(ub))
-        .map(|v| v.iter().fold(0.0f64, |a, c| a.max(c.abs())))
-        .fold(0.0, f64::max);
+    let umax =
+        dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).map(|v| v.iter().fold(0.0f64, |a, c| a.max(c.abs()))).fold(0.0, f64::max);
     // the largest displacement component (DESIGN's "max |u|" is the max-norm of u ∈ Rⁿ)
     assert!((umax - 8.7e-5).abs() < 0.05e-5, "max |u| = {umax:e}");
 }
@@ -207,11 +205,8 @@ fn dragged_block_slides_above_the_slip_bound_and_sticks_below() {
 #[test]
 fn all_five_solvers_agree_and_satisfy_kkt() {
     // isotropic Tresca (the seed), frictionless (no tangential multipliers), and orthotropic
-    let cases: [&[&str]; 3] = [
-        &[],
-        &["contact.pair.0.friction={type=\"none\"}"],
-        &["contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}"],
-    ];
+    let cases: [&[&str]; 3] =
+        [&[], &["contact.pair.0.friction={type=\"none\"}"], &["contact.pair.0.friction={type=\"orthotropic\", g1=0.09, g2=0.03, direction=[1.0, 0.0, 0.0]}"]];
     for sets in cases {
         let (reference, _) = solve_u_with(6, sets, 1e-11, Method::Gimssn);
         for m in Method::ALL {
@@ -289,13 +284,19 @@ fn the_report_names_the_law_the_states_and_the_units_as_solved() {
     assert_eq!(free.report.problem, "frictionless contact (monolithic dual)");
     assert!(c.contact > 0 && c.stick == 0 && c.slip == 0 && c.open + c.contact == c.pairs, "{c:?}");
     let f = tresca_feti::output::hdf5::read(&dir.join("free.h5")).unwrap();
-    let Some(tresca_feti::output::Values::I32(st)) = f.fields.iter().find(|x| x.name == "contact_status").map(|x| x.values.clone()) else { panic!("contact_status") };
+    let Some(tresca_feti::output::Values::I32(st)) = f.fields.iter().find(|x| x.name == "contact_status").map(|x| x.values.clone()) else {
+        panic!("contact_status")
+    };
     assert_eq!(st.iter().filter(|&&s| s == tresca_feti::contact::state::CONTACT).count(), c.contact);
     assert!(!st.contains(&tresca_feti::contact::state::SLIP));
     // Tresca: stick + slip ≤ closed at every outer iteration, and the last step's slip ≤ closed
     let tresca = run(&["mesh.n=6"], "tresca.h5");
     let sv = tresca.report.solver.as_ref().unwrap();
-    assert!(sv.info.history.iter().all(|h| h.stick + h.slip <= h.normal_active), "{:?}", sv.info.history.iter().map(|h| (h.normal_active, h.stick, h.slip)).collect::<Vec<_>>());
+    assert!(
+        sv.info.history.iter().all(|h| h.stick + h.slip <= h.normal_active),
+        "{:?}",
+        sv.info.history.iter().map(|h| (h.normal_active, h.stick, h.slip)).collect::<Vec<_>>()
+    );
     assert!(sv.info.history.iter().any(|h| h.slip > 0));
     assert_eq!(tresca.report.problem, "contact with Tresca friction (monolithic dual)");
     // units from the scene, in the JSON and the summary
@@ -303,17 +304,34 @@ fn the_report_names_the_law_the_states_and_the_units_as_solved() {
     assert_eq!((u.length.as_deref(), u.force.as_deref(), u.stress.as_deref()), (Some("m"), Some("MN"), Some("MPa")));
     let mm = run(&["mesh.n=4", "units={length=\"mm\", force=\"N\"}"], "mm.h5");
     assert_eq!(mm.report.units.as_ref().and_then(|u| u.stress.clone()).as_deref(), Some("MPa"));
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["solve", seed.to_str().unwrap(), "--quiet", "--set", "mesh.n=4", "--set", "units={length=\"mm\", force=\"N\"}", "--out", dir.join("p.h5").to_str().unwrap()]).output().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti"))
+        .args([
+            "solve",
+            seed.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "mesh.n=4",
+            "--set",
+            "units={length=\"mm\", force=\"N\"}",
+            "--out",
+            dir.join("p.h5").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains(" mm (body ") && text.contains(") N\n") && text.contains(" MPa\n"), "{text}");
     // TFETI DOF counts consistent with check
     let two = run(&["mesh.n=4", "decomposition.subdomains=2"], "tfeti.h5");
     let m = &two.report.mesh;
     assert!(m.free_dofs < m.dofs && m.subdomain_dofs.is_some_and(|s| s > m.dofs), "{m:?}");
-    let check = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["check", seed.to_str().unwrap(), "--set", "mesh.n=4", "--set", "decomposition.subdomains=2"]).output().unwrap();
+    let check = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti"))
+        .args(["check", seed.to_str().unwrap(), "--set", "mesh.n=4", "--set", "decomposition.subdomains=2"])
+        .output()
+        .unwrap();
     let text = String::from_utf8_lossy(&check.stdout);
     assert!(text.contains(&format!("({} free after Dirichlet elimination)", m.free_dofs)), "{text}");
-    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["check", seed.to_str().unwrap(), "--set", "units.length=\"\""]).output().unwrap();
+    let bad =
+        std::process::Command::new(env!("CARGO_BIN_EXE_tresca-feti")).args(["check", seed.to_str().unwrap(), "--set", "units.length=\"\""]).output().unwrap();
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.lines().count() == 1 && err.contains("units.length"), "{err}");
 }

@@ -30,8 +30,6 @@ fn line<'a>(stdout: &'a str, prefix: &str) -> &'a str {
     stdout.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no `{prefix}` line in: {stdout}"))
 }
 
-
-
 /// max|a − b| / max|a|.
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());

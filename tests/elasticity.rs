@@ -114,11 +114,7 @@ fn harmonic(p: [f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     let e = (0.6 * p[0] + 0.8 * p[2]).exp();
     let (s, c) = p[1].sin_cos();
     let u = [0.6 * e * c, -e * s, 0.8 * e * c];
-    let g = [
-        [0.36 * e * c, -0.6 * e * s, 0.48 * e * c],
-        [-0.6 * e * s, -e * c, -0.8 * e * s],
-        [0.48 * e * c, -0.8 * e * s, 0.64 * e * c],
-    ];
+    let g = [[0.36 * e * c, -0.6 * e * s, 0.48 * e * c], [-0.6 * e * s, -e * c, -0.8 * e * s], [0.48 * e * c, -0.8 * e * s, 0.64 * e * c]];
     (u, g)
 }
 
@@ -206,7 +202,10 @@ use tresca_feti::mesh::{BodyGeometry, Cell, CellKind};
 /// Gauss–Legendre points and weights on [0, 1].
 fn gauss01(n: usize) -> Vec<(f64, f64)> {
     let (p, w): (&[f64], &[f64]) = match n {
-        4 => (&[-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6], &[0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9]),
+        4 => (
+            &[-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6],
+            &[0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9],
+        ),
         5 => (
             &[-0.906_179_845_938_664, -0.538_469_310_105_683, 0.0, 0.538_469_310_105_683, 0.906_179_845_938_664],
             &[0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1],
@@ -226,9 +225,7 @@ fn fine_rule(kind: CellKind) -> Vec<([f64; 3], f64)> {
         for &(v, wv) in &g {
             for &(w, ww) in &g {
                 match kind {
-                    CellKind::Tet4 | CellKind::Tet10 => {
-                        r.push(([u, (1.0 - u) * v, (1.0 - u) * (1.0 - v) * w], wu * wv * ww * (1.0 - u).powi(2) * (1.0 - v)))
-                    }
+                    CellKind::Tet4 | CellKind::Tet10 => r.push(([u, (1.0 - u) * v, (1.0 - u) * (1.0 - v) * w], wu * wv * ww * (1.0 - u).powi(2) * (1.0 - v))),
                     CellKind::Wedge6 => r.push(([u, (1.0 - u) * v, 2.0 * w - 1.0], 2.0 * wu * wv * ww * (1.0 - u))),
                     CellKind::Hex8 => unreachable!(),
                 }
@@ -491,7 +488,8 @@ fn convergence(kind: CellKind, ns: &[usize]) -> Vec<(f64, f64)> {
         });
         rows.push((1.0 / (n - 1) as f64, 3 * mesh.nodes.len(), l2, h1));
     }
-    let rates: Vec<(f64, f64)> = rows.windows(2).map(|w| ((w[0].2 / w[1].2).ln() / (w[0].0 / w[1].0).ln(), (w[0].3 / w[1].3).ln() / (w[0].0 / w[1].0).ln())).collect();
+    let rates: Vec<(f64, f64)> =
+        rows.windows(2).map(|w| ((w[0].2 / w[1].2).ln() / (w[0].0 / w[1].0).ln(), (w[0].3 / w[1].3).ln() / (w[0].0 / w[1].0).ln())).collect();
     eprintln!("{kind:?}: manufactured solution with body force, Dirichlet on the whole boundary");
     eprintln!("  {:>8} {:>8} {:>12} {:>6} {:>12} {:>6}", "h", "DOFs", "L2 error", "rate", "H1 error", "rate");
     for (i, (h, dofs, l2, h1)) in rows.iter().enumerate() {

@@ -184,7 +184,12 @@ fn siconos_solves_the_exported_coulomb_problem_to_our_solution() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/siconos_check.py")).arg(&dual).arg("3e-11").output().expect("python3 (run/install-deps installs python3-siconos)");
+    let check = Command::new("/usr/bin/python3")
+        .arg(root().join("run/peer/siconos_check.py"))
+        .arg(&dual)
+        .arg("3e-11")
+        .output()
+        .expect("python3 (run/install-deps installs python3-siconos)");
     let out = String::from_utf8_lossy(&check.stdout);
     assert!(check.status.success(), "{out}{}", String::from_utf8_lossy(&check.stderr));
     assert!(out.contains("in contact") && out.contains("max|r_siconos - r_tresca_feti|"), "{out}");
@@ -200,10 +205,29 @@ fn siconos_global_solver_solves_our_fclib_export_to_our_solution() {
         let file = dir.join(format!("fclib{ranks}.h5"));
         let out = dir.join(format!("r{ranks}.h5"));
         let scene = root().join("run/stress/coulomb_partial_slip.toml");
-        let args = ["solve", scene.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap(), "--set", "mesh.n=6", "--set", "solver.eps=1e-12", "--set", "decomposition.subdomains=1", "--export-fclib", file.to_str().unwrap()];
+        let args = [
+            "solve",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            "mesh.n=6",
+            "--set",
+            "solver.eps=1e-12",
+            "--set",
+            "decomposition.subdomains=1",
+            "--export-fclib",
+            file.to_str().unwrap(),
+        ];
         let o = if ranks == 1 { Command::new(BIN).args(args).output().unwrap() } else { common::mpirun(2, &args) };
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/fclib_check.py")).arg(&file).arg("3e-11").output().expect("python3 (run/install-deps installs python3-siconos)");
+        let check = Command::new("/usr/bin/python3")
+            .arg(root().join("run/peer/fclib_check.py"))
+            .arg(&file)
+            .arg("3e-11")
+            .output()
+            .expect("python3 (run/install-deps installs python3-siconos)");
         let text = String::from_utf8_lossy(&check.stdout);
         assert!(check.status.success(), "{ranks} rank(s): {text}{}", String::from_utf8_lossy(&check.stderr));
         assert!(text.contains("max|v_siconos - v_ours|"), "{text}");
@@ -217,7 +241,21 @@ fn work_precision_has_coulomb_rows() {
     let path = dir.join("wp.csv");
     let scene = root().join("run/stress/coulomb_partial_slip.toml");
     let o = Command::new(BIN)
-        .args(["work-precision", "--scene", scene.to_str().unwrap(), "--sizes", "6", "--subdomains", "0,2", "--eps", "1e-5,1e-9", "--solvers", "tssn", "--csv", path.to_str().unwrap()])
+        .args([
+            "work-precision",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--sizes",
+            "6",
+            "--subdomains",
+            "0,2",
+            "--eps",
+            "1e-5,1e-9",
+            "--solvers",
+            "tssn",
+            "--csv",
+            path.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -245,7 +283,9 @@ fn getfem_solves_the_same_discrete_problem_to_our_solution() {
         .expect("run/peer/getfem_compare (/usr/bin/python3 with python3-getfem, python3-siconos: run/install-deps)");
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
-    for (friction, code, rows) in [("tresca", "GetFEM", 1), ("tresca", "tresca-feti", 2), ("coulomb", "GetFEM", 1), ("coulomb", "tresca-feti", 2), ("coulomb", "Siconos", 1)] {
+    for (friction, code, rows) in
+        [("tresca", "GetFEM", 1), ("tresca", "tresca-feti", 2), ("coulomb", "GetFEM", 1), ("coulomb", "tresca-feti", 2), ("coulomb", "Siconos", 1)]
+    {
         let n = out.lines().filter(|l| l.split_whitespace().take(3).eq(["5", friction, code])).count();
         assert_eq!(n, rows, "{friction} {code}: {out}");
     }

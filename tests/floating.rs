@@ -22,7 +22,15 @@ fn a_floating_block_sticks_and_the_contact_balances_its_load() {
         let c = r.report.contact.as_ref().unwrap();
         // the upper block's load: 2 down on its top, 0.3 along x on its side
         let f = c.total_force_on_slave;
-        eprintln!("S = {s}: contact force on the floating block ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}", f[0], f[1], f[2], c.stick, c.slip, r.report.solver.as_ref().unwrap().kkt_worst);
+        eprintln!(
+            "S = {s}: contact force on the floating block ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}",
+            f[0],
+            f[1],
+            f[2],
+            c.stick,
+            c.slip,
+            r.report.solver.as_ref().unwrap().kkt_worst
+        );
         assert!((f[0] + 0.3).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "the contact force balances the load: {f:?}");
         assert_eq!((c.stick, c.slip, c.open), (49, 0, 0), "T = 0.3 < μN = 0.6: every pair sticks");
         assert!(r.report.solver.as_ref().unwrap().kkt_worst <= 1e-8);
@@ -36,7 +44,10 @@ fn a_block_dragged_by_one_face_sticks_below_mu_n_and_slides_at_mu_n_above() {
     // the upper block is held in x by its xmin face only (moved by δ); y, z and the rotation
     // about x are held by contact and friction
     let base = std::fs::read_to_string(root().join("run/validation/floating_block.toml")).unwrap();
-    let scene = base.replace("[[traction]]\nface = \"upper.xmin\"\np = [0.3, 0.0, 0.0]\n", "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\nvalue = [0.00001, 0.0, 0.0]\n");
+    let scene = base.replace(
+        "[[traction]]\nface = \"upper.xmin\"\np = [0.3, 0.0, 0.0]\n",
+        "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\nvalue = [0.00001, 0.0, 0.0]\n",
+    );
     assert_ne!(scene, base);
     let dir = tmpdir("dragged-floating");
     let path = dir.join("dragged.toml");
@@ -74,12 +85,22 @@ fn a_tied_group_held_by_contact_alone_solves_and_balances_its_load() {
     let dir = tmpdir("tied-group");
     let one = solve(&scene, &[], &dir.join("s1.h5"));
     let u1 = &one.solution.displacement;
-    for (s, sets) in [(1, vec![]), (2, vec!["decomposition.subdomains=2", "load.steps=3", "traction.1.factors=[0.0, 0.5, 1.0]", "traction.0.factors=[0.5, 1.0, 1.0]"])] {
+    for (s, sets) in
+        [(1, vec![]), (2, vec!["decomposition.subdomains=2", "load.steps=3", "traction.1.factors=[0.0, 0.5, 1.0]", "traction.0.factors=[0.5, 1.0, 1.0]"])]
+    {
         let r = solve(&scene, &sets, &dir.join(format!("p{s}.h5")));
         assert!(r.report.problem.contains("TFETI"), "{}", r.report.problem);
         let c = r.report.contact.as_ref().unwrap();
         let f = c.total_force_on_slave;
-        eprintln!("S = {s}: force on the plate ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}", f[0], f[1], f[2], c.stick, c.slip, r.report.solver.as_ref().unwrap().kkt_worst);
+        eprintln!(
+            "S = {s}: force on the plate ({:.6e}, {:.2e}, {:.6e}), {} stick, {} slip, KKT {:.1e}",
+            f[0],
+            f[1],
+            f[2],
+            c.stick,
+            c.slip,
+            r.report.solver.as_ref().unwrap().kkt_worst
+        );
         assert!((f[0] + 0.3).abs() <= 1e-8 && f[1].abs() <= 1e-8 && (f[2] - 2.0).abs() <= 1e-8, "the contact force balances the load: {f:?}");
         assert_eq!((c.stick, c.open), (25, 0), "T = 0.3 < μN = 0.6: every pair sticks");
         if let Some(steps) = r.report.load_path.as_ref() {
@@ -133,7 +154,10 @@ fn a_block_on_a_tied_stack_is_held_by_contact_and_the_tie_group_by_its_base() {
 #[test]
 fn a_one_hexahedron_body_held_by_contact_alone_is_solved() {
     let dir = tmpdir("one-hex");
-    let scene = std::fs::read_to_string(root().join("run/validation/floating_block.toml")).unwrap().replace("friction = { type = \"coulomb\", mu = 0.3 }", "").replace("p = [0.3, 0.0, 0.0]", "p = [0.0, 0.0, 0.0]")
+    let scene = std::fs::read_to_string(root().join("run/validation/floating_block.toml"))
+        .unwrap()
+        .replace("friction = { type = \"coulomb\", mu = 0.3 }", "")
+        .replace("p = [0.3, 0.0, 0.0]", "p = [0.0, 0.0, 0.0]")
         + "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\n[[dirichlet]]\nface = \"upper.ymin\"\ncomponents = [\"y\"]\n";
     let path = dir.join("one_hex.toml");
     std::fs::write(&path, scene).unwrap();

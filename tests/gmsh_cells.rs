@@ -180,7 +180,9 @@ fn small_tetrahedral_cube_reads() {
 #[test]
 fn seed_on_tetrahedra_writes_results_that_read_back() {
     let dir = tmpdir("seed-tet");
-    for (cells, n, kind, count, topology, dataset) in [("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"), ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10")] {
+    for (cells, n, kind, count, topology, dataset) in
+        [("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"), ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10")]
+    {
         let out = dir.join(format!("{cells}.h5"));
         let c = format!("mesh.cells=\"{cells}\"");
         let m = format!("mesh.n={n}");
@@ -194,7 +196,10 @@ fn seed_on_tetrahedra_writes_results_that_read_back() {
         assert!(data.cells.iter().all(|c| c.kind == kind), "{cells}");
         let xdmf = std::fs::read_to_string(out.with_extension("xdmf")).unwrap();
         assert!(xdmf.contains(&format!("<Topology TopologyType=\"{topology}\" NumberOfElements=\"{count}\">")), "{xdmf}");
-        assert!(xdmf.contains(&format!("Dimensions=\"{count} {}\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">{cells}.h5:/mesh/{dataset}<", kind.len())), "{xdmf}");
+        assert!(
+            xdmf.contains(&format!("Dimensions=\"{count} {}\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">{cells}.h5:/mesh/{dataset}<", kind.len())),
+            "{xdmf}"
+        );
     }
 }
 

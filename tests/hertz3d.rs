@@ -21,7 +21,9 @@ const R: f64 = 10.0;
 fn slave_nodes(h5: &Path) -> Vec<(f64, f64, i32, f64, f64)> {
     let f = fields(h5);
     let get = |name: &str| f.fields.iter().find(|x| x.name == name).unwrap_or_else(|| panic!("field {name}")).values.clone();
-    let (Values::I32(status), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else { panic!("field types") };
+    let (Values::I32(status), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else {
+        panic!("field types")
+    };
     (0..f.coordinates.len()).filter(|&v| status[v] > 0).map(|v| (f.coordinates[v][0], f.coordinates[v][1], status[v], p[v], q[3 * v])).collect()
 }
 
@@ -82,7 +84,12 @@ fn hertz3d_on_a_tetrahedral_cap() {
     axis.sort_by(|u, v| u.0.total_cmp(&v.0));
     let last = axis.iter().rposition(|n| n.2 != OPEN).unwrap();
     let mid = 0.5 * (axis[last].0 + axis[last + 1].0);
-    eprintln!("tet4 cap: a = {a:.4} ({:.2} h), p0 = {p0:.2}, peak {peak:.2} ({:+.2} %), contact radius midpoint {:+.2} h from a", a / h, 100.0 * err, (mid - a) / h);
+    eprintln!(
+        "tet4 cap: a = {a:.4} ({:.2} h), p0 = {p0:.2}, peak {peak:.2} ({:+.2} %), contact radius midpoint {:+.2} h from a",
+        a / h,
+        100.0 * err,
+        (mid - a) / h
+    );
     assert!(a > 7.0 * h && a < 9.0 * h, "a = {a} is not the sized a ≈ 8h");
     // measured +1.76 % at this level
     assert!(err.abs() <= 0.02, "peak pressure {peak:.2} vs Hertz p0 = {p0:.2}: {:+.2} %", 100.0 * err);
@@ -107,7 +114,12 @@ fn cattaneo_mindlin3d_stick_radius_on_non_matching_meshes() {
     let (lo, hi) = stick.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &x| (l.min(x), u.max(x)));
     let (lo, hi) = (lo - h / 2.0, hi + h / 2.0);
     let half = (hi - lo) / 2.0;
-    eprintln!("P = {p:.3}, Q/(μP) = {:.3}, a = {a:.4}, c = {c:.4} ({:.2} h), stick zone along x [{lo:.4}, {hi:.4}]: half-width {half:.4} ({:+.2} h from c)", q / (mu * p), c / h, (half - c) / h);
+    eprintln!(
+        "P = {p:.3}, Q/(μP) = {:.3}, a = {a:.4}, c = {c:.4} ({:.2} h), stick zone along x [{lo:.4}, {hi:.4}]: half-width {half:.4} ({:+.2} h from c)",
+        q / (mu * p),
+        c / h,
+        (half - c) / h
+    );
     assert!((0.3..0.7).contains(&(q / (mu * p))), "the shear is sized for Q ≈ μP/2");
     assert!(nodes.iter().filter(|n| n.1 == 0.0 && n.2 != OPEN && n.0 > lo && n.0 < hi).all(|n| n.2 == STICK), "one stick zone along x");
     // measured 2026-12-05: +0.27 h (docs/validation.md: within 0.35 h at three levels)
@@ -136,7 +148,9 @@ fn cattaneo_mindlin3d_pressing_alone_slips_nowhere_with_either_body_as_slave() {
         let c = r.report.contact.as_ref().unwrap();
         let f = fields(&out);
         let get = |n: &str| f.fields.iter().find(|x| x.name == n).unwrap().values.clone();
-        let (Values::I32(st), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else { panic!("field types") };
+        let (Values::I32(st), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else {
+            panic!("field types")
+        };
         let closed: Vec<usize> = (0..st.len()).filter(|&v| st[v] > OPEN).collect();
         let p0 = closed.iter().map(|&v| p[v]).fold(0.0, f64::max);
         let worst = closed.iter().map(|&v| q[3 * v].hypot(q[3 * v + 1])).fold(0.0, f64::max) / (0.3 * p0);
@@ -189,7 +203,11 @@ fn tresca_on_a_quarter_model_by_tfeti_keeps_b_of_full_rank() {
 fn the_smoothed_pressure_of_unstructured_tet4_hertz() {
     let dir = tmpdir("hertz-tet4");
     let out = dir.join("hertz.h5");
-    let r = solve(&root().join("run/validation/hertz3d_tet4.toml"), &["output.fields=[\"contact_status\", \"contact_pressure\", \"contact_pressure_smooth\"]"], &out);
+    let r = solve(
+        &root().join("run/validation/hertz3d_tet4.toml"),
+        &["output.fields=[\"contact_status\", \"contact_pressure\", \"contact_pressure_smooth\"]"],
+        &out,
+    );
     let f = fields(&out);
     let get = |name: &str| match &f.fields.iter().find(|x| x.name == name).unwrap_or_else(|| panic!("field {name}")).values {
         Values::F64(v) => v.clone(),
@@ -201,10 +219,23 @@ fn the_smoothed_pressure_of_unstructured_tet4_hertz() {
     let r_of = |v: usize| x[v][0].hypot(x[v][1]);
     // within a/2 of the pole, off the symmetry planes
     let inner: Vec<usize> = (0..st.len()).filter(|&v| st[v] > 1.0 && r_of(v) < 0.5 * a && x[v][0] > 1e-9 && x[v][1] > 1e-9).collect();
-    let scatter = |p: &[f64]| (inner.iter().map(|&v| (p[v] / (p0 * (1.0 - (r_of(v) / a).powi(2)).sqrt()) - 1.0).powi(2)).sum::<f64>() / inner.len() as f64).sqrt();
+    let scatter =
+        |p: &[f64]| (inner.iter().map(|&v| (p[v] / (p0 * (1.0 - (r_of(v) / a).powi(2)).sqrt()) - 1.0).powi(2)).sum::<f64>() / inner.len() as f64).sqrt();
     let peak = |p: &[f64]| (0..st.len()).filter(|&v| st[v] > 0.0).map(|v| p[v]).fold(0.0, f64::max) / p0 - 1.0;
-    eprintln!("tet4 Hertz, {} nodes within a/2: λ/D peak {:+.2} %, scatter {:.2} %; smoothed peak {:+.2} %, scatter {:.2} %", inner.len(), 100.0 * peak(&raw), 100.0 * scatter(&raw), 100.0 * peak(&smooth), 100.0 * scatter(&smooth));
+    eprintln!(
+        "tet4 Hertz, {} nodes within a/2: λ/D peak {:+.2} %, scatter {:.2} %; smoothed peak {:+.2} %, scatter {:.2} %",
+        inner.len(),
+        100.0 * peak(&raw),
+        100.0 * scatter(&raw),
+        100.0 * peak(&smooth),
+        100.0 * scatter(&smooth)
+    );
     assert!(inner.len() >= 10);
     assert!(peak(&smooth).abs() <= 0.03, "smoothed peak {:+.2} %", 100.0 * peak(&smooth));
-    assert!(scatter(&smooth) <= 0.02 && scatter(&smooth) < 0.5 * scatter(&raw), "scatter {:.2} % (λ/D {:.2} %)", 100.0 * scatter(&smooth), 100.0 * scatter(&raw));
+    assert!(
+        scatter(&smooth) <= 0.02 && scatter(&smooth) < 0.5 * scatter(&raw),
+        "scatter {:.2} % (λ/D {:.2} %)",
+        100.0 * scatter(&smooth),
+        100.0 * scatter(&raw)
+    );
 }

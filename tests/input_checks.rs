@@ -47,7 +47,12 @@ fn two_blocks() -> String {
 #[test]
 fn material_data_outside_double_range_is_refused() {
     // E = 1e200: stopped after 0 iterations, every pair open, max|u| = 0, exit 0
-    assert_clean_failure("E-huge", SEED, &["--set", "mesh.n=3", "--set", "material.0.E=1e200", "--set", "material.1.E=1e200"], &["material[0].E", "1e200", "1e30"]);
+    assert_clean_failure(
+        "E-huge",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "material.0.E=1e200", "--set", "material.1.E=1e200"],
+        &["material[0].E", "1e200", "1e30"],
+    );
     assert_clean_failure("E-huge-one", SEED, &["--set", "mesh.n=3", "--set", "material.1.E=1e200"], &["material[1].E", "1e200"]);
     assert_clean_failure("E-tiny", SEED, &["--set", "mesh.n=3", "--set", "material.0.E=1e-200"], &["material[0].E", "1e-200", "1e-30"]);
     // ν so close to 1/2 (or −1) that λ = Eν/((1+ν)(1−2ν)) blows up
@@ -100,10 +105,16 @@ fn a_hexahedron_listed_twice_is_refused() {
     let first_block = full.find("\n2 1 3 9\n").expect("surface block");
     let at = first_block + "\n2 1 3 9\n".len();
     assert!(full[at..].starts_with("1 2 17 89 23 \n"), "{}", &full[at..at + 40]);
-    let twice = format!("{}{}{}", &full[..at], "190 2 17 89 23 \n", &full[at..]).replacen("\n2 1 3 9\n", "\n2 1 3 10\n", 1).replacen("$Elements\n8 189 1 189\n", "$Elements\n8 190 1 190\n", 1);
+    let twice = format!("{}{}{}", &full[..at], "190 2 17 89 23 \n", &full[at..]).replacen("\n2 1 3 9\n", "\n2 1 3 10\n", 1).replacen(
+        "$Elements\n8 189 1 189\n",
+        "$Elements\n8 190 1 190\n",
+        1,
+    );
     let path2 = dir.join("dup_quad.msh");
     std::fs::write(&path2, twice).unwrap();
-    let faces = |s: &str| s.lines().skip_while(|l| *l != "faces:").take_while(|l| !l.starts_with("total applied load")).map(str::to_string).collect::<Vec<_>>().join("\n");
+    let faces = |s: &str| {
+        s.lines().skip_while(|l| *l != "faces:").take_while(|l| !l.starts_with("total applied load")).map(str::to_string).collect::<Vec<_>>().join("\n")
+    };
     let a = check_ok("quad-once", &gmsh_scene(&root().join("mesh/two_blocks.msh")), &[]);
     let b = check_ok("quad-twice", &gmsh_scene(&path2), &[]);
     assert!(!faces(&a).is_empty());
@@ -120,7 +131,11 @@ fn conflicting_dirichlet_prescriptions_are_refused() {
     let again = format!("{SEED}\n[[dirichlet]]\nface = \"lower.xmin\"\ncomponents = [\"x\"]\nvalue = [0.001, 0.0, 0.0]\n");
     assert_clean_failure("same-face", &again, &n3, &["dirichlet[2]", "dirichlet[1]", "component x", "node"]);
     // and in the other order (it used to take the last one: the answer changed with the order)
-    let swapped = with(SEED, "[[dirichlet]]\nface = \"lower.xmin\"\n", "[[dirichlet]]\nface = \"lower.xmin\"\ncomponents = [\"x\"]\nvalue = [0.001, 0.0, 0.0]\n\n[[dirichlet]]\nface = \"lower.xmin\"\n");
+    let swapped = with(
+        SEED,
+        "[[dirichlet]]\nface = \"lower.xmin\"\n",
+        "[[dirichlet]]\nface = \"lower.xmin\"\ncomponents = [\"x\"]\nvalue = [0.001, 0.0, 0.0]\n\n[[dirichlet]]\nface = \"lower.xmin\"\n",
+    );
     assert_clean_failure("same-face-swapped", &swapped, &n3, &["dirichlet[2]", "dirichlet[1]", "component x"]);
     // faces sharing only an edge: lower.zmin and lower.xmin
     let edge = format!("{SEED}\n[[dirichlet]]\nface = \"lower.zmin\"\ncomponents = [\"x\"]\nvalue = [0.001, 0.0, 0.0]\n");
@@ -149,15 +164,32 @@ fn zero_friction_does_not_hold_a_floating_body() {
     assert_clean_failure("none", FLOATING, &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"none\"}"], &frictionless);
     assert_clean_failure("tresca-zero", FLOATING, &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"tresca\", g=0.0}"], &frictionless);
     assert_clean_failure("coulomb-zero", FLOATING, &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"coulomb\", mu=0.0}"], &frictionless);
-    assert_clean_failure("coulomb-ortho-zero", FLOATING, &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"coulomb\", mu1=0.0, mu2=0.0, direction=[1.0, 0.0, 0.0]}"], &frictionless);
+    assert_clean_failure(
+        "coulomb-ortho-zero",
+        FLOATING,
+        &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"coulomb\", mu1=0.0, mu2=0.0, direction=[1.0, 0.0, 0.0]}"],
+        &frictionless,
+    );
     // a zero bound along x only leaves the sliding along x free
-    for (name, f) in [("ortho-g1-zero", "{type=\"orthotropic\", g1=0.0, g2=0.1, direction=[1.0, 0.0, 0.0]}"), ("coulomb-mu1-zero", "{type=\"coulomb\", mu1=0.0, mu2=0.3, direction=[1.0, 0.0, 0.0]}")] {
+    for (name, f) in [
+        ("ortho-g1-zero", "{type=\"orthotropic\", g1=0.0, g2=0.1, direction=[1.0, 0.0, 0.0]}"),
+        ("coulomb-mu1-zero", "{type=\"coulomb\", mu1=0.0, mu2=0.3, direction=[1.0, 0.0, 0.0]}"),
+    ] {
         let set = format!("contact.pair.0.friction={f}");
-        assert_clean_failure(name, FLOATING, &["--set", "mesh.n=4", "--set", &set], &["body \"upper\"", "translation along x", "neither Dirichlet conditions nor contact"]);
+        assert_clean_failure(
+            name,
+            FLOATING,
+            &["--set", "mesh.n=4", "--set", &set],
+            &["body \"upper\"", "translation along x", "neither Dirichlet conditions nor contact"],
+        );
     }
     // a bound > 0 along both directions holds it (TFETI with the orthogonal projector) where
     // it can carry the push (0.3 along x against g1 times the contact area 2)
-    check_ok("ortho-both", FLOATING, &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"orthotropic\", g1=0.2, g2=0.1, direction=[1.0, 0.0, 0.0]}"]);
+    check_ok(
+        "ortho-both",
+        FLOATING,
+        &["--set", "mesh.n=4", "--set", "contact.pair.0.friction={type=\"orthotropic\", g1=0.2, g2=0.1, direction=[1.0, 0.0, 0.0]}"],
+    );
     check_ok("coulomb", FLOATING, &n4);
 }
 
@@ -207,14 +239,21 @@ fn many_materials_and_bodies_check_in_linear_time() {
 #[test]
 fn absurd_length_scales_are_refused_naming_the_scale() {
     let scaled = |s: f64| {
-        let b = |lo: [f64; 3], hi: [f64; 3]| format!("box = {{ min = [{:e}, {:e}, {:e}], max = [{:e}, {:e}, {:e}] }}", lo[0] * s, lo[1] * s, lo[2] * s, hi[0] * s, hi[1] * s, hi[2] * s);
+        let b = |lo: [f64; 3], hi: [f64; 3]| {
+            format!("box = {{ min = [{:e}, {:e}, {:e}], max = [{:e}, {:e}, {:e}] }}", lo[0] * s, lo[1] * s, lo[2] * s, hi[0] * s, hi[1] * s, hi[2] * s)
+        };
         let t = with(SEED, "box = { min = [0.0, 0.0, 1.0], max = [2.0, 1.0, 2.0] }", &b([0.0, 0.0, 1.0], [2.0, 1.0, 2.0]));
         with(&t, "box = { min = [0.0, 0.0, 0.0], max = [2.0, 1.0, 1.0] }", &b([0.0; 3], [2.0, 1.0, 1.0]))
     };
     assert_clean_failure("box-tiny", &scaled(1e-120), &["--set", "mesh.n=3"], &["body[0].box", "5.000e-121 m", "1e-30"]);
     assert_clean_failure("box-huge", &scaled(1e120), &["--set", "mesh.n=3"], &["body[0].box", "1.000e120 m", "1e30"]);
     // a cylinder radius beyond the range made the nodes NaN
-    assert_clean_failure("cylinder-huge", SEED, &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"zmin\", radius=1e200}"], &["body[0].box.cylinder.radius", "1e30"]);
+    assert_clean_failure(
+        "cylinder-huge",
+        SEED,
+        &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"zmin\", radius=1e200}"],
+        &["body[0].box.cylinder.radius", "1e30"],
+    );
 
     // a Gmsh mesh whose coordinates are all scaled
     let dir = tmpdir("scaled-meshes");
@@ -328,7 +367,8 @@ fn a_piped_mesh_is_read_once() {
     let scene = dir.join("scene.toml");
     let piped = GMSH.replacen("file = \"../mesh/two_blocks.msh\"", "file = \"/dev/stdin\"", 1).replace("../mesh/two_blocks.msh", mesh.to_str().unwrap());
     std::fs::write(&scene, &piped).unwrap();
-    let mut child = Command::new(common::BIN).args(["check", scene.to_str().unwrap()]).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut child =
+        Command::new(common::BIN).args(["check", scene.to_str().unwrap()]).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     let bytes = std::fs::read(&mesh).unwrap();
     let mut stdin = child.stdin.take().unwrap();
     let writer = std::thread::spawn(move || {
@@ -349,7 +389,12 @@ fn a_piped_mesh_is_read_once() {
 /// whether the body is held; 1e-6 thick (ratio 2e6) still solves.
 #[test]
 fn a_body_too_thin_for_its_elements_is_refused_naming_it() {
-    assert_clean_failure("thin", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000000001]"], &["body[0].box", "body \"upper\"", "thinner than the element can represent"]);
+    assert_clean_failure(
+        "thin",
+        SEED,
+        &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000000001]"],
+        &["body[0].box", "body \"upper\"", "thinner than the element can represent"],
+    );
     check_ok("thin-ok", SEED, &["--set", "mesh.n=4", "--set", "body.0.box.max=[2.0, 1.0, 1.000001]"]);
 }
 
@@ -362,6 +407,11 @@ fn max_overlap_is_a_sharp_boundary() {
     let lowered = |d: &str| format!("body.0.box.min=[0.0, 0.0, {d}]");
     let inside = check_ok("overlap-inside", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99977")]);
     assert!(inside.contains("initial interference: 16 slave nodes start inside the master, at most 2.300e-4 m deep"), "{inside}");
-    assert_clean_failure("overlap-beyond", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99976")], &["contact.pair[0]", "bodies overlap", "(0.000000, 0.000000, 0.999760)", "2.400e-4", "max_overlap = 1e-3", "2.357e-1"]);
+    assert_clean_failure(
+        "overlap-beyond",
+        SEED,
+        &["--set", "mesh.n=4", "--set", &lowered("0.99976")],
+        &["contact.pair[0]", "bodies overlap", "(0.000000, 0.000000, 0.999760)", "2.400e-4", "max_overlap = 1e-3", "2.357e-1"],
+    );
     check_ok("overlap-wider", SEED, &["--set", "mesh.n=4", "--set", &lowered("0.99976"), "--set", "contact.pair.0.max_overlap=1e-2"]);
 }

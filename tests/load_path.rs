@@ -48,9 +48,14 @@ fn a_frictionless_path_ends_at_the_one_step_solution() {
 fn contact_row(h5: &Path) -> Vec<(f64, i32, f64, f64)> {
     let f = fields(h5);
     let get = |name: &str| f.fields.iter().find(|x| x.name == name).unwrap_or_else(|| panic!("field {name}")).values.clone();
-    let (Values::I32(status), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else { panic!("field types") };
+    let (Values::I32(status), Values::F64(p), Values::F64(q)) = (get("contact_status"), get("contact_pressure"), get("contact_traction")) else {
+        panic!("field types")
+    };
     let xc = f.coordinates.iter().map(|x| x[0]).fold(0.0, f64::max) / 2.0;
-    let mut row: Vec<_> = (0..f.coordinates.len()).filter(|&v| status[v] > 0 && f.coordinates[v][1] == 0.0).map(|v| (f.coordinates[v][0] - xc, status[v], p[v], q[3 * v])).collect();
+    let mut row: Vec<_> = (0..f.coordinates.len())
+        .filter(|&v| status[v] > 0 && f.coordinates[v][1] == 0.0)
+        .map(|v| (f.coordinates[v][0] - xc, status[v], p[v], q[3 * v]))
+        .collect();
     row.sort_by(|a, b| a.0.total_cmp(&b.0));
     row
 }
@@ -111,10 +116,16 @@ fn press_then_shear_slips_more_than_a_proportional_path() {
     sets.extend(["load.steps=4", "dirichlet.1.factors=[0.25, 0.5, 0.75, 1.0]", "dirichlet.2.factors=[0.25, 0.5, 0.75, 1.0]"]);
     let prop = solve(&scene, &sets, &dir.join("b.h5"));
     let (a, b) = (shear.report.contact.as_ref().unwrap(), prop.report.contact.as_ref().unwrap());
-    eprintln!("press then shear: {} stick, {} slip, Fx {:.4}; proportional: {} stick, {} slip, Fx {:.4}", a.stick, a.slip, a.total_force_on_slave[0], b.stick, b.slip, b.total_force_on_slave[0]);
+    eprintln!(
+        "press then shear: {} stick, {} slip, Fx {:.4}; proportional: {} stick, {} slip, Fx {:.4}",
+        a.stick, a.slip, a.total_force_on_slave[0], b.stick, b.slip, b.total_force_on_slave[0]
+    );
     assert!(b.slip < a.slip, "the proportional path slips less");
     assert!(b.total_force_on_slave[0].abs() < a.total_force_on_slave[0].abs(), "and carries less shear for the same last displacement");
-    assert!((a.total_force_on_slave[2] - b.total_force_on_slave[2]).abs() <= 1e-3 * a.total_force_on_slave[2].abs(), "the normal problem does not depend on the path (identical materials)");
+    assert!(
+        (a.total_force_on_slave[2] - b.total_force_on_slave[2]).abs() <= 1e-3 * a.total_force_on_slave[2].abs(),
+        "the normal problem does not depend on the path (identical materials)"
+    );
 }
 
 #[test]
@@ -168,7 +179,12 @@ fn a_path_past_the_friction_limit_writes_the_steps_before_it() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
-    for want in ["body \"upper\": no equilibrium exists at load step 5/5", "the applied force along x is 6.6000e-1", "hold at most 6.0000e-1 along it", "steps 1–4 are solved and written to"] {
+    for want in [
+        "body \"upper\": no equilibrium exists at load step 5/5",
+        "the applied force along x is 6.6000e-1",
+        "hold at most 6.0000e-1 along it",
+        "steps 1–4 are solved and written to",
+    ] {
         assert!(err.contains(want), "`{want}` not in {err}");
     }
     let f = fields(&out);
@@ -188,6 +204,11 @@ fn a_path_past_the_friction_limit_writes_the_steps_before_it() {
         let text = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let line = text.lines().find(|l| l.starts_with("warning: load path stopped before load step 5/5")).unwrap_or_else(|| panic!("{text}"));
-        assert!(line.contains(&format!("applied force along x is {applied}")) && line.contains("hold at most 6.0000e-1 along it") && line.contains("solve writes steps 1–4"), "{line}");
+        assert!(
+            line.contains(&format!("applied force along x is {applied}"))
+                && line.contains("hold at most 6.0000e-1 along it")
+                && line.contains("solve writes steps 1–4"),
+            "{line}"
+        );
     }
 }

@@ -64,7 +64,11 @@ fn max_memory_sets_the_limit_and_names_itself() {
         assert!(line.contains(want), "expected `{want}` in: {line}");
     }
     // the environment variable, when no flag is given
-    let o = Command::new(BIN).args(["solve", &seed(), "--set", "mesh.n=8", "-q", "--out", out.to_str().unwrap()]).env("TRESCA_FETI_MAX_MEMORY", "2M").output().unwrap();
+    let o = Command::new(BIN)
+        .args(["solve", &seed(), "--set", "mesh.n=8", "-q", "--out", out.to_str().unwrap()])
+        .env("TRESCA_FETI_MAX_MEMORY", "2M")
+        .output()
+        .unwrap();
     let line = one_line_failure("env", &o, &out);
     assert!(line.contains("2.1 MB are available (TRESCA_FETI_MAX_MEMORY)"), "{line}");
     // a size that is no size: a usage error
@@ -76,7 +80,11 @@ fn max_memory_sets_the_limit_and_names_itself() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--max-memory"));
     // a variable that is no size: one line naming it, for solve and check, no result file
     for bad in ["lots", "0", "-1", "8GBBBB"] {
-        let o = Command::new(BIN).args(["solve", &seed(), "--set", "mesh.n=4", "-q", "--out", out.to_str().unwrap()]).env("TRESCA_FETI_MAX_MEMORY", bad).output().unwrap();
+        let o = Command::new(BIN)
+            .args(["solve", &seed(), "--set", "mesh.n=4", "-q", "--out", out.to_str().unwrap()])
+            .env("TRESCA_FETI_MAX_MEMORY", bad)
+            .output()
+            .unwrap();
         let line = one_line_failure(bad, &o, &out);
         assert!(line.contains("TRESCA_FETI_MAX_MEMORY") && line.contains(bad), "{line}");
         let o = Command::new(BIN).args(["check", &seed(), "--set", "mesh.n=4"]).env("TRESCA_FETI_MAX_MEMORY", bad).output().unwrap();

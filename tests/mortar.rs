@@ -8,8 +8,6 @@ mod common;
 use common::{f64_field, fields, i32_field, mpirun, root, solve, tmpdir};
 use tresca_feti::output::{OutputData, Values};
 
-
-
 /// Two blocks of one material (E = 1000, Poisson's ratio `nu`) stacked at z = 1 with different
 /// meshes (upper `up` nodes per direction and cells `cells`, lower 7 × 5 × 6 hexahedra), with
 /// the boundary conditions and interface `rest` (TOML), solved to ε = 1e-10.
@@ -165,7 +163,13 @@ fn a_uniform_shear_below_the_slip_limit_is_transmitted_exactly() {
     let (p, tau): (f64, f64) = (1.0, 0.3);
     for (name, up, cells) in [("hex-on-hex", [5, 4, 4], "hex8"), ("tet-on-hex", [4, 3, 4], "tet4")] {
         let mut rest = String::from("[[dirichlet]]\nface = \"lower.zmin\"\n");
-        for (face, t) in [("upper.zmax", [tau, 0.0, -p]), ("upper.xmax", [0.0, 0.0, tau]), ("upper.xmin", [0.0, 0.0, -tau]), ("lower.xmax", [0.0, 0.0, tau]), ("lower.xmin", [0.0, 0.0, -tau])] {
+        for (face, t) in [
+            ("upper.zmax", [tau, 0.0, -p]),
+            ("upper.xmax", [0.0, 0.0, tau]),
+            ("upper.xmin", [0.0, 0.0, -tau]),
+            ("lower.xmax", [0.0, 0.0, tau]),
+            ("lower.xmin", [0.0, 0.0, -tau]),
+        ] {
             rest += &format!("[[traction]]\nface = \"{face}\"\np = {t:?}\n");
         }
         rest += CONTACT;
@@ -270,7 +274,10 @@ fn a_whole_surface_as_slave_leaves_the_nodes_without_a_master_outside() {
     std::fs::write(&cap, scene("ball.cap")).unwrap();
     let (a, b) = (solve(&whole, &[], &dir.join("whole.h5")), solve(&cap, &[], &dir.join("cap.h5")));
     let (ca, cb) = (a.report.contact.as_ref().unwrap(), b.report.contact.as_ref().unwrap());
-    eprintln!("whole: {} pairs, {} outside, {} in contact; cap: {} pairs, {} outside; F {:?} vs {:?}", ca.pairs, ca.outside, ca.contact, cb.pairs, cb.outside, ca.total_force_on_slave, cb.total_force_on_slave);
+    eprintln!(
+        "whole: {} pairs, {} outside, {} in contact; cap: {} pairs, {} outside; F {:?} vs {:?}",
+        ca.pairs, ca.outside, ca.contact, cb.pairs, cb.outside, ca.total_force_on_slave, cb.total_force_on_slave
+    );
     assert!(ca.outside > 100 && ca.contact > 0 && ca.pairs == cb.pairs, "{ca:?} {cb:?}");
     let (ua, ub) = (&a.solution.displacement, &b.solution.displacement);
     let scale = common::max_abs(ua);
@@ -343,7 +350,15 @@ fn a_press_fit_gives_the_lame_contact_pressure() {
         let mean = closed.iter().sum::<f64>() / closed.len().max(1) as f64;
         let worst = closed.iter().map(|q| (q - lame).abs() / lame).fold(0.0, f64::max);
         let f = r.report.contact.as_ref().unwrap().total_force_on_slave;
-        eprintln!("{name}: {} slave nodes, p in [{:.5}, {:.5}] against Lamé {lame:.5}, worst {:.2} %, F_x {:.6} (−p·b·t = {:.6})", closed.len(), closed.iter().cloned().fold(f64::INFINITY, f64::min), closed.iter().cloned().fold(0.0, f64::max), 100.0 * worst, f[0], -lame * b * 0.1);
+        eprintln!(
+            "{name}: {} slave nodes, p in [{:.5}, {:.5}] against Lamé {lame:.5}, worst {:.2} %, F_x {:.6} (−p·b·t = {:.6})",
+            closed.len(),
+            closed.iter().cloned().fold(f64::INFINITY, f64::min),
+            closed.iter().cloned().fold(0.0, f64::max),
+            100.0 * worst,
+            f[0],
+            -lame * b * 0.1
+        );
         assert_eq!(closed.len(), 50, "{name}: every slave node closed");
         assert!(worst <= 0.02, "{name}: contact pressure {:.2} % from Lamé", 100.0 * worst);
         // measured 2026-12-05: worst +1.51 %, mean −0.08 %, the resultant to 5 digits
@@ -422,7 +437,12 @@ fn the_slave_of_two_named_faces_is_the_softer_and_finer_side() {
     std::fs::write(&path, &scene).unwrap();
     let o = common::run(&["check", path.to_str().unwrap()]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("contact pair 0: slave block.block_top") && out.contains("slave block.block_top chosen by the smaller E·h (Young's modulus × mean facet size): E·h") && out.contains("the softer side"), "{out}");
+    assert!(
+        out.contains("contact pair 0: slave block.block_top")
+            && out.contains("slave block.block_top chosen by the smaller E·h (Young's modulus × mean facet size): E·h")
+            && out.contains("the softer side"),
+        "{out}"
+    );
     let r = solve(&path, &[], &dir.join("r.h5"));
     let c = r.report.contact.as_ref().unwrap();
     let n_a = r.report.solver.as_ref().unwrap().info.n_a;
@@ -462,7 +482,11 @@ fn ties_that_repeat_a_constraint_are_refused_naming_the_keys() {
         (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("upper.zmin", "lower.zmax")), "tie[1]", "tie[0]"),
         (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("lower.zmax", "upper.zmin")), "tie[1]", "tie[0]"),
         (format!("{}{}", tie("upper.zmin", "lower.zmax"), tie("upper.zmin", "lower.xmax")), "tie[1].slave", "tie[0]"),
-        (format!("{}{}", "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.xmax\"\n", tie("upper.zmin", "lower.zmax")), "tie[0].slave", "contact.pair[0]"),
+        (
+            format!("{}{}", "[[contact.pair]]\nslave = \"upper.zmin\"\nmaster = \"lower.xmax\"\n", tie("upper.zmin", "lower.zmax")),
+            "tie[0].slave",
+            "contact.pair[0]",
+        ),
     ];
     for (interface, key, other) in cases {
         let scene = write(&dir, &stack([5, 4, 4], "hex8", &interface));
@@ -526,7 +550,13 @@ fn slave_nodes_beyond_the_master_edge_are_not_held() {
     let mean = under.iter().sum::<f64>() / under.len() as f64;
     let pmax = closed.iter().map(|&v| p[v]).fold(0.0, f64::max);
     let (fb, fp) = (block.report.contact.as_ref().unwrap().total_force_on_slave[2], punch.report.contact.as_ref().unwrap().total_force_on_slave[2]);
-    eprintln!("block as slave: {} closed, {} beyond the edge, max p {pmax:.3e} = {:.1}× the mean under the punch; F {fb:.5} vs {fp:.5} ({:+.2} %)", closed.len(), beyond.len(), pmax / mean, 100.0 * (-fb / fp - 1.0));
+    eprintln!(
+        "block as slave: {} closed, {} beyond the edge, max p {pmax:.3e} = {:.1}× the mean under the punch; F {fb:.5} vs {fp:.5} ({:+.2} %)",
+        closed.len(),
+        beyond.len(),
+        pmax / mean,
+        100.0 * (-fb / fp - 1.0)
+    );
     assert!(beyond.is_empty(), "closed beyond the punch's edge: {beyond:?}");
     assert!(pmax <= 20.0 * mean, "max p {pmax} against the mean {mean}");
     assert!((-fb - fp).abs() <= 0.03 * fp, "force {fb} against {fp} with the punch as slave");

@@ -319,7 +319,10 @@ fn two_runs_onto_one_output_leave_one_runs_set() {
         let data = common::fields(&out);
         let u = common::f64_field(&data, "displacement");
         let h5_umax = u.chunks(3).map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
-        assert!((json_umax - h5_umax).abs() <= 1e-12 * h5_umax, "pair {pair}: the JSON (max |u| {json_umax:e}) and the h5 ({h5_umax:e}) come from different runs");
+        assert!(
+            (json_umax - h5_umax).abs() <= 1e-12 * h5_umax,
+            "pair {pair}: the JSON (max |u| {json_umax:e}) and the h5 ({h5_umax:e}) come from different runs"
+        );
         let xdmf = std::fs::read_to_string(dir.join("r.xdmf")).unwrap();
         assert!(xdmf.contains("r.h5:"), "pair {pair}: {xdmf}");
     }
@@ -332,7 +335,9 @@ fn two_runs_onto_one_output_leave_one_runs_set() {
 fn the_xdmf_opens_in_meshio_with_the_hdf5_files_arrays() {
     let dir = tmpdir("xdmf-meshio");
     let seed = root().join("run/seed.toml");
-    let gmsh = std::fs::read_to_string(root().join("run/gmsh_blocks.toml")).unwrap().replace("\"../mesh/two_blocks.msh\"", &format!("\"{}\"", root().join("mesh/two_tet10_blocks.msh").display()));
+    let gmsh = std::fs::read_to_string(root().join("run/gmsh_blocks.toml"))
+        .unwrap()
+        .replace("\"../mesh/two_blocks.msh\"", &format!("\"{}\"", root().join("mesh/two_tet10_blocks.msh").display()));
     let tet10 = dir.join("tet10.toml");
     std::fs::write(&tet10, gmsh).unwrap();
     let cases: [(&str, &Path, usize, &[&str], &str); 3] = [
@@ -348,7 +353,11 @@ fn the_xdmf_opens_in_meshio_with_the_hdf5_files_arrays() {
         }
         let o = if ranks == 1 { Command::new(BIN).args(&args).output().unwrap() } else { common::mpirun(ranks, &args) };
         assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let check = Command::new("/usr/bin/python3").arg(root().join("run/peer/xdmf_check.py")).arg(out.with_extension("xdmf")).output().expect("python3 with meshio (run/install-deps)");
+        let check = Command::new("/usr/bin/python3")
+            .arg(root().join("run/peer/xdmf_check.py"))
+            .arg(out.with_extension("xdmf"))
+            .output()
+            .expect("python3 with meshio (run/install-deps)");
         let text = String::from_utf8_lossy(&check.stdout);
         assert!(check.status.success(), "{name}: {text}{}", String::from_utf8_lossy(&check.stderr));
         assert!(text.contains(expect) && text.contains("equal to the HDF5 file's"), "{name}: {text}");

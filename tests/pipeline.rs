@@ -76,12 +76,7 @@ p = [12.0, 0.0, 0.0]
 
 /// Displacements keyed by (body, rounded coordinates).
 fn by_position(body_of: &[usize], nodes: &[[f64; 3]], u: &[[f64; 3]]) -> HashMap<(usize, [i64; 3]), [f64; 3]> {
-    nodes
-        .iter()
-        .zip(u)
-        .zip(body_of)
-        .map(|((x, u), &b)| ((b, x.map(|c| (c * 1e9).round() as i64)), *u))
-        .collect()
+    nodes.iter().zip(u).zip(body_of).map(|((x, u), &b)| ((b, x.map(|c| (c * 1e9).round() as i64)), *u)).collect()
 }
 
 fn node_bodies(m: &model::Model) -> Vec<usize> {
@@ -101,7 +96,14 @@ fn gmsh_seed_geometry_counts_and_matches_the_generated_box() {
     assert_eq!(gm.mesh.nodes.len(), 2 * 7 * 4 * 4);
     assert_eq!(gm.mesh.cells.len(), 2 * 54);
     let counts: Vec<(String, usize)> = gm.mesh.faces.iter().map(|f| (f.name.clone(), f.facets.len())).collect();
-    for (name, n) in [("upper.upper_top", 18), ("upper.upper_bottom", 18), ("upper.upper_left", 9), ("upper.upper_right", 9), ("lower.lower_top", 18), ("lower.lower_left", 9)] {
+    for (name, n) in [
+        ("upper.upper_top", 18),
+        ("upper.upper_bottom", 18),
+        ("upper.upper_left", 9),
+        ("upper.upper_right", 9),
+        ("lower.lower_top", 18),
+        ("lower.lower_left", 9),
+    ] {
         assert!(counts.contains(&(name.to_string(), n)), "{name}: {counts:?}");
     }
     assert_eq!(gm.contact.len(), 1);
@@ -152,8 +154,8 @@ fn written_file_reads_back_as_computed() {
     let stored = scene::parse(&attr("scene"), "stored", &[]).unwrap();
     let mut expect = scene::load(&scene_path, &sets.map(String::from)).unwrap().scene;
     expect.output.path = Some(h5.clone()); // --out is part of the resolved scene
-    // so are the automatic choices: the decomposition by cost (this small seed: monolithic)
-    // and the method for that dual
+                                           // so are the automatic choices: the decomposition by cost (this small seed: monolithic)
+                                           // and the method for that dual
     assert!(expect.solver.auto && expect.decomposition.subdomains.is_none());
     assert!(!stored.solver.auto && stored.decomposition.subdomains == Some(1));
     expect.decomposition.subdomains = Some(1);
@@ -201,7 +203,10 @@ fn the_report_and_the_solver_history_read_back_typed() {
     let sv = s.report.solver.as_ref().expect("a contact solve reports its solver");
     for r in [&file, &stored] {
         let rs = r.solver.as_ref().unwrap();
-        assert_eq!((rs.method.as_str(), rs.info.iterations, rs.info.n_a, rs.info.inner_iterations), ("gimssn", sv.info.iterations, sv.info.n_a, sv.info.inner_iterations));
+        assert_eq!(
+            (rs.method.as_str(), rs.info.iterations, rs.info.n_a, rs.info.inner_iterations),
+            ("gimssn", sv.info.iterations, sv.info.n_a, sv.info.inner_iterations)
+        );
         assert_eq!(rs.info.history, sv.info.history);
         assert_eq!(r.contact.as_ref().unwrap().pairs, 25);
     }
@@ -221,7 +226,10 @@ fn a_curved_face_pairs_as_slave_and_as_master() {
     let dir = tmpdir("curved");
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/bench/cylinder_on_flat.toml");
     let text = std::fs::read_to_string(&base).unwrap();
-    let swapped = text.replace("slave = \"upper.zmin\"", "slave = \"X\"").replace("master = \"lower.zmax\"", "master = \"upper.zmin\"").replace("slave = \"X\"", "slave = \"lower.zmax\"");
+    let swapped = text
+        .replace("slave = \"upper.zmin\"", "slave = \"X\"")
+        .replace("master = \"lower.zmax\"", "master = \"upper.zmin\"")
+        .replace("slave = \"X\"", "slave = \"lower.zmax\"");
     assert_ne!(text, swapped);
     let other = dir.join("swapped.toml");
     std::fs::write(&other, swapped).unwrap();
@@ -237,4 +245,3 @@ fn a_curved_face_pairs_as_slave_and_as_master() {
     let du = a.solution.displacement.iter().zip(&b.solution.displacement).flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs())).fold(0.0, f64::max);
     assert!(du <= 1e-9, "displacements differ by {du:e}");
 }
-

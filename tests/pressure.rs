@@ -107,7 +107,11 @@ fn a_traction_takes_a_vector_or_a_pressure() {
     let dir = tmpdir("traction-forms");
     let neither = dir.join("neither.toml");
     std::fs::write(&neither, text.replace("pressure = 1.0", "")).unwrap();
-    for (path, set, key) in [(&scene, "traction.0.p=[1.0, 0.0, 0.0]", "traction[0].pressure: give either"), (&scene, "traction.0.pressure=nan", "traction[0].pressure"), (&neither, "title=\"x\"", "traction[0].p: give `p`")] {
+    for (path, set, key) in [
+        (&scene, "traction.0.p=[1.0, 0.0, 0.0]", "traction[0].pressure: give either"),
+        (&scene, "traction.0.pressure=nan", "traction[0].pressure"),
+        (&neither, "title=\"x\"", "traction[0].p: give `p`"),
+    ] {
         let o = common::run(&["check", path.to_str().unwrap(), "--set", set]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.lines().count() == 1 && err.contains(key), "{set}: {err}");

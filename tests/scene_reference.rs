@@ -65,7 +65,8 @@ fn every_key_of_the_parser_is_documented_and_no_other() {
 #[test]
 fn the_reference_examples_parse() {
     // every ```toml block of the reference is a whole scene or a fragment appended to a minimal one
-    let minimal = "[[material]]\nname = \"m\"\nE = 1.0\nnu = 0.3\n[[body]]\nname = \"b\"\nmaterial = \"m\"\nbox = { min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }\n";
+    let minimal =
+        "[[material]]\nname = \"m\"\nE = 1.0\nnu = 0.3\n[[body]]\nname = \"b\"\nmaterial = \"m\"\nbox = { min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }\n";
     let text = reference();
     let mut blocks = text.split("```toml\n").skip(1).map(|b| b.split("```").next().unwrap_or_default()).peekable();
     assert!(blocks.peek().is_some(), "no ```toml example in docs/scene-reference.md");

@@ -256,7 +256,17 @@ fn tet10_approaches_a_fine_hex8_solution_as_n_grows() {
 fn the_cli_solves_a_tet10_seed() {
     let dir = common::tmpdir("tet10-cli");
     let out = dir.join("t.h5");
-    let o = common::run(&["solve", &common::root().join("run/seed.toml").to_string_lossy(), "--set", "mesh.n=5", "--set", "mesh.cells=\"tet10\"", "-q", "--out", out.to_str().unwrap()]);
+    let o = common::run(&[
+        "solve",
+        &common::root().join("run/seed.toml").to_string_lossy(),
+        "--set",
+        "mesh.n=5",
+        "--set",
+        "mesh.cells=\"tet10\"",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
     assert!(json.get("contact").is_some(), "{json}");

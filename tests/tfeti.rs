@@ -9,9 +9,9 @@
 use std::path::Path;
 
 use tresca_feti::comm::SerialComm;
+use tresca_feti::contact::state;
 use tresca_feti::model::{self, Model};
 use tresca_feti::pipeline::{self, ContactOutcome, Solution, Timings};
-use tresca_feti::contact::state;
 use tresca_feti::scene::{self, LoadedScene};
 
 fn load(scene: &str, sets: &[String]) -> (LoadedScene, Model) {
@@ -94,13 +94,7 @@ fn agreement(scene: &str, sets: &[String], parts: &[usize]) -> Vec<Agreement> {
         let (sol, dec_c) = solve(scene, sets, s);
         let f = sol.tfeti.as_ref().expect("TFETI figures");
         assert_eq!(f.subdomains.len(), s * model.mesh.bodies.len());
-        let du = mono
-            .displacement
-            .iter()
-            .zip(&sol.displacement)
-            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-            .fold(0.0f64, f64::max)
-            / umax;
+        let du = mono.displacement.iter().zip(&sol.displacement).flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs())).fold(0.0f64, f64::max) / umax;
         let dirichlet = model.constraints.iter().map(|&(v, c, val)| (sol.displacement[v][c] - val).abs() / umax).fold(0.0f64, f64::max);
         let (mut dp, mut cnt, mut same_status, mut kkt) = (0.0, None, true, None);
         if let (Some(a), Some(b)) = (&mono_c, &dec_c) {
@@ -189,7 +183,13 @@ fn dirichlet_rows_and_eliminated_dirichlet_dofs_match_alike() {
     // the seed: with every Dirichlet row kept, and with the held DOFs eliminated inside the
     // subdomains (the default; partly, where the hold is firm enough)
     let slabs = |mode: &str| {
-        let mut v: Vec<String> = ["body.0.box={min=[0.0, 0.0, 1.0], max=[4.0, 0.1, 2.0], nodes=[21, 2, 6]}", "body.1.box={min=[0.0, 0.0, 0.0], max=[4.0, 0.1, 1.0], nodes=[21, 2, 6]}", "solver.eps=1e-12"].map(String::from).to_vec();
+        let mut v: Vec<String> = [
+            "body.0.box={min=[0.0, 0.0, 1.0], max=[4.0, 0.1, 2.0], nodes=[21, 2, 6]}",
+            "body.1.box={min=[0.0, 0.0, 0.0], max=[4.0, 0.1, 1.0], nodes=[21, 2, 6]}",
+            "solver.eps=1e-12",
+        ]
+        .map(String::from)
+        .to_vec();
         v.push(format!("decomposition.dirichlet=\"{mode}\""));
         v
     };
@@ -233,7 +233,12 @@ fn htfeti_clusters_match_the_monolithic_dual() {
         let (sol, _) = solve("run/seed.toml", &seed(8, &[&format!("decomposition.subdomains_per_cluster={per}")]), 8);
         let f = sol.tfeti.expect("TFETI figures");
         assert_eq!((f.subdomains.len(), f.clusters), (16, clusters));
-        assert!(f.coarse_dim <= 6 * clusters && (per == 1) == (f.corner_rows == 0), "{per} per cluster: coarse {}, {} corner rows", f.coarse_dim, f.corner_rows);
+        assert!(
+            f.coarse_dim <= 6 * clusters && (per == 1) == (f.corner_rows == 0),
+            "{per} per cluster: coarse {}, {} corner rows",
+            f.coarse_dim,
+            f.corner_rows
+        );
     }
 }
 

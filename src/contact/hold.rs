@@ -53,7 +53,9 @@ impl Unheld {
         let axis = ["x", "y", "z"][self.natural % 3];
         let what = if self.natural < 3 { format!("force along {axis}") } else { format!("moment about {axis} (through the centroid)") };
         let carry = match self.supply.map(|h| h.max(0.0)) {
-            Some(held) if held > 0.0 => format!("with its other components as applied, contact and friction hold at most {held:.4e} along it, {:.3e} less", load - held),
+            Some(held) if held > 0.0 => {
+                format!("with its other components as applied, contact and friction hold at most {held:.4e} along it, {:.3e} less", load - held)
+            }
             Some(_) => "contact and friction hold none of it".into(),
             None => "contact and friction cannot hold its other components either".into(),
         };
@@ -71,7 +73,11 @@ impl Unheld {
 /// `body "a"`, or `bodies "a", "b" (tied)` for a group.
 pub fn group_name(mesh: &Mesh, bodies: &[usize]) -> String {
     let names: Vec<String> = bodies.iter().map(|&b| format!("\"{}\"", mesh.bodies[b].name)).collect();
-    if names.len() == 1 { format!("body {}", names[0]) } else { format!("bodies {} (tied)", names.join(", ")) }
+    if names.len() == 1 {
+        format!("body {}", names[0])
+    } else {
+        format!("bodies {} (tied)", names.join(", "))
+    }
 }
 
 /// The equilibrium rows of the free bodies' motions: G_f (column per multiplier), e_f, and each
@@ -199,13 +205,13 @@ fn largest(g: &[Vec<(usize, f64)>], e: &[f64], u: &[f64], n: usize, cones: &Cone
     for (r, row) in g.iter().enumerate() {
         for &(j, v) in row {
             ai.push(r0 + r);
-        aj.push(j);
-        av.push(v);
+            aj.push(j);
+            av.push(v);
         }
         if u[r] != 0.0 {
             ai.push(r0 + r);
-        aj.push(n);
-        av.push(-u[r]);
+            aj.push(n);
+            av.push(-u[r]);
         }
     }
     let a = CscMatrix::new_from_triplets(r0 + g.len(), n + 1, ai, aj, av);
@@ -251,7 +257,12 @@ impl Cones {
         let per = if friction { 3 } else { 1 };
         let mut c = Cones { a: vec![], h: vec![], zero: 0, nonneg: 0, socs: 0 };
         // λτ = 0 where a pair has no friction among frictional ones
-        let none: Vec<usize> = pairs.iter().enumerate().filter(|&(_, &i)| friction && contact.bound[i] == SlipBound::None && contact.coulomb[i] == Coefficient::Fixed).map(|(c, _)| c).collect();
+        let none: Vec<usize> = pairs
+            .iter()
+            .enumerate()
+            .filter(|&(_, &i)| friction && contact.bound[i] == SlipBound::None && contact.coulomb[i] == Coefficient::Fixed)
+            .map(|(c, _)| c)
+            .collect();
         for &p in &none {
             for k in 1..3 {
                 c.a.push((c.h.len(), per * p + k, 1.0));
@@ -311,13 +322,13 @@ fn nearest(g: &[Vec<(usize, f64)>], e: &[f64], n: usize, cones: &Cones) -> Optio
     }
     let r0 = cones.h.len();
     ai.push(r0);
-        aj.push(n);
-        av.push(-1.0);
+    aj.push(n);
+    av.push(-1.0);
     for (r, row) in g.iter().enumerate() {
         for &(j, v) in row {
             ai.push(r0 + 1 + r);
-        aj.push(j);
-        av.push(v);
+            aj.push(j);
+            av.push(v);
         }
     }
     let rows = r0 + 1 + g.len();

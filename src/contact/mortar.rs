@@ -124,13 +124,7 @@ pub struct MortarParams {
 
 impl Default for MortarParams {
     fn default() -> Self {
-        Self {
-            search_distance: 1e-2,
-            min_opposition: 0.0,
-            allow_uncovered: false,
-            min_coverage: 1e-8,
-            trim_edge: true,
-        }
+        Self { search_distance: 1e-2, min_opposition: 0.0, allow_uncovered: false, min_coverage: 1e-8, trim_edge: true }
     }
 }
 
@@ -194,31 +188,17 @@ impl MortarRows {
 
     /// Σ_k c_ik² per row: the diagonal of B Bᵀ for the normal rows (2 for node-to-node).
     pub fn row_norms_squared(&self) -> Vec<f64> {
-        self.coupling
-            .iter()
-            .map(|row| row.iter().map(|(_, c)| c * c).sum())
-            .collect()
+        self.coupling.iter().map(|row| row.iter().map(|(_, c)| c * c).sum()).collect()
     }
 }
 
 /// Why the mortar rows could not be built.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum MortarError {
-    #[error(
-        "{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6) or 8 (quad8)"
-    )]
-    FacetNodes {
-        side: &'static str,
-        facet: usize,
-        nodes: usize,
-    },
+    #[error("{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6) or 8 (quad8)")]
+    FacetNodes { side: &'static str, facet: usize, nodes: usize },
     #[error("{side} facet {facet} names node {node}, beyond the {len} coordinates")]
-    NodeOutOfRange {
-        side: &'static str,
-        facet: usize,
-        node: usize,
-        len: usize,
-    },
+    NodeOutOfRange { side: &'static str, facet: usize, node: usize, len: usize },
     #[error("{side} facet {facet} is degenerate or not convex")]
     Degenerate { side: &'static str, facet: usize },
     #[error(
@@ -226,19 +206,9 @@ pub enum MortarError {
          {distance:.1e} ({uncovered} of {nodes} slave nodes uncovered)",
         point(x)
     )]
-    NoMaster {
-        node: usize,
-        x: V3,
-        distance: f64,
-        uncovered: usize,
-        nodes: usize,
-    },
+    NoMaster { node: usize, x: V3, distance: f64, uncovered: usize, nodes: usize },
     #[error("a Gauss point of slave facet {slave} and master facet {master} does not project onto the {side} facet")]
-    Projection {
-        slave: usize,
-        master: usize,
-        side: &'static str,
-    },
+    Projection { slave: usize, master: usize, side: &'static str },
     #[error("the search distance must be finite and positive, got {0}")]
     SearchDistance(f64),
 }
@@ -270,11 +240,7 @@ fn dot(a: V3, b: V3) -> f64 {
 }
 
 fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 fn norm(a: V3) -> f64 {
@@ -372,10 +338,7 @@ impl Kind {
     /// Triangles on (0,0),(1,0),(0,1); quads on [−1, 1]² (corners as [`QUAD`], then the edge
     /// midpoints in the order of [`Kind::edges`]).
     fn shape(self, xi: V2) -> Shape {
-        let mut s = Shape {
-            phi: [0.0; MAX_NODES],
-            dphi: [[0.0; 2]; MAX_NODES],
-        };
+        let mut s = Shape { phi: [0.0; MAX_NODES], dphi: [[0.0; 2]; MAX_NODES] };
         match self {
             Kind::Tri3 | Kind::Tri6 => tri_shape(self, xi, &mut s),
             Kind::Quad4 => quad4_shape(xi, &mut s),
@@ -388,10 +351,7 @@ impl Kind {
     /// (degree 7).
     fn rule(self) -> Vec<(V2, f64)> {
         if self.is_tri() {
-            return dunavant7()
-                .iter()
-                .map(|&(l, w)| ([l[1], l[2]], 0.5 * w))
-                .collect();
+            return dunavant7().iter().map(|&(l, w)| ([l[1], l[2]], 0.5 * w)).collect();
         }
         let g = gauss4();
         let mut q = Vec::with_capacity(16);
@@ -434,10 +394,7 @@ fn tri_shape(kind: Kind, [r, t]: V2, s: &mut Shape) {
     }
     for &(e, a, b) in kind.edges() {
         s.phi[e] = 4.0 * l[a] * l[b];
-        s.dphi[e] = [
-            4.0 * (l[a] * dl[b][0] + l[b] * dl[a][0]),
-            4.0 * (l[a] * dl[b][1] + l[b] * dl[a][1]),
-        ];
+        s.dphi[e] = [4.0 * (l[a] * dl[b][0] + l[b] * dl[a][0]), 4.0 * (l[a] * dl[b][1] + l[b] * dl[a][1])];
     }
 }
 
@@ -453,16 +410,10 @@ fn quad8_shape([r, t]: V2, s: &mut Shape) {
     for (a, [ra, ta]) in QUAD.into_iter().enumerate() {
         let (p, q) = (1.0 + ra * r, 1.0 + ta * t);
         s.phi[a] = 0.25 * p * q * (ra * r + ta * t - 1.0);
-        s.dphi[a] = [
-            0.25 * ra * q * (2.0 * ra * r + ta * t),
-            0.25 * ta * p * (ra * r + 2.0 * ta * t),
-        ];
+        s.dphi[a] = [0.25 * ra * q * (2.0 * ra * r + ta * t), 0.25 * ta * p * (ra * r + 2.0 * ta * t)];
     }
     for &(e, a, b) in Kind::Quad8.edges() {
-        let [re, te] = [
-            0.5 * (QUAD[a][0] + QUAD[b][0]),
-            0.5 * (QUAD[a][1] + QUAD[b][1]),
-        ];
+        let [re, te] = [0.5 * (QUAD[a][0] + QUAD[b][0]), 0.5 * (QUAD[a][1] + QUAD[b][1])];
         if re == 0.0 {
             s.phi[e] = 0.5 * (1.0 - r * r) * (1.0 + te * t);
             s.dphi[e] = [-r * (1.0 + te * t), 0.5 * (1.0 - r * r) * te];
@@ -509,30 +460,12 @@ struct Facet {
 }
 
 impl Facet {
-    fn new(
-        f: &SurfaceFacet,
-        coords: &[V3],
-        side: &'static str,
-        facet: usize,
-    ) -> Result<Facet, MortarError> {
-        let kind = Kind::of(f.nodes.len()).ok_or(MortarError::FacetNodes {
-            side,
-            facet,
-            nodes: f.nodes.len(),
-        })?;
-        let mut out = Facet {
-            kind,
-            nodes: [0; MAX_NODES],
-            x: [[0.0; 3]; MAX_NODES],
-        };
+    fn new(f: &SurfaceFacet, coords: &[V3], side: &'static str, facet: usize) -> Result<Facet, MortarError> {
+        let kind = Kind::of(f.nodes.len()).ok_or(MortarError::FacetNodes { side, facet, nodes: f.nodes.len() })?;
+        let mut out = Facet { kind, nodes: [0; MAX_NODES], x: [[0.0; 3]; MAX_NODES] };
         for (a, &node) in f.nodes.iter().enumerate() {
             let len = coords.len();
-            let x = coords.get(node).ok_or(MortarError::NodeOutOfRange {
-                side,
-                facet,
-                node,
-                len,
-            })?;
+            let x = coords.get(node).ok_or(MortarError::NodeOutOfRange { side, facet, node, len })?;
             out.nodes[a] = node;
             out.x[a] = *x;
         }
@@ -557,9 +490,7 @@ impl Facet {
     /// ∫ |∂x/∂ξ × ∂x/∂η| dξ.
     fn area(&self) -> f64 {
         let rule = self.kind.rule();
-        rule.iter()
-            .map(|(xi, w)| w * norm(self.jacobian(*xi)))
-            .sum()
+        rule.iter().map(|(xi, w)| w * norm(self.jacobian(*xi))).sum()
     }
 
     /// ∂x/∂ξ × ∂x/∂η at ξ.
@@ -601,11 +532,7 @@ impl Plane {
         let e = sub(f.x[1], f.x[0]);
         let e = sub(e, scale(n, dot(e, n)));
         let t0 = scale(e, 1.0 / norm(e));
-        Plane {
-            c,
-            n,
-            t: [t0, cross(n, t0)],
-        }
+        Plane { c, n, t: [t0, cross(n, t0)] }
     }
 
     fn to2d(&self, x: V3) -> V2 {
@@ -615,10 +542,7 @@ impl Plane {
 
     /// The projected corner polygon of a facet.
     fn polygon(&self, f: &Facet) -> Vec<V2> {
-        f.x[..f.kind.corners()]
-            .iter()
-            .map(|&x| self.to2d(x))
-            .collect()
+        f.x[..f.kind.corners()].iter().map(|&x| self.to2d(x)).collect()
     }
 
     /// The parametric coordinates of the point of `f` whose projection is `p` (Newton).
@@ -628,18 +552,12 @@ impl Plane {
         for _ in 0..50 {
             let (x, t) = f.map(&f.kind.shape(xi));
             let r = sub2(self.to2d(x), p);
-            let j = [
-                [dot(t[0], self.t[0]), dot(t[1], self.t[0])],
-                [dot(t[0], self.t[1]), dot(t[1], self.t[1])],
-            ];
+            let j = [[dot(t[0], self.t[0]), dot(t[1], self.t[0])], [dot(t[0], self.t[1]), dot(t[1], self.t[1])]];
             let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
             if det.abs() < 1e-300 {
                 return None;
             }
-            let d = [
-                (j[1][1] * r[0] - j[0][1] * r[1]) / det,
-                (j[0][0] * r[1] - j[1][0] * r[0]) / det,
-            ];
+            let d = [(j[1][1] * r[0] - j[0][1] * r[1]) / det, (j[0][0] * r[1] - j[1][0] * r[0]) / det];
             xi = [xi[0] - d[0], xi[1] - d[1]];
             let step = d[0].abs() + d[1].abs();
             if step < 1e-13 || (step < 1e-9 && step > 0.5 * last) {
@@ -667,10 +585,7 @@ struct SlaveFacet {
 
 impl SlaveFacet {
     fn new(f: Facet, facet: usize) -> Result<SlaveFacet, MortarError> {
-        let bad = MortarError::Degenerate {
-            side: "slave",
-            facet,
-        };
+        let bad = MortarError::Degenerate { side: "slave", facet };
         let n0 = f.centre_normal().ok_or(bad.clone())?;
         let plane = Plane::of(&f, n0);
         let poly = plane.polygon(&f);
@@ -679,14 +594,7 @@ impl SlaveFacet {
         }
         let (a, d) = dual_coefficients(&f).ok_or(bad)?;
         let weighted_normal = scale(n0, f.area());
-        Ok(SlaveFacet {
-            plane_area: polygon_area(&poly),
-            f,
-            plane,
-            a,
-            d,
-            weighted_normal,
-        })
+        Ok(SlaveFacet { plane_area: polygon_area(&poly), f, plane, a, d, weighted_normal })
     }
 
     /// ψᵢ = Σ_j a_ij φ_j at a point, from the shape functions there.
@@ -708,23 +616,12 @@ impl SlaveFacet {
 
     /// The dual coefficients for the covered part `segs` of a partly covered facet:
     /// A = D̂ M̂⁻¹ with D̂, M̂ integrated over the segments only, or None when M̂ is singular.
-    fn partial_dual(
-        &self,
-        segs: &[(usize, Vec<V2>)],
-        id: usize,
-    ) -> Result<Option<Mat>, MortarError> {
+    fn partial_dual(&self, segs: &[(usize, Vec<V2>)], id: usize) -> Result<Option<Mat>, MortarError> {
         let mut samples = Vec::new();
         for (master, poly) in segs {
             for (p, w) in fan_points(poly) {
-                let fail = MortarError::Projection {
-                    slave: id,
-                    master: *master,
-                    side: "slave",
-                };
-                let sh = self
-                    .f
-                    .kind
-                    .shape(self.plane.invert(&self.f, p).ok_or(fail)?);
+                let fail = MortarError::Projection { slave: id, master: *master, side: "slave" };
+                let sh = self.f.kind.shape(self.plane.invert(&self.f, p).ok_or(fail)?);
                 let wj = w * self.jacobian_ratio(&sh);
                 samples.push((sh, wj));
             }
@@ -737,12 +634,7 @@ impl SlaveFacet {
 /// The dual coefficients of a whole facet (in the standard basis, see [`dual_from`]) and
 /// D_e = (∫_e φ̃_j dA), or None when M_e is singular.
 fn dual_coefficients(f: &Facet) -> Option<(Mat, [f64; MAX_NODES])> {
-    let samples: Vec<(Shape, f64)> = f
-        .kind
-        .rule()
-        .into_iter()
-        .map(|(xi, w)| (f.kind.shape(xi), w * norm(f.jacobian(xi))))
-        .collect();
+    let samples: Vec<(Shape, f64)> = f.kind.rule().into_iter().map(|(xi, w)| (f.kind.shape(xi), w * norm(f.jacobian(xi)))).collect();
     dual_from(&samples, &f.kind.transformation(), f.n())
 }
 
@@ -851,10 +743,7 @@ fn is_convex(p: &[V2]) -> bool {
     let a = polygon_area(p);
     a > 0.0
         && (0..n).all(|i| {
-            let (u, v) = (
-                sub2(p[(i + 1) % n], p[i]),
-                sub2(p[(i + 2) % n], p[(i + 1) % n]),
-            );
+            let (u, v) = (sub2(p[(i + 1) % n], p[i]), sub2(p[(i + 2) % n], p[(i + 1) % n]));
             cross2(u, v) > 1e-12 * a
         })
 }
@@ -890,10 +779,7 @@ fn clip_polygon(subject: &[V2], clip: &[V2]) -> Vec<V2> {
 fn dedup(p: Vec<V2>, tol: f64) -> Vec<V2> {
     let mut out: Vec<V2> = Vec::with_capacity(p.len());
     for v in p {
-        if out
-            .last()
-            .is_none_or(|l| (v[0] - l[0]).abs() + (v[1] - l[1]).abs() > tol)
-        {
+        if out.last().is_none_or(|l| (v[0] - l[0]).abs() + (v[1] - l[1]).abs() > tol) {
             out.push(v);
         }
     }
@@ -937,12 +823,7 @@ struct Segment {
 }
 
 /// Build the dual mortar rows of `slave` against `master` (see the module doc).
-pub fn dual_mortar(
-    coords: &[[f64; 3]],
-    slave: &[SurfaceFacet],
-    master: &[SurfaceFacet],
-    params: &MortarParams,
-) -> Result<MortarRows, MortarError> {
+pub fn dual_mortar(coords: &[[f64; 3]], slave: &[SurfaceFacet], master: &[SurfaceFacet], params: &MortarParams) -> Result<MortarRows, MortarError> {
     let start = Instant::now();
     let sd = params.search_distance;
     if !(sd.is_finite() && sd > 0.0) {
@@ -950,19 +831,9 @@ pub fn dual_mortar(
     }
     let slaves = slave_facets(coords, slave)?;
     let masters = master_facets(coords, master)?;
-    let tree = RTree::bulk_load(
-        masters
-            .iter()
-            .enumerate()
-            .map(|(k, (m, _))| GeomWithData::new(Rectangle::from_aabb(m.aabb(sd)), k))
-            .collect(),
-    );
+    let tree = RTree::bulk_load(masters.iter().enumerate().map(|(k, (m, _))| GeomWithData::new(Rectangle::from_aabb(m.aabb(sd)), k)).collect());
     let mut acc = node_accumulators(&slaves);
-    let mut info = MortarInfo {
-        slave_facets: slaves.len(),
-        master_facets: masters.len(),
-        ..Default::default()
-    };
+    let mut info = MortarInfo { slave_facets: slaves.len(), master_facets: masters.len(), ..Default::default() };
     for (si, s) in slaves.iter().enumerate() {
         let mut segs = Vec::new();
         for hit in tree.locate_in_envelope_intersecting(s.f.aabb(0.0)) {
@@ -986,21 +857,14 @@ pub fn dual_mortar(
 }
 
 fn slave_facets(coords: &[V3], slave: &[SurfaceFacet]) -> Result<Vec<SlaveFacet>, MortarError> {
-    slave
-        .iter()
-        .enumerate()
-        .map(|(k, f)| SlaveFacet::new(Facet::new(f, coords, "slave", k)?, k))
-        .collect()
+    slave.iter().enumerate().map(|(k, f)| SlaveFacet::new(Facet::new(f, coords, "slave", k)?, k)).collect()
 }
 
 /// Master facets with their unit normals (at the centre).
 fn master_facets(coords: &[V3], master: &[SurfaceFacet]) -> Result<Vec<(Facet, V3)>, MortarError> {
     let one = |(k, f): (usize, &SurfaceFacet)| {
         let m = Facet::new(f, coords, "master", k)?;
-        let n = m.centre_normal().ok_or(MortarError::Degenerate {
-            side: "master",
-            facet: k,
-        })?;
+        let n = m.centre_normal().ok_or(MortarError::Degenerate { side: "master", facet: k })?;
         Ok((m, n))
     };
     master.iter().enumerate().map(one).collect()
@@ -1017,13 +881,8 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
             node.neighbours.extend(s.f.nodes[..s.f.n()].iter().filter(|&&v| v != s.f.nodes[a]));
         }
         for &(e, a, b) in s.f.kind.edges() {
-            let edge = Some((
-                s.f.nodes[a].min(s.f.nodes[b]),
-                s.f.nodes[a].max(s.f.nodes[b]),
-            ));
-            acc.get_mut(&s.f.nodes[e])
-                .expect("slave node accumulator")
-                .edge = edge;
+            let edge = Some((s.f.nodes[a].min(s.f.nodes[b]), s.f.nodes[a].max(s.f.nodes[b])));
+            acc.get_mut(&s.f.nodes[e]).expect("slave node accumulator").edge = edge;
         }
     }
     acc
@@ -1054,13 +913,7 @@ fn facet_dual(s: &SlaveFacet, segs: &[(usize, Vec<V2>)], id: usize) -> Result<Ma
 
 /// The clip polygon of a slave and a master facet on the slave's plane, or None when they do
 /// not face each other, do not overlap, or are farther apart than the search distance.
-fn overlap(
-    s: &SlaveFacet,
-    m: &Facet,
-    nm: V3,
-    params: &MortarParams,
-    ids: (usize, usize),
-) -> Result<Option<Vec<V2>>, MortarError> {
+fn overlap(s: &SlaveFacet, m: &Facet, nm: V3, params: &MortarParams, ids: (usize, usize)) -> Result<Option<Vec<V2>>, MortarError> {
     if -dot(nm, s.plane.n) <= params.min_opposition {
         return Ok(None);
     }
@@ -1078,23 +931,14 @@ fn overlap(
 
 /// Slave and master parametric coordinates of the plane point p.
 fn project(s: &SlaveFacet, m: &Facet, p: V2, ids: (usize, usize)) -> Result<(V2, V2), MortarError> {
-    let fail = |side| MortarError::Projection {
-        slave: ids.0,
-        master: ids.1,
-        side,
-    };
+    let fail = |side| MortarError::Projection { slave: ids.0, master: ids.1, side };
     let xs = s.plane.invert(&s.f, p).ok_or(fail("slave"))?;
     let xm = s.plane.invert(m, p).ok_or(fail("master"))?;
     Ok((xs, xm))
 }
 
 /// The smallest |(x_m − x_s)·n₀| over the vertices of the clip polygon.
-fn min_gap(
-    s: &SlaveFacet,
-    m: &Facet,
-    poly: &[V2],
-    ids: (usize, usize),
-) -> Result<f64, MortarError> {
+fn min_gap(s: &SlaveFacet, m: &Facet, poly: &[V2], ids: (usize, usize)) -> Result<f64, MortarError> {
     let mut g = f64::INFINITY;
     for &p in poly {
         let (xs, xm) = project(s, m, p, ids)?;
@@ -1109,19 +953,13 @@ fn min_gap(
 /// vertex centroid, the 7-point rule on each.
 fn fan_points(poly: &[V2]) -> Vec<(V2, f64)> {
     let k = poly.len() as f64;
-    let c = [
-        poly.iter().map(|p| p[0]).sum::<f64>() / k,
-        poly.iter().map(|p| p[1]).sum::<f64>() / k,
-    ];
+    let c = [poly.iter().map(|p| p[0]).sum::<f64>() / k, poly.iter().map(|p| p[1]).sum::<f64>() / k];
     let mut out = Vec::with_capacity(7 * poly.len());
     for i in 0..poly.len() {
         let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
         let area = 0.5 * cross2(sub2(a, c), sub2(b, c)).abs();
         for (l, w) in dunavant7() {
-            let p = [
-                l[0] * c[0] + l[1] * a[0] + l[2] * b[0],
-                l[0] * c[1] + l[1] * a[1] + l[2] * b[1],
-            ];
+            let p = [l[0] * c[0] + l[1] * a[0] + l[2] * b[0], l[0] * c[1] + l[1] * a[1] + l[2] * b[1]];
             out.push((p, w * area));
         }
     }
@@ -1129,17 +967,8 @@ fn fan_points(poly: &[V2]) -> Vec<(V2, f64)> {
 }
 
 /// D_ii = ∫ ψᵢ and M_ij = ∫ ψᵢ φ_j over a clip polygon, with ψ from the coefficients `a`.
-fn integrate(
-    s: &SlaveFacet,
-    a: &Mat,
-    m: &Facet,
-    poly: &[V2],
-    ids: (usize, usize),
-) -> Result<Segment, MortarError> {
-    let mut seg = Segment {
-        d: [0.0; MAX_NODES],
-        m: [[0.0; MAX_NODES]; MAX_NODES],
-    };
+fn integrate(s: &SlaveFacet, a: &Mat, m: &Facet, poly: &[V2], ids: (usize, usize)) -> Result<Segment, MortarError> {
+    let mut seg = Segment { d: [0.0; MAX_NODES], m: [[0.0; MAX_NODES]; MAX_NODES] };
     for (p, w) in fan_points(poly) {
         let (xs, xm) = project(s, m, p, ids)?;
         let ss = s.f.kind.shape(xs);
@@ -1175,20 +1004,10 @@ fn finish(
     params: &MortarParams,
     info: &mut MortarInfo,
 ) -> Result<MortarRows, MortarError> {
-    let uncovered: Vec<usize> = acc
-        .iter()
-        .filter(|(_, a)| !a.covered)
-        .map(|(&k, _)| k)
-        .collect();
+    let uncovered: Vec<usize> = acc.iter().filter(|(_, a)| !a.covered).map(|(&k, _)| k).collect();
     if let (Some(&node), false) = (uncovered.first(), params.allow_uncovered) {
         let (distance, nodes) = (params.search_distance, acc.len());
-        return Err(MortarError::NoMaster {
-            node,
-            x: coords[node],
-            distance,
-            uncovered: uncovered.len(),
-            nodes,
-        });
+        return Err(MortarError::NoMaster { node, x: coords[node], distance, uncovered: uncovered.len(), nodes });
     }
     info.nodes_uncovered = uncovered.len();
     let mut rows = MortarRows { uncovered, ..Default::default() };
@@ -1264,7 +1083,11 @@ fn geometric_gap<'a>(x: V3, n: V3, masters: impl Iterator<Item = &'a Facet>) -> 
     // inside the reference facet, with a margin of round-off
     let inside = |k: Kind, xi: V2| {
         let m = 1e-9;
-        if k.is_tri() { xi[0] >= -m && xi[1] >= -m && xi[0] + xi[1] <= 1.0 + m } else { xi[0].abs() <= 1.0 + m && xi[1].abs() <= 1.0 + m }
+        if k.is_tri() {
+            xi[0] >= -m && xi[1] >= -m && xi[0] + xi[1] <= 1.0 + m
+        } else {
+            xi[0].abs() <= 1.0 + m && xi[1].abs() <= 1.0 + m
+        }
     };
     let mut best = f64::NAN;
     for m in masters {
@@ -1290,14 +1113,7 @@ mod tests {
         facets: Vec<Vec<usize>>,
     }
 
-    fn patch(
-        coords: &mut Vec<V3>,
-        nx: usize,
-        ny: usize,
-        tri: bool,
-        up: bool,
-        map: &dyn Fn(f64, f64) -> V3,
-    ) -> Patch {
+    fn patch(coords: &mut Vec<V3>, nx: usize, ny: usize, tri: bool, up: bool, map: &dyn Fn(f64, f64) -> V3) -> Patch {
         let mut ids = Vec::new();
         for j in 0..=ny {
             for i in 0..=nx {
@@ -1310,11 +1126,7 @@ mod tests {
         for j in 0..ny {
             for i in 0..nx {
                 let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
-                let mut fs = if tri {
-                    vec![vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]]
-                } else {
-                    vec![q.to_vec()]
-                };
+                let mut fs = if tri { vec![vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]] } else { vec![q.to_vec()] };
                 if !up {
                     fs.iter_mut().for_each(|f| f.reverse());
                 }
@@ -1328,20 +1140,12 @@ mod tests {
         p.facets.iter().map(|f| SurfaceFacet { nodes: f }).collect()
     }
 
-    fn run(
-        coords: &[V3],
-        s: &Patch,
-        m: &Patch,
-        params: &MortarParams,
-    ) -> Result<MortarRows, MortarError> {
+    fn run(coords: &[V3], s: &Patch, m: &Patch, params: &MortarParams) -> Result<MortarRows, MortarError> {
         dual_mortar(coords, &views(s), &views(m), params)
     }
 
     fn params(sd: f64) -> MortarParams {
-        MortarParams {
-            search_distance: sd,
-            ..Default::default()
-        }
+        MortarParams { search_distance: sd, ..Default::default() }
     }
 
     /// ∫ φᵢ dA of flat straight-sided tri3 / parallelogram quad4 facets: facet area / nodes.
@@ -1349,16 +1153,8 @@ mod tests {
         let mut out = BTreeMap::new();
         for f in &p.facets {
             let area = match f.len() {
-                3 => {
-                    0.5 * norm(cross(
-                        sub(coords[f[1]], coords[f[0]]),
-                        sub(coords[f[2]], coords[f[0]]),
-                    ))
-                }
-                _ => norm(cross(
-                    sub(coords[f[1]], coords[f[0]]),
-                    sub(coords[f[3]], coords[f[0]]),
-                )),
+                3 => 0.5 * norm(cross(sub(coords[f[1]], coords[f[0]]), sub(coords[f[2]], coords[f[0]]))),
+                _ => norm(cross(sub(coords[f[1]], coords[f[0]]), sub(coords[f[3]], coords[f[0]]))),
             };
             for &n in f {
                 *out.entry(n).or_insert(0.0) += area / f.len() as f64;
@@ -1375,23 +1171,14 @@ mod tests {
     fn wobbly(amp: f64, z: impl Fn(f64, f64) -> f64) -> impl Fn(f64, f64) -> V3 {
         move |u: f64, v: f64| {
             let inner = |t: f64| t > 1e-9 && t < 1.0 - 1e-9;
-            let (du, dv) = if inner(u) && inner(v) {
-                (
-                    amp * (17.0 * u + 5.0 * v).sin(),
-                    amp * (3.0 * u - 11.0 * v).cos(),
-                )
-            } else {
-                (0.0, 0.0)
-            };
+            let (du, dv) = if inner(u) && inner(v) { (amp * (17.0 * u + 5.0 * v).sin(), amp * (3.0 * u - 11.0 * v).cos()) } else { (0.0, 0.0) };
             let (x, y) = (u + du, v + dv);
             [x, y, z(x, y)]
         }
     }
 
     fn coefficient(row: &[(usize, f64)], node: usize) -> f64 {
-        row.iter()
-            .find(|(k, _)| *k == node)
-            .map_or(0.0, |(_, c)| *c)
+        row.iter().find(|(k, _)| *k == node).map_or(0.0, |(_, c)| *c)
     }
 
     #[test]
@@ -1411,21 +1198,8 @@ mod tests {
 
     #[test]
     fn warped_quad_dual_basis_is_biorthogonal() {
-        let coords = [
-            [0.0, 0.0, 0.0],
-            [1.2, 0.1, 0.15],
-            [1.0, 0.9, -0.1],
-            [-0.1, 1.1, 0.2],
-        ];
-        let f = Facet::new(
-            &SurfaceFacet {
-                nodes: &[0, 1, 2, 3],
-            },
-            &coords,
-            "slave",
-            0,
-        )
-        .unwrap();
+        let coords = [[0.0, 0.0, 0.0], [1.2, 0.1, 0.15], [1.0, 0.9, -0.1], [-0.1, 1.1, 0.2]];
+        let f = Facet::new(&SurfaceFacet { nodes: &[0, 1, 2, 3] }, &coords, "slave", 0).unwrap();
         let s = SlaveFacet::new(f, 0).unwrap();
         let mut g = [[0.0; MAX_NODES]; MAX_NODES];
         for (xi, w) in s.f.kind.rule() {
@@ -1436,10 +1210,7 @@ mod tests {
         for (i, row) in g.iter().enumerate().take(4) {
             for (k, gik) in row.iter().enumerate().take(4) {
                 let want = if i == k { s.d[k] } else { 0.0 };
-                assert!(
-                    (gik - want).abs() < 1e-14,
-                    "∫ψ{i}φ{k} = {gik} (want {want})"
-                );
+                assert!((gik - want).abs() < 1e-14, "∫ψ{i}φ{k} = {gik} (want {want})");
             }
         }
     }
@@ -1459,19 +1230,9 @@ mod tests {
             assert_eq!(rows.coupling[r].len(), 2, "row {r}: {:?}", rows.coupling[r]);
             assert!((coefficient(&rows.coupling[r], sn) - 1.0).abs() < 1e-13);
             assert!((coefficient(&rows.coupling[r], mn) + 1.0).abs() < 1e-13);
-            assert!(
-                (rows.area[r] - areas[&sn]).abs() < 1e-14,
-                "area {} vs {}",
-                rows.area[r],
-                areas[&sn]
-            );
+            assert!((rows.area[r] - areas[&sn]).abs() < 1e-14, "area {} vs {}", rows.area[r], areas[&sn]);
             let x = coords[sn];
-            assert!(
-                (rows.gap[r] - g(x[0], x[1])).abs() < 1e-14,
-                "gap {} vs {}",
-                rows.gap[r],
-                g(x[0], x[1])
-            );
+            assert!((rows.gap[r] - g(x[0], x[1])).abs() < 1e-14, "gap {} vs {}", rows.gap[r], g(x[0], x[1]));
             assert!((rows.normal[r][2] - 1.0).abs() < 1e-15);
             assert!((rows.row_norms_squared()[r] - 2.0).abs() < 1e-13);
         }
@@ -1494,13 +1255,7 @@ mod tests {
 
     /// Slave (tri or quad, ns cells) on a wobbly master (tri or quad, nm cells) over the unit
     /// square, master at z = f_lin; the whole pair mapped by `rot` (a rigid motion).
-    fn nonmatching(
-        stri: bool,
-        ns: usize,
-        mtri: bool,
-        nm: usize,
-        rot: &dyn Fn(V3) -> V3,
-    ) -> (Vec<V3>, Patch, MortarRows) {
+    fn nonmatching(stri: bool, ns: usize, mtri: bool, nm: usize, rot: &dyn Fn(V3) -> V3) -> (Vec<V3>, Patch, MortarRows) {
         let mut coords = Vec::new();
         let s = patch(&mut coords, ns, ns, stri, true, &|u, v| rot([u, v, 0.0]));
         let w = wobbly(0.2 / nm as f64, f_lin);
@@ -1520,18 +1275,10 @@ mod tests {
         let n = sub(n, o);
         for r in 0..rows.len() {
             let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
-            assert!(
-                (masters - 1.0).abs() < 1e-12,
-                "row {r}: Σ M_ij/D_ii = {masters}"
-            );
+            assert!((masters - 1.0).abs() < 1e-12, "row {r}: Σ M_ij/D_ii = {masters}");
             let (i, j) = (r % (ns + 1), r / (ns + 1));
             let (x, y) = (i as f64 / ns as f64, j as f64 / ns as f64);
-            assert!(
-                (rows.gap[r] - f_lin(x, y)).abs() < 1e-12,
-                "row {r} at ({x}, {y}): gap {} vs {}",
-                rows.gap[r],
-                f_lin(x, y)
-            );
+            assert!((rows.gap[r] - f_lin(x, y)).abs() < 1e-12, "row {r} at ({x}, {y}): gap {} vs {}", rows.gap[r], f_lin(x, y));
             assert!(norm(sub(rows.normal[r], n)) < 1e-14);
             let q = rows.row_norms_squared()[r];
             assert!(q > 1.0, "row {r}: ‖row‖² = {q}");
@@ -1568,11 +1315,7 @@ mod tests {
     #[test]
     fn rotated_nonmatching_pair_gives_the_same_rows() {
         let id = |x: V3| x;
-        for (stri, ns, mtri, nm) in [
-            (false, 4, false, 7),
-            (true, 4, false, 7),
-            (false, 5, true, 3),
-        ] {
+        for (stri, ns, mtri, nm) in [(false, 4, false, 7), (true, 4, false, 7), (false, 5, true, 3)] {
             let (_, s, rows) = nonmatching(stri, ns, mtri, nm, &rotation);
             check_nonmatching(&s, &rows, ns, &rotation);
             let (_, _, flat) = nonmatching(stri, ns, mtri, nm, &id);
@@ -1588,10 +1331,7 @@ mod tests {
 
     fn norms_range(rows: &MortarRows) -> (f64, f64) {
         let q = rows.row_norms_squared();
-        (
-            q.iter().copied().fold(f64::INFINITY, f64::min),
-            q.iter().copied().fold(0.0, f64::max),
-        )
+        (q.iter().copied().fold(f64::INFINITY, f64::min), q.iter().copied().fold(0.0, f64::max))
     }
 
     /// Master finer than the slave: every ‖row‖² = 1 + Σ_j (M_ij/D_ii)² lies in (1, 2), below
@@ -1599,12 +1339,7 @@ mod tests {
     #[test]
     fn row_norms_squared_between_1_and_2_on_a_finer_master() {
         let id = |x: V3| x;
-        for (stri, ns, mtri, nm) in [
-            (false, 4, false, 7),
-            (true, 4, false, 7),
-            (false, 3, true, 8),
-            (false, 4, false, 13),
-        ] {
+        for (stri, ns, mtri, nm) in [(false, 4, false, 7), (true, 4, false, 7), (false, 3, true, 8), (false, 4, false, 13)] {
             let (_, _, rows) = nonmatching(stri, ns, mtri, nm, &id);
             let (lo, hi) = norms_range(&rows);
             assert!(lo > 1.0 && hi < 2.0, "{ns} on {nm}: ‖row‖² in [{lo}, {hi}]");
@@ -1643,20 +1378,10 @@ mod tests {
         let mut coords = Vec::new();
         let s = patch(&mut coords, n, n, tri, true, &cyl(1.0, -0.3, 0.3, 0.0, 0.6));
         let nm = (2.3 * n as f64) as usize;
-        let m = patch(
-            &mut coords,
-            nm,
-            nm,
-            !tri,
-            false,
-            &cyl(1.0 + delta, -0.35, 0.35, -0.05, 0.65),
-        );
+        let m = patch(&mut coords, nm, nm, !tri, false, &cyl(1.0 + delta, -0.35, 0.35, -0.05, 0.65));
         let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
         assert_eq!(rows.len(), s.ids.len());
-        rows.gap
-            .iter()
-            .map(|g| (g - delta).abs())
-            .fold(0.0, f64::max)
+        rows.gap.iter().map(|g| (g - delta).abs()).fold(0.0, f64::max)
     }
 
     /// |dᵢ − δ| ≤ 0.1 h² (R = 1), and halving h divides it by about 4 (quad4 slave on a tri3
@@ -1664,20 +1389,14 @@ mod tests {
     #[test]
     fn curved_cylinder_gap_is_delta_to_second_order() {
         for tri in [false, true] {
-            let e: Vec<f64> = [4, 8, 16]
-                .iter()
-                .map(|&n| cylinder_gap_error(n, tri, 0.01))
-                .collect();
+            let e: Vec<f64> = [4, 8, 16].iter().map(|&n| cylinder_gap_error(n, tri, 0.01)).collect();
             for (k, n) in [4.0, 8.0, 16.0].into_iter().enumerate() {
                 let h = 0.6 / n;
                 assert!(e[k] < 0.1 * h * h, "tri {tri}, h = {h}: |d − δ| = {}", e[k]);
             }
             for k in 0..2 {
                 let ratio = e[k] / e[k + 1];
-                assert!(
-                    ratio > 3.0 && ratio < 5.5,
-                    "tri {tri}: halving h divides the error by {ratio}"
-                );
+                assert!(ratio > 3.0 && ratio < 5.5, "tri {tri}: halving h divides the error by {ratio}");
             }
         }
     }
@@ -1699,17 +1418,7 @@ mod tests {
         let s = patch(&mut coords, 3, 3, false, true, &flat(0.0));
         let m = patch(&mut coords, 3, 3, false, false, &|u, v| [u + 1.05, v, 0.01]);
         let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
-        assert!(
-            matches!(
-                err,
-                MortarError::NoMaster {
-                    node: 0,
-                    uncovered: 16,
-                    ..
-                }
-            ),
-            "{err}"
-        );
+        assert!(matches!(err, MortarError::NoMaster { node: 0, uncovered: 16, .. }), "{err}");
     }
 
     #[test]
@@ -1718,10 +1427,7 @@ mod tests {
         let s = patch(&mut coords, 2, 2, false, true, &flat(0.0));
         let m = patch(&mut coords, 3, 3, false, true, &flat(0.01));
         let err = run(&coords, &s, &m, &params(0.1)).unwrap_err();
-        assert!(
-            matches!(err, MortarError::NoMaster { uncovered: 9, .. }),
-            "{err}"
-        );
+        assert!(matches!(err, MortarError::NoMaster { uncovered: 9, .. }), "{err}");
     }
 
     /// Slave [0, 1.5] × [0, 1] (6 × 4 quads, h = 0.25) on master [0, 1]²: the nodes at
@@ -1733,53 +1439,20 @@ mod tests {
         let s = patch(&mut coords, 6, 4, false, true, &|u, v| [1.5 * u, v, 0.0]);
         let m = patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin));
         let err = run(&coords, &s, &m, &params(0.05)).unwrap_err();
-        assert!(
-            err.to_string()
-                .starts_with("slave node 5 at (1.25, 0, 0) finds no master facet"),
-            "{err}"
-        );
-        assert!(matches!(
-            err,
-            MortarError::NoMaster {
-                node: 5,
-                uncovered: 10,
-                nodes: 35,
-                ..
-            }
-        ));
-        let p = MortarParams {
-            allow_uncovered: true,
-            ..params(0.05)
-        };
+        assert!(err.to_string().starts_with("slave node 5 at (1.25, 0, 0) finds no master facet"), "{err}");
+        assert!(matches!(err, MortarError::NoMaster { node: 5, uncovered: 10, nodes: 35, .. }));
+        let p = MortarParams { allow_uncovered: true, ..params(0.05) };
         let rows = run(&coords, &s, &m, &p).unwrap();
-        assert_eq!(
-            (
-                rows.info.nodes_uncovered,
-                rows.info.rows_dropped,
-                rows.len()
-            ),
-            (10, 0, 25)
-        );
+        assert_eq!((rows.info.nodes_uncovered, rows.info.rows_dropped, rows.len()), (10, 0, 25));
         let areas = nodal_areas(&coords, &s);
         for r in 0..rows.len() {
             let x = coords[rows.node[r]];
             assert!(x[0] < 1.0 + 1e-12);
             let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
-            assert!(
-                (masters - 1.0).abs() < 1e-12,
-                "row {r}: Σ M_ij/D_ii = {masters}"
-            );
+            assert!((masters - 1.0).abs() < 1e-12, "row {r}: Σ M_ij/D_ii = {masters}");
             // Nodes on x = 1 have only their left facets covered: D_ii = half the nodal area.
-            let want = if x[0] > 1.0 - 1e-12 {
-                0.5 * areas[&rows.node[r]]
-            } else {
-                areas[&rows.node[r]]
-            };
-            assert!(
-                (rows.area[r] - want).abs() < 1e-14,
-                "row {r}: D_ii = {} vs {want}",
-                rows.area[r]
-            );
+            let want = if x[0] > 1.0 - 1e-12 { 0.5 * areas[&rows.node[r]] } else { areas[&rows.node[r]] };
+            assert!((rows.area[r] - want).abs() < 1e-14, "row {r}: D_ii = {} vs {want}", rows.area[r]);
             if x[0] < 0.75 + 1e-12 {
                 assert!((rows.gap[r] - f_lin(x[0], x[1])).abs() < 1e-12);
             }
@@ -1795,9 +1468,7 @@ mod tests {
     fn partly_covered_facets_use_the_dual_basis_of_the_covered_part() {
         let mut coords = Vec::new();
         let s = patch(&mut coords, 5, 4, false, true, &|u, v| [1.25 * u, v, 0.0]);
-        let m = patch(&mut coords, 9, 7, false, false, &|u, v| {
-            [1.1 * u, v, f_lin(1.1 * u, v)]
-        });
+        let m = patch(&mut coords, 9, 7, false, false, &|u, v| [1.1 * u, v, f_lin(1.1 * u, v)]);
         let rows = run(&coords, &s, &m, &MortarParams { trim_edge: false, ..params(0.05) }).unwrap();
         assert_eq!((rows.len(), rows.info.rows_dropped), (30, 0));
         let areas = nodal_areas(&coords, &s);
@@ -1807,10 +1478,7 @@ mod tests {
         for r in 0..rows.len() {
             let x = coords[rows.node[r]];
             let masters: f64 = rows.coupling[r][1..].iter().map(|(_, c)| -c).sum();
-            assert!(
-                (masters - 1.0).abs() < 1e-12,
-                "row {r}: Σ M_ij/D_ii = {masters}"
-            );
+            assert!((masters - 1.0).abs() < 1e-12, "row {r}: Σ M_ij/D_ii = {masters}");
             let err = rows.gap[r] - f_lin(x[0], x[1]);
             assert!(err.abs() < 1e-12, "row {r} at {x:?}: gap error {err}");
             if x[0] > 1.2 {
@@ -1819,11 +1487,7 @@ mod tests {
                 assert!(q[r] > 2.0, "row {r}: ‖row‖² = {}", q[r]);
             }
         }
-        let p = MortarParams {
-            min_coverage: 0.2,
-            trim_edge: false,
-            ..params(0.05)
-        };
+        let p = MortarParams { min_coverage: 0.2, trim_edge: false, ..params(0.05) };
         let rows = run(&coords, &s, &m, &p).unwrap();
         assert_eq!((rows.len(), rows.info.rows_dropped), (25, 5));
         assert!(rows.node.iter().all(|&n| coords[n][0] < 1.2));
@@ -1849,14 +1513,7 @@ mod tests {
 
     /// A quadratic structured patch (tri6 or quad8) on the (2nx + 1) × (2ny + 1) lattice of
     /// (u, v) ∈ [0, 1]² mapped by `map` (quad8 leaves the cell centres unused).
-    fn patch2(
-        coords: &mut Vec<V3>,
-        nx: usize,
-        ny: usize,
-        tri: bool,
-        up: bool,
-        map: &dyn Fn(f64, f64) -> V3,
-    ) -> Patch {
+    fn patch2(coords: &mut Vec<V3>, nx: usize, ny: usize, tri: bool, up: bool, map: &dyn Fn(f64, f64) -> V3) -> Patch {
         let base = coords.len();
         for j in 0..=2 * ny {
             for i in 0..=2 * nx {
@@ -1872,10 +1529,7 @@ mod tests {
                 let mid = l(a + 1, b + 1);
                 let e = [l(a + 1, b), l(a + 2, b + 1), l(a + 1, b + 2), l(a, b + 1)];
                 let mut fs = if tri {
-                    vec![
-                        vec![q[0], q[1], q[2], e[0], e[1], mid],
-                        vec![q[0], q[2], q[3], mid, e[2], e[3]],
-                    ]
+                    vec![vec![q[0], q[1], q[2], e[0], e[1], mid], vec![q[0], q[2], q[3], mid, e[2], e[3]]]
                 } else {
                     vec![vec![q[0], q[1], q[2], q[3], e[0], e[1], e[2], e[3]]]
                 };
@@ -1889,15 +1543,8 @@ mod tests {
                 facets.extend(fs);
             }
         }
-        let ids = facets
-            .iter()
-            .flatten()
-            .copied()
-            .collect::<std::collections::BTreeSet<_>>();
-        Patch {
-            ids: ids.into_iter().collect(),
-            facets,
-        }
+        let ids = facets.iter().flatten().copied().collect::<std::collections::BTreeSet<_>>();
+        Patch { ids: ids.into_iter().collect(), facets }
     }
 
     /// The modified quadratic dual basis is biorthogonal to φ̃ and has positive D̃: corners
@@ -1906,27 +1553,13 @@ mod tests {
     fn quadratic_modified_dual_basis() {
         let mut coords = Vec::new();
         for (tri, corner) in [(true, 2.0 / 15.0), (false, 1.0 / 20.0)] {
-            let p = patch2(&mut coords, 1, 1, tri, true, &|u, v| {
-                [2.0 * u, 1.5 * v, 0.0]
-            });
-            let f = Facet::new(
-                &SurfaceFacet {
-                    nodes: &p.facets[0],
-                },
-                &coords,
-                "slave",
-                0,
-            )
-            .unwrap();
+            let p = patch2(&mut coords, 1, 1, tri, true, &|u, v| [2.0 * u, 1.5 * v, 0.0]);
+            let f = Facet::new(&SurfaceFacet { nodes: &p.facets[0] }, &coords, "slave", 0).unwrap();
             let s = SlaveFacet::new(f, 0).unwrap();
             let (n, c, area) = (s.f.n(), s.f.kind.corners(), s.f.area());
             for k in 0..n {
                 let want = if k < c { corner } else { 0.2 };
-                assert!(
-                    (s.d[k] / area - want).abs() < 1e-14,
-                    "tri {tri}: D̃_{k}/A = {}",
-                    s.d[k] / area
-                );
+                assert!((s.d[k] / area - want).abs() < 1e-14, "tri {tri}: D̃_{k}/A = {}", s.d[k] / area);
             }
             let t = s.f.kind.transformation();
             let mut g = [[0.0; MAX_NODES]; MAX_NODES];
@@ -1972,22 +1605,12 @@ mod tests {
                         cm += c
                     }
                 }
-                assert!(
-                    (cs - 1.0).abs() < 1e-13 && (cm + 1.0).abs() < 1e-12,
-                    "{case}, row {r}: {cs} {cm}"
-                );
+                assert!((cs - 1.0).abs() < 1e-13 && (cm + 1.0).abs() < 1e-12, "{case}, row {r}: {cs} {cm}");
                 let x = coords[rows.node[r]];
                 let err = rows.gap[r] - f_lin(x[0], x[1]);
-                assert!(
-                    err.abs() < 1e-12,
-                    "{case}, row {r} at {x:?}: gap error {err}"
-                );
+                assert!(err.abs() < 1e-12, "{case}, row {r} at {x:?}: gap error {err}");
             }
-            let edge_rows = rows
-                .coupling
-                .iter()
-                .filter(|row| (row[0].1 - 5.0 / 3.0).abs() < 1e-15)
-                .count();
+            let edge_rows = rows.coupling.iter().filter(|row| (row[0].1 - 5.0 / 3.0).abs() < 1e-15).count();
             assert_eq!(edge_rows, if stri { 33 } else { 24 }, "{case}");
         }
     }

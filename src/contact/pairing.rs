@@ -140,7 +140,11 @@ impl Contact {
                     // friction along the plane's normal is zero there whatever the master side
                     let v = self.slave[i];
                     let roller = (0..3).any(|k| !held(v, k)) && (0..3).all(|k| !held(v, k) || still(v, k));
-                    if roller { free(self.slave[i], t) <= VOID_ROLLER_PART } else { free(self.slave[i], t) <= VOID_FREE_PART && loose <= 0.5 * total }
+                    if roller {
+                        free(self.slave[i], t) <= VOID_ROLLER_PART
+                    } else {
+                        free(self.slave[i], t) <= VOID_FREE_PART && loose <= 0.5 * total
+                    }
                 })
             })
             .collect();
@@ -296,7 +300,11 @@ fn frame_normal(row: &RowGeom, sn: &HashMap<usize, [f64; 3]>, sk: &HashMap<usize
     let n: [f64; 3] = std::array::from_fn(|d| km * ns[d] - ks * nm[d]);
     let l = dot(n, n).sqrt();
     // faces that do not face each other keep the slave's normal (the pairing refuses them)
-    if l.is_nan() || l <= 0.0 || dot(ns, nm) > 0.0 { ns } else { n.map(|v| v / l) }
+    if l.is_nan() || l <= 0.0 || dot(ns, nm) > 0.0 {
+        ns
+    } else {
+        n.map(|v| v / l)
+    }
 }
 
 /// Consistent nodal areas ∫ φᵢ dA of a face.
@@ -348,9 +356,8 @@ enum NodeToNode {
 
 /// The bounding-box diagonal of `points` (0 for none).
 fn diagonal<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> f64 {
-    let (lo, hi) = points.fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
-        (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d])))
-    });
+    let (lo, hi) = points
+        .fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| (std::array::from_fn(|d| lo[d].min(p[d])), std::array::from_fn(|d| hi[d].max(p[d]))));
     if lo[0] > hi[0] {
         0.0
     } else {
@@ -366,13 +373,7 @@ fn node_to_node(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64) -
     let snodes = slave.nodes();
     let mnodes = master.nodes();
     if snodes.len() != mnodes.len() {
-        return Err(NodeToNode::Mismatch(format!(
-            "slave face {} has {} nodes but master face {} has {}",
-            slave.name,
-            snodes.len(),
-            master.name,
-            mnodes.len()
-        )));
+        return Err(NodeToNode::Mismatch(format!("slave face {} has {} nodes but master face {} has {}", slave.name, snodes.len(), master.name, mnodes.len())));
     }
     // master nodes hashed by their position in the contact plane of the slave face's mean
     // normal, in cells of size tol: a match lies in one of the 27 neighbouring cells
@@ -426,7 +427,10 @@ fn node_to_node(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64) -
             return Err(NodeToNode::Fail(Error::scene(key, format!("master node {m} of {} is matched by two slave nodes ({prev} and {s})", master.name))));
         }
         if dot(n, mnormals[&m]) > -0.5 {
-            return Err(NodeToNode::Fail(Error::scene(key, format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name))));
+            return Err(NodeToNode::Fail(Error::scene(
+                key,
+                format!("faces {} and {} do not face each other (their outward normals are not opposite)", slave.name, master.name),
+            )));
         }
         let gap = dot(sub(mesh.nodes[m], xs), n);
         rows.push(RowGeom { slave: s, coupling: vec![(s, 1.0), (m, -1.0)], normal: n, area: areas[&s], gap, geometric: gap });
@@ -457,11 +461,21 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64,
     if r.is_empty() {
         return Err(Error::scene(
             key,
-            format!("no slave node of {} finds a master facet of {} within the search distance {search:.3e} (do the faces face each other? is it the right face?)", slave.name, master.name),
+            format!(
+                "no slave node of {} finds a master facet of {} within the search distance {search:.3e} (do the faces face each other? is it the right face?)",
+                slave.name, master.name
+            ),
         ));
     }
     let rows = (0..r.len())
-        .map(|i| RowGeom { slave: r.node[i], coupling: r.coupling[i].clone(), normal: r.normal[i], area: r.area[i], gap: r.gap[i], geometric: r.geometric_gap[i] })
+        .map(|i| RowGeom {
+            slave: r.node[i],
+            coupling: r.coupling[i].clone(),
+            normal: r.normal[i],
+            area: r.area[i],
+            gap: r.gap[i],
+            geometric: r.geometric_gap[i],
+        })
         .collect();
     Ok(Interface { rows, how: Discretization::Mortar, outside: r.uncovered, search })
 }
@@ -469,7 +483,16 @@ fn mortar_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, search: f64,
 /// The rows of interface `slave`–`master` under `discretization` (None: node-to-node where the
 /// faces match, mortar otherwise); `outside` as for [`mortar_rows`].
 #[allow(clippy::too_many_arguments)]
-fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64, discretization: Option<Discretization>, search: Option<f64>, outside: bool) -> Result<Interface> {
+fn interface_rows(
+    mesh: &Mesh,
+    key: &str,
+    slave: &Face,
+    master: &Face,
+    tol: f64,
+    discretization: Option<Discretization>,
+    search: Option<f64>,
+    outside: bool,
+) -> Result<Interface> {
     let search = search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
     let mortar = || mortar_rows(mesh, key, slave, master, search, outside);
     let nodal = |rows| Ok(Interface { rows, how: Discretization::NodeToNode, outside: vec![], search });
@@ -477,7 +500,13 @@ fn interface_rows(mesh: &Mesh, key: &str, slave: &Face, master: &Face, tol: f64,
     // pairs there would hold no force; the mortar's modified dual basis gives every node one
     let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
     if quadratic && discretization == Some(Discretization::NodeToNode) {
-        return Err(Error::scene(key, format!("face {} has quadratic facets, whose corner nodes carry no area: node-to-node cannot use them (discretization = \"mortar\" can)", slave.name)));
+        return Err(Error::scene(
+            key,
+            format!(
+                "face {} has quadratic facets, whose corner nodes carry no area: node-to-node cannot use them (discretization = \"mortar\" can)",
+                slave.name
+            ),
+        ));
     }
     if quadratic {
         return mortar();
@@ -532,7 +561,11 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         for row in rows {
             // the frame between the faces' normals, and the weighted gap along it
             let n = frame_normal(&row, &sn, &sk, &mn, &mk);
-            let row = if n == row.normal { row } else { RowGeom { gap: -row.coupling.iter().map(|&(k, c)| c * dot(mesh.nodes[k], n)).sum::<f64>(), normal: n, ..row } };
+            let row = if n == row.normal {
+                row
+            } else {
+                RowGeom { gap: -row.coupling.iter().map(|&(k, c)| c * dot(mesh.nodes[k], n)).sum::<f64>(), normal: n, ..row }
+            };
             let (s, n, xs) = (row.slave, row.normal, mesh.nodes[row.slave]);
             for &(m, _) in row.coupling.iter().skip(1) {
                 if let Some(prev) = couples.insert((s.min(m), s.max(m)), k).filter(|&prev| prev != k) {
@@ -759,7 +792,17 @@ mod tests {
     }
 
     fn seed_pair(friction: Friction) -> ContactPair {
-        ContactPair { slave: "upper.zmin".into(), master: "lower.zmax".into(), friction, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: crate::scene::Fit::None, faces: None }
+        ContactPair {
+            slave: "upper.zmin".into(),
+            master: "lower.zmax".into(),
+            friction,
+            tolerance: None,
+            discretization: None,
+            search_distance: None,
+            max_overlap: None,
+            interference: crate::scene::Fit::None,
+            faces: None,
+        }
     }
 
     fn faces(m: &Mesh, s: &str, ma: &str) -> Vec<(usize, usize)> {
@@ -886,14 +929,26 @@ mod tests {
         assert!(e.contains("do not match node to node"), "{e}");
         // far apart: no master facet within the search distance, the slave node named
         let m = blocks(4, 4, [0.0, 0.0, 0.5], I);
-        let e = pair(&m, &[ContactPair { discretization: Some(Discretization::Mortar), ..seed_pair(Friction::None) }], &faces(&m, "upper.zmin", "lower.zmax")).unwrap_err().to_string();
+        let e = pair(&m, &[ContactPair { discretization: Some(Discretization::Mortar), ..seed_pair(Friction::None) }], &faces(&m, "upper.zmin", "lower.zmax"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("contact.pair[0]") && e.contains("slave node") && e.contains("search distance"), "{e}");
         // one interface given twice, or from both sides
         let m = blocks(4, 4, [0.0; 3], I);
         let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
-        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), friction: Friction::None, tolerance: None, discretization: None, search_distance: None, max_overlap: None, interference: crate::scene::Fit::None, faces: None };
+        let swapped = ContactPair {
+            slave: "lower.zmax".into(),
+            master: "upper.zmin".into(),
+            friction: Friction::None,
+            tolerance: None,
+            discretization: None,
+            search_distance: None,
+            max_overlap: None,
+            interference: crate::scene::Fit::None,
+            faces: None,
+        };
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");

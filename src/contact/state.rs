@@ -103,10 +103,25 @@ pub fn contact_state(contact: &Contact, set: &Lambda, lambda: &[f64], r: &[f64],
 /// every field, as for a distributed field ([`crate::output::OutputData::rows`]).
 pub fn contact_fields(contact: &Contact, state: &ContactState, pairs: &[usize], want: impl Fn(&str) -> bool) -> (Vec<Field>, Vec<usize>) {
     let mut fields = Vec::new();
-    let scalar = |name: &str, f: &dyn Fn(usize) -> f64| Field { name: name.into(), center: Center::Node, ncomp: 1, values: Values::F64(pairs.iter().map(|&i| f(i)).collect()) };
-    let vector = |name: &str, f: &dyn Fn(usize) -> [f64; 3]| Field { name: name.into(), center: Center::Node, ncomp: 3, values: Values::F64(pairs.iter().flat_map(|&i| f(i)).collect()) };
+    let scalar = |name: &str, f: &dyn Fn(usize) -> f64| Field {
+        name: name.into(),
+        center: Center::Node,
+        ncomp: 1,
+        values: Values::F64(pairs.iter().map(|&i| f(i)).collect()),
+    };
+    let vector = |name: &str, f: &dyn Fn(usize) -> [f64; 3]| Field {
+        name: name.into(),
+        center: Center::Node,
+        ncomp: 3,
+        values: Values::F64(pairs.iter().flat_map(|&i| f(i)).collect()),
+    };
     if want("contact_status") {
-        fields.push(Field { name: "contact_status".into(), center: Center::Node, ncomp: 1, values: Values::I32(pairs.iter().map(|&i| state.status[i]).collect()) });
+        fields.push(Field {
+            name: "contact_status".into(),
+            center: Center::Node,
+            ncomp: 1,
+            values: Values::I32(pairs.iter().map(|&i| state.status[i]).collect()),
+        });
     }
     if want("contact_pressure") {
         fields.push(scalar("contact_pressure", &|i| state.normal_force[i] / contact.area[i]));

@@ -351,7 +351,11 @@ fn write_string(grp: &::hdf5::Group, name: &str, value: &str) -> R<()> {
         H5Tclose(tid);
         ok
     });
-    if ok { Ok(()) } else { Err(format!("writing {what} failed")) }
+    if ok {
+        Ok(())
+    } else {
+        Err(format!("writing {what} failed"))
+    }
 }
 
 #[cfg(test)]

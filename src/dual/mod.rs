@@ -58,7 +58,6 @@ pub fn gather_rows<'a, C: crate::comm::Comm>(comm: &C, pieces: impl Iterator<Ite
     comm.sum_f64(y);
 }
 
-
 /// B u = c − gap − c0 on the tangential rows of `layout` (the prescribed part of B u is
 /// −c0), 0 elsewhere.
 pub fn tangential_jump(layout: Layout, c: &[f64], c0: &[f64], gap: &[f64]) -> Vec<f64> {

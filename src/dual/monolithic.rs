@@ -148,7 +148,17 @@ impl<'c, C: Comm> MonolithicDual<'c, C> {
             blocks.iter_mut().for_each(|blk| blk.dense = None);
             None
         };
-        let mut dual = MonolithicDual { comm, layout, blocks, c: vec![], c0: vec![], counter: ProductCounter::default(), single: None, single_now: Default::default(), explicit };
+        let mut dual = MonolithicDual {
+            comm,
+            layout,
+            blocks,
+            c: vec![],
+            c0: vec![],
+            counter: ProductCounter::default(),
+            single: None,
+            single_now: Default::default(),
+            explicit,
+        };
         dual.set_c(contact, None);
         let rhs = dual.rhs();
         (dual, rhs)
@@ -447,9 +457,7 @@ mod tests {
                     assert!((ku[j] - (blk.local.sys.f[j] - btx[j])).abs() <= 1e-9 * (1.0 + blk.local.sys.f[j].abs()));
                 }
             }
-            let rel = |i: usize, dir: [f64; 3]| {
-                contact.row(i).iter().map(|&(v, coef)| (0..3).map(|c| coef * full[v][c] * dir[c]).sum::<f64>()).sum::<f64>()
-            };
+            let rel = |i: usize, dir: [f64; 3]| contact.row(i).iter().map(|&(v, coef)| (0..3).map(|c| coef * full[v][c] * dir[c]).sum::<f64>()).sum::<f64>();
             let scale = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             for i in 0..contact.len() {
                 let r = ax[i] - b[i];

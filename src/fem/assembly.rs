@@ -68,7 +68,11 @@ impl DofMap {
             .map(|v| {
                 [0, 1, 2].map(|c| {
                     let d = 3 * v + c;
-                    if self.free[d] == FIXED { self.prescribed[d] } else { x[self.free[d]] }
+                    if self.free[d] == FIXED {
+                        self.prescribed[d]
+                    } else {
+                        x[self.free[d]]
+                    }
                 })
             })
             .collect()
@@ -135,11 +139,10 @@ pub struct BodySystem {
 pub fn assemble_body(mesh: &Mesh, body: usize, lame: Lame, dofs: &DofMap, loads: &[f64]) -> Result<BodySystem> {
     let b = &mesh.bodies[body];
     let start = b.nodes.start;
-    assemble_elements(&mesh.nodes, &mesh.cells, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads)
-        .map_err(|e| match e {
-            AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)),
-            AssemblyError::Memory(e) => e,
-        })
+    assemble_elements(&mesh.nodes, &mesh.cells, b.elems.clone(), b.nodes.len(), |v| v - start, lame, dofs, loads).map_err(|e| match e {
+        AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", b.name), format!("element {} is {msg}", e - b.elems.start)),
+        AssemblyError::Memory(e) => e,
+    })
 }
 
 /// Assembles K_ff and f_f over the elements `elems` of (`nodes`, `cells`), whose nodes are

@@ -4,16 +4,8 @@
 use super::material::Lame;
 
 /// Reference coordinates of the hex8 corners.
-pub const HEX_REF: [[f64; 3]; 8] = [
-    [-1.0, -1.0, -1.0],
-    [1.0, -1.0, -1.0],
-    [1.0, 1.0, -1.0],
-    [-1.0, 1.0, -1.0],
-    [-1.0, -1.0, 1.0],
-    [1.0, -1.0, 1.0],
-    [1.0, 1.0, 1.0],
-    [-1.0, 1.0, 1.0],
-];
+pub const HEX_REF: [[f64; 3]; 8] =
+    [[-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, 1.0]];
 
 /// Reference coordinates of the quad4 corners.
 pub const QUAD_REF: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
@@ -51,8 +43,7 @@ pub fn physical_gradients<const N: usize>(x: &[[f64; 3]; N], dref: &[[f64; 3]; N
             }
         }
     }
-    let det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
-        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+    let det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1]) - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
         + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
     let inv_det = 1.0 / det;
     let inv = [
@@ -99,11 +90,7 @@ pub fn hex_gauss_points() -> [[f64; 3]; 8] {
 
 /// Smallest det J over the Gauss points and corners: ≤ 0 means an inverted or degenerate element.
 pub fn hex_min_jacobian(x: &HexCoords) -> f64 {
-    hex_gauss_points()
-        .iter()
-        .chain(HEX_REF.iter())
-        .map(|&xi| hex_gradients(x, xi).1)
-        .fold(f64::INFINITY, f64::min)
+    hex_gauss_points().iter().chain(HEX_REF.iter()).map(|&xi| hex_gradients(x, xi).1).fold(f64::INFINITY, f64::min)
 }
 
 /// Element stiffness K_e (24×24, DOF order 3a + i) of isotropic elasticity, 2×2×2 Gauss:
@@ -179,11 +166,7 @@ pub fn quad4_nodal_areas(x: &[[f64; 3]; 4]) -> [f64; 4] {
                     deta[k] += 0.25 * (1.0 + r[0] * xi) * r[1] * x[a][k];
                 }
             }
-            let c = [
-                dxi[1] * deta[2] - dxi[2] * deta[1],
-                dxi[2] * deta[0] - dxi[0] * deta[2],
-                dxi[0] * deta[1] - dxi[1] * deta[0],
-            ];
+            let c = [dxi[1] * deta[2] - dxi[2] * deta[1], dxi[2] * deta[0] - dxi[0] * deta[2], dxi[0] * deta[1] - dxi[1] * deta[0]];
             let da = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
             for a in 0..4 {
                 w[a] += n[a] * da;
@@ -199,16 +182,7 @@ mod tests {
     use faer::Mat;
 
     fn distorted() -> HexCoords {
-        [
-            [0.0, 0.0, 0.0],
-            [1.3, 0.1, -0.05],
-            [1.1, 0.9, 0.1],
-            [-0.1, 1.2, 0.0],
-            [0.05, -0.1, 0.8],
-            [1.2, 0.0, 1.1],
-            [1.4, 1.3, 1.2],
-            [0.1, 1.0, 0.9],
-        ]
+        [[0.0, 0.0, 0.0], [1.3, 0.1, -0.05], [1.1, 0.9, 0.1], [-0.1, 1.2, 0.0], [0.05, -0.1, 0.8], [1.2, 0.0, 1.1], [1.4, 1.3, 1.2], [0.1, 1.0, 0.9]]
     }
 
     fn rigid_modes(x: &HexCoords) -> Mat<f64> {

@@ -23,14 +23,7 @@ impl Lame {
     pub fn stress(&self, eps: &[f64; 6]) -> [f64; 6] {
         let tr = eps[0] + eps[1] + eps[2];
         let (l, m) = (self.lambda, self.mu);
-        [
-            l * tr + 2.0 * m * eps[0],
-            l * tr + 2.0 * m * eps[1],
-            l * tr + 2.0 * m * eps[2],
-            m * eps[3],
-            m * eps[4],
-            m * eps[5],
-        ]
+        [l * tr + 2.0 * m * eps[0], l * tr + 2.0 * m * eps[1], l * tr + 2.0 * m * eps[2], m * eps[3], m * eps[4], m * eps[5]]
     }
 }
 

@@ -100,7 +100,12 @@ impl Clustering {
             let part = if parts <= 1 {
                 vec![0; nb]
             } else {
-                body_parts(first, last, &weight, &dofs, parts).ok_or_else(|| Error::numerical(format!("METIS clusters of body \"{}\"", mesh.bodies[body].name), "the partition of the subdomain graph failed; try another decomposition.subdomains_per_cluster"))?
+                body_parts(first, last, &weight, &dofs, parts).ok_or_else(|| {
+                    Error::numerical(
+                        format!("METIS clusters of body \"{}\"", mesh.bodies[body].name),
+                        "the partition of the subdomain graph failed; try another decomposition.subdomains_per_cluster",
+                    )
+                })?
             };
             let base = members.len();
             let mut groups = vec![Vec::new(); parts.max(1)];
@@ -191,7 +196,10 @@ impl Clustering {
             if n2 > MAX_CORNER_SYSTEM {
                 return Err(Error::scene(
                     "decomposition.subdomains_per_cluster",
-                    format!("cluster {c} of {} subdomains has a corner problem of {n2} unknowns (at most {MAX_CORNER_SYSTEM}, held dense); use smaller clusters", members[c].len()),
+                    format!(
+                        "cluster {c} of {} subdomains has a corner problem of {n2} unknowns (at most {MAX_CORNER_SYSTEM}, held dense); use smaller clusters",
+                        members[c].len()
+                    ),
                 ));
             }
         }
@@ -225,7 +233,8 @@ impl Clustering {
         if (0..self.len()).all(|c| self.members[c] == [c] && self.offset[c] == 0) {
             return cons;
         }
-        let rows = self.members.iter().map(|m| m.iter().flat_map(|&s| cons.rows[s].iter().map(move |&(r, j, v)| (r, self.offset[s] + j, v))).collect()).collect();
+        let rows =
+            self.members.iter().map(|m| m.iter().flat_map(|&s| cons.rows[s].iter().map(move |&(r, j, v)| (r, self.offset[s] + j, v))).collect()).collect();
         Constraints { rows, ..cons }
     }
 

@@ -167,7 +167,14 @@ impl Coarse {
     /// `cons` lists — (`kernels[s]` = (R_s, k_s), at least for [`Coarse::pieces_read`];
     /// `loads[s]` = f_s for this rank's pieces) and factorizes what `kind` needs; `body` names
     /// a piece's body in errors. Collective.
-    pub fn new<C: Comm>(dist: &Distribution<'_, C>, kernels: &[Option<(Vec<f64>, usize)>], cons: &Constraints, loads: &[Vec<f64>], kind: Kind, body: &dyn Fn(usize) -> String) -> Result<Coarse> {
+    pub fn new<C: Comm>(
+        dist: &Distribution<'_, C>,
+        kernels: &[Option<(Vec<f64>, usize)>],
+        cons: &Constraints,
+        loads: &[Vec<f64>],
+        kind: Kind,
+        body: &dyn Fn(usize) -> String,
+    ) -> Result<Coarse> {
         let e_start = cons.e_start();
         // k of every piece, from the ranks that hold them (one contributor per entry)
         let mut ks = vec![0.0; kernels.len()];
@@ -544,7 +551,11 @@ impl Coarse {
         let g = self.g_mul(dist, lambda_local, false);
         let num = g.iter().zip(&self.e).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
         let den = self.e.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if den > 0.0 { num / den } else { num }
+        if den > 0.0 {
+            num / den
+        } else {
+            num
+        }
     }
 }
 
@@ -557,9 +568,8 @@ fn coarse_matrix<C: Comm>(blocks: &[Block], dist: &Distribution<'_, C>, first: u
             format!("C = G_E G_Eᵀ is singular (body \"{}\"): every body needs Dirichlet conditions that stop its rigid motion", body(s)),
         ));
     }
-    let chol = Cholesky::factorize(&c, block_nested_dissection(blocks, &c)).map_err(|_| {
-        Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion")
-    })?;
+    let chol = Cholesky::factorize(&c, block_nested_dissection(blocks, &c))
+        .map_err(|_| Error::numerical("TFETI coarse problem", "C = G_E G_Eᵀ is singular: every body needs Dirichlet conditions that stop its rigid motion"))?;
     Ok((chol, c.nnz()))
 }
 
@@ -697,10 +707,17 @@ mod tests {
     }
 
     /// The coarse problem on one rank holding every piece.
-    fn build<'c>(model: &crate::model::Model, d: &Decomposition, cons: &Constraints, kind: Kind, comm: &'c crate::comm::SerialComm) -> (Coarse, Distribution<'c, crate::comm::SerialComm>) {
+    fn build<'c>(
+        model: &crate::model::Model,
+        d: &Decomposition,
+        cons: &Constraints,
+        kind: Kind,
+        comm: &'c crate::comm::SerialComm,
+    ) -> (Coarse, Distribution<'c, crate::comm::SerialComm>) {
         let dist = Distribution::new(comm, cons, &vec![0; d.subdomains.len()]);
         let k: Vec<_> = kernels(model, d).into_iter().map(Some).collect();
-        let c = Coarse::new(&dist, &k, cons, &subdomain_loads(d, &model.loads, &(0..d.subdomains.len()).collect::<Vec<_>>()), kind, &|_| String::new()).unwrap();
+        let c =
+            Coarse::new(&dist, &k, cons, &subdomain_loads(d, &model.loads, &(0..d.subdomains.len()).collect::<Vec<_>>()), kind, &|_| String::new()).unwrap();
         (c, dist)
     }
 

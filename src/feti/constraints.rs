@@ -68,7 +68,15 @@ impl Constraints {
 /// One entry `coef` of `row` on local DOF `dof` of a subdomain (`rows`), for DOF (node, k): a
 /// prescribed DOF's part moves to c (c −= coef · value, recorded in `moved`) and the entry stays
 /// with coefficient 0, so the row keeps its subdomains.
-fn put(rows: &mut Vec<(usize, usize, f64)>, c: &mut [f64], moved: &mut Vec<(usize, usize, f64)>, prescribed: &std::collections::HashMap<(usize, usize), (f64, usize)>, (row, dof): (usize, usize), at: (usize, usize), coef: f64) {
+fn put(
+    rows: &mut Vec<(usize, usize, f64)>,
+    c: &mut [f64],
+    moved: &mut Vec<(usize, usize, f64)>,
+    prescribed: &std::collections::HashMap<(usize, usize), (f64, usize)>,
+    (row, dof): (usize, usize),
+    at: (usize, usize),
+    coef: f64,
+) {
     match prescribed.get(&at) {
         Some(&(val, entry)) => {
             c[row] -= coef * val;
@@ -82,7 +90,14 @@ fn put(rows: &mut Vec<(usize, usize, f64)>, c: &mut [f64], moved: &mut Vec<(usiz
 /// Builds B and c for the decomposition `d`; `dirichlet` lists (node, component, value), a
 /// later entry for the same DOF winning; `contact` the pairs (if contact is on); `eliminated`
 /// per subdomain the local DOFs held inside it (sorted; empty: all Dirichlet rows).
-pub fn build(d: &Decomposition, dirichlet: &[(usize, usize, f64)], contact: Option<&Contact>, ties: &Tied, gluing: Gluing, eliminated: &[Vec<usize>]) -> Constraints {
+pub fn build(
+    d: &Decomposition,
+    dirichlet: &[(usize, usize, f64)],
+    contact: Option<&Contact>,
+    ties: &Tied,
+    gluing: Gluing,
+    eliminated: &[Vec<usize>],
+) -> Constraints {
     let (m, friction) = contact.map_or((0, false), |c| (c.len(), c.has_friction()));
     let mut layout = Layout::contact(m, friction);
     let mut rows = vec![Vec::new(); d.subdomains.len()];

@@ -53,10 +53,7 @@ pub fn decompose_each(mesh: &Mesh, parts: &[usize]) -> Result<Decomposition> {
         let parts = parts[b];
         let ne = body.elems.len();
         if parts == 0 || parts > ne {
-            return Err(Error::scene(
-                "decomposition.subdomains",
-                format!("body \"{}\" has {ne} elements; cannot split it into {parts} subdomains", body.name),
-            ));
+            return Err(Error::scene("decomposition.subdomains", format!("body \"{}\" has {ne} elements; cannot split it into {parts} subdomains", body.name)));
         }
         let part = partition(mesh, body.elems.clone(), parts).map_err(|m| Error::numerical(format!("METIS partition of body \"{}\"", body.name), m))?;
         let mut elems = vec![Vec::new(); parts];

@@ -9,15 +9,15 @@
 //! monolithic dual, so the contact status and KKT residuals read the same. The FETI
 //! preconditioner of the gluing and Dirichlet block ([`FetiPreconditioner`]) is built here too.
 
+use super::cluster::ClusterSystem;
 use super::coarse::Coarse;
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
-use super::cluster::ClusterSystem;
+use super::precond::Scaling;
 use crate::comm::Comm;
 use crate::dual::{DualProblem, Recovered};
 use crate::error::{Error, Result};
 use crate::linalg::schur::{Form, Schur};
-use super::precond::Scaling;
 use crate::qp::{self, Layout, Operator, Preconditioner, ProductCounter};
 use crate::scene::Preconditioner as PreconditionerKind;
 
@@ -87,7 +87,22 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let c = dist.restrict(&cons.c);
         let layout = dist.layout;
         let e_start = cons.layout.contact_dim();
-        let mut dual = TfetiDual { dist, layout, pieces, coarse, c0: c.clone(), c, lambda_hat: vec![], d_hat: vec![], counter: ProductCounter::default(), e_start, precond: None, null: vec![], single: None, single_now: Default::default() };
+        let mut dual = TfetiDual {
+            dist,
+            layout,
+            pieces,
+            coarse,
+            c0: c.clone(),
+            c,
+            lambda_hat: vec![],
+            d_hat: vec![],
+            counter: ProductCounter::default(),
+            e_start,
+            precond: None,
+            null: vec![],
+            single: None,
+            single_now: Default::default(),
+        };
         let b = dual.rhs();
         (dual, b)
     }
@@ -247,7 +262,8 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
                 let a = self.coarse.alpha_restricted(&self.dist, chol.as_ref().expect("checked"), &pw);
                 let r = self.coarse.residual_after(&self.dist, &a, &w);
                 // the deepest penetration of a contact row not kept, against the largest |w|
-                let mut worst = [(0..l.m).filter(|&i| !free[l.normal(i)]).map(|i| -r[l.normal(i)]).fold(0.0f64, f64::max), w.iter().fold(0.0f64, |m, v| m.max(v.abs()))];
+                let mut worst =
+                    [(0..l.m).filter(|&i| !free[l.normal(i)]).map(|i| -r[l.normal(i)]).fold(0.0f64, f64::max), w.iter().fold(0.0f64, |m, v| m.max(v.abs()))];
                 let comm = self.dist.comm();
                 comm.max_f64(&mut worst);
                 alpha = Some(a);
@@ -284,8 +300,9 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         let mut pieces = Vec::with_capacity(self.pieces.len());
         for s in &self.pieces {
             let touched: Vec<usize> = s.entries.iter().map(|x| x.1).collect();
-            let schur = Schur::new(&s.sys.k_free(), &touched, form)
-                .map_err(|err| Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\"")))?;
+            let schur = Schur::new(&s.sys.k_free(), &touched, form).map_err(|err| {
+                Error::numerical(format!("the Dirichlet preconditioner of subdomain {}", s.sys.index), format!("{err}; try solver.preconditioner = \"lumped\""))
+            })?;
             pieces.push(schur);
         }
         self.precond = Some((scaling, pieces));

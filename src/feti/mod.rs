@@ -57,7 +57,8 @@ pub fn eliminated(mesh: &Mesh, d: &Decomposition, dirichlet: &[(usize, usize, f6
         held.dedup();
         if !held.is_empty() {
             let coords: Vec<[f64; 3]> = sd.nodes.iter().map(|&v| mesh.nodes[v]).collect();
-            let interface: Vec<usize> = (0..3 * sd.nodes.len()).filter(|&dof| d.copies[sd.nodes[dof / 3]].len() > 1 && held.binary_search(&dof).is_err()).collect();
+            let interface: Vec<usize> =
+                (0..3 * sd.nodes.len()).filter(|&dof| d.copies[sd.nodes[dof / 3]].len() > 1 && held.binary_search(&dof).is_err()).collect();
             if subdomain::held_kernel(&coords, held).is_none() || subdomain::hold_ratio(&coords, held, &interface) < subdomain::HOLD_RATIO {
                 held.clear();
             }

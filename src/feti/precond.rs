@@ -221,10 +221,12 @@ mod tests {
                 }
             }
             let mut s = 3u64;
-            let x: Vec<f64> = (0..n).map(|_| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            }).collect();
+            let x: Vec<f64> = (0..n)
+                .map(|_| {
+                    s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+                })
+                .collect();
             let mut y = x.clone();
             sc.apply(&dist, &mut y);
             // BΔBᵀ y = x (zero rows: y = 0 there)

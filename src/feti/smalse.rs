@@ -118,7 +118,16 @@ pub struct SmalseInfo {
 /// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
 /// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start).
 #[allow(clippy::too_many_arguments)]
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, m: Option<&dyn Preconditioner>, set: &Lambda, coulomb: Option<&[Coefficient]>, x0: &[f64], p: &Params, penalty: f64, monitor: &mut dyn Monitor) -> Result<(QpSolution, SmalseInfo), QpError> {
+pub fn solve<C: Comm>(
+    dual: &TfetiDual<'_, C>,
+    m: Option<&dyn Preconditioner>,
+    set: &Lambda,
+    coulomb: Option<&[Coefficient]>,
+    x0: &[f64],
+    p: &Params,
+    penalty: f64,
+    monitor: &mut dyn Monitor,
+) -> Result<(QpSolution, SmalseInfo), QpError> {
     let sp = dual.space();
     // the dual's λ̂ solves Gλ̂ = e; λ_e = Qλ̂, and P(d̃ − Fλ_e) = P(d̃ − Fλ̂) + PFPλ̂
     let lambda_p = dual.dist.owned_part(&dual.lambda_hat);

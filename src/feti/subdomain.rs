@@ -30,11 +30,11 @@
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_elements, AssemblyError, DofMap};
 use crate::fem::material::Lame;
+use crate::feti::decomposition::Subdomain;
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, nested_dissection};
 use crate::linalg::sparse::SymCsc;
 use crate::mesh::{Cell, Mesh};
-use crate::feti::decomposition::Subdomain;
 use crate::scene::OrderingKind;
 
 /// Rigid-body modes per subdomain.
@@ -144,7 +144,11 @@ pub fn hold_ratio(coords: &[[f64; 3]], held: &[usize], interface: &[usize]) -> f
     let b = w.transpose() * gram(interface) * &w;
     let Ok(top) = b.self_adjoint_eigenvalues(faer::Side::Lower) else { return 0.0 };
     let max = top.iter().copied().fold(0.0, f64::max);
-    if max > 0.0 { 1.0 / max } else { f64::INFINITY }
+    if max > 0.0 {
+        1.0 / max
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// `k` fixing DOFs (local DOF indices, ascending) for the nodes at `coords` with the `k` modes
@@ -257,14 +261,14 @@ impl SubdomainSystem {
         let coords = part.coords;
         let nn = coords.len();
         let what = || format!("subdomain {index} (body \"{}\")", part.body);
-        let (r, kdim) = held_kernel(coords, &held).ok_or_else(|| Error::numerical(what(), "its held DOFs stop a rigid motion only weakly: keep its Dirichlet rows"))?;
+        let (r, kdim) =
+            held_kernel(coords, &held).ok_or_else(|| Error::numerical(what(), "its held DOFs stop a rigid motion only weakly: keep its Dirichlet rows"))?;
         let fixed = fixing_dofs(coords, &r, kdim, &held).ok_or_else(|| Error::numerical(what(), "its nodes are collinear: no rigid-body fixing DOFs"))?;
         let all = DofMap::new(0..nn, &[]);
-        let sys = assemble_elements(coords, part.cells, 0..part.cells.len(), nn, |v| v, lame, &all, &f)
-            .map_err(|e| match e {
-                AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)),
-                AssemblyError::Memory(e) => e,
-            })?;
+        let sys = assemble_elements(coords, part.cells, 0..part.cells.len(), nn, |v| v, lame, &all, &f).map_err(|e| match e {
+            AssemblyError::Element(e, msg) => Error::mesh(format!("body {}", part.body), format!("element {} is {msg}", part.elems[e] - part.body_elems_start)),
+            AssemblyError::Memory(e) => e,
+        })?;
         let k = sys.k;
         let mut zeroed: Vec<usize> = fixed.iter().chain(&held).copied().collect();
         zeroed.sort_unstable();
@@ -379,7 +383,13 @@ fn identity_on(k: &SymCsc, fixed: &[usize], held: &[usize]) -> SymCsc {
     for j in 0..k.n {
         for p in k.col_ptr[j]..k.col_ptr[j + 1] {
             let i = k.row_idx[p];
-            let v = if mask[i] == 0 && mask[j] == 0 { k.values[p] } else if i == j { 1.0 } else { 0.0 };
+            let v = if mask[i] == 0 && mask[j] == 0 {
+                k.values[p]
+            } else if i == j {
+                1.0
+            } else {
+                0.0
+            };
             if i == j || (mask[i] != 2 && mask[j] != 2) {
                 out.row_idx.push(i);
                 out.values.push(v);
@@ -472,7 +482,8 @@ pub(crate) mod tests {
         let sd = &d.subdomains[0];
         let nd = 3 * sd.nodes.len();
         let on = |pred: &dyn Fn([f64; 3]) -> bool, comps: &[usize]| -> Vec<usize> {
-            let mut v: Vec<usize> = (0..sd.nodes.len()).filter(|&l| pred(mesh.nodes[sd.nodes[l]])).flat_map(|l| comps.iter().map(move |&c| 3 * l + c)).collect();
+            let mut v: Vec<usize> =
+                (0..sd.nodes.len()).filter(|&l| pred(mesh.nodes[sd.nodes[l]])).flat_map(|l| comps.iter().map(move |&c| 3 * l + c)).collect();
             v.sort_unstable();
             v
         };
@@ -523,12 +534,16 @@ pub(crate) mod tests {
     /// it is not; without an interface the ratio is infinite.
     #[test]
     fn hold_ratio_tells_a_face_from_a_patch() {
-        let coords: Vec<[f64; 3]> = (0..5).flat_map(|i| (0..5).flat_map(move |j| (0..5).map(move |k| [i as f64 / 4.0, j as f64 / 4.0, k as f64 / 4.0]))).collect();
-        let on = |pred: &dyn Fn([f64; 3]) -> bool| -> Vec<usize> { (0..coords.len()).filter(|&l| pred(coords[l])).flat_map(|l| (0..3).map(move |c| 3 * l + c)).collect() };
+        let coords: Vec<[f64; 3]> =
+            (0..5).flat_map(|i| (0..5).flat_map(move |j| (0..5).map(move |k| [i as f64 / 4.0, j as f64 / 4.0, k as f64 / 4.0]))).collect();
+        let on = |pred: &dyn Fn([f64; 3]) -> bool| -> Vec<usize> {
+            (0..coords.len()).filter(|&l| pred(coords[l])).flat_map(|l| (0..3).map(move |c| 3 * l + c)).collect()
+        };
         let face = on(&|p| p[0] == 0.0);
         let node = on(&|p| p == [0.0, 0.0, 0.0]);
         // glued on its five other faces
-        let interface: Vec<usize> = on(&|p| p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0 || p[2] == 0.0 || p[2] == 1.0).into_iter().filter(|d| !face.contains(d)).collect();
+        let interface: Vec<usize> =
+            on(&|p| p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0 || p[2] == 0.0 || p[2] == 1.0).into_iter().filter(|d| !face.contains(d)).collect();
         let firm = hold_ratio(&coords, &face, &interface);
         let weak = hold_ratio(&coords, &node, &interface);
         assert!(firm >= HOLD_RATIO, "a face: {firm:.2e}");

@@ -7,10 +7,8 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
-};
 use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::{Conj, Mat, MatMut, Par, Side};
 
 use super::sparse::SymCsc;
@@ -63,11 +61,7 @@ impl Symbolic {
                 (vec![], false)
             }
         };
-        let ord = if ord {
-            SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, a.n))
-        } else {
-            SymmetricOrdering::Amd
-        };
+        let ord = if ord { SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, a.n)) } else { SymmetricOrdering::Amd };
         let symbolic = factorize_symbolic_cholesky(view.symbolic(), Side::Lower, ord, CholeskySymbolicParams::default())
             .map_err(|e| fail(format!("symbolic analysis: {e:?}")))?;
         Ok(Symbolic(std::sync::Arc::new(symbolic)))
@@ -88,16 +82,7 @@ impl Cholesky {
         let mut values = vec![0.0; sym.len_val()];
         let mut mem = MemBuffer::try_new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
             .map_err(|_| fail("out of memory for the factorization workspace".into()))?;
-        sym
-            .factorize_numeric_llt(
-                &mut values,
-                view,
-                Side::Lower,
-                LltRegularization::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
+        sym.factorize_numeric_llt(&mut values, view, Side::Lower, LltRegularization::default(), par, MemStack::new(&mut mem), Default::default())
             .map_err(|e| fail(format!("matrix is not positive definite ({e:?}); is the body held by enough Dirichlet conditions?")))?;
         if values.iter().any(|v| !v.is_finite()) {
             return Err(fail("factor contains NaN or infinity".into()));
@@ -166,7 +151,6 @@ fn llt_solve<T: faer::traits::ComplexField>(sym: &SymbolicCholesky<usize>, value
     let rhs = MatMut::from_column_major_slice_mut(b, n, ncols);
     LltRef::new(sym, values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
 }
-
 
 /// The trailing nb × nb block of the factor L whose values `values` follow the structure `sym`
 /// (supernodal: read supernode by supernode; simplicial: column by column).

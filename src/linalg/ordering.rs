@@ -23,9 +23,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
     if n <= 1 || adjncy.is_empty() {
         return Ok((0..n).collect());
     }
-    let to_idx = |v: usize| {
-        i32::try_from(v).map_err(|_| Error::numerical("METIS ordering", "graph too large for 32-bit indices"))
-    };
+    let to_idx = |v: usize| i32::try_from(v).map_err(|_| Error::numerical("METIS ordering", "graph too large for 32-bit indices"));
     let mut nv = to_idx(n)?;
     let mut xadj: Vec<i32> = xadj.iter().map(|&v| to_idx(v)).collect::<Result<_>>()?;
     let mut adj: Vec<i32> = adjncy.iter().map(|&v| to_idx(v)).collect::<Result<_>>()?;
@@ -36,15 +34,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>>
     // all buffers have exactly those sizes and outlive the calls.
     let status = metis_exclusive(|| unsafe {
         metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
-        metis_sys::METIS_NodeND(
-            &mut nv,
-            xadj.as_mut_ptr(),
-            adj.as_mut_ptr(),
-            std::ptr::null_mut(),
-            options.as_mut_ptr(),
-            perm.as_mut_ptr(),
-            iperm.as_mut_ptr(),
-        )
+        metis_sys::METIS_NodeND(&mut nv, xadj.as_mut_ptr(), adj.as_mut_ptr(), std::ptr::null_mut(), options.as_mut_ptr(), perm.as_mut_ptr(), iperm.as_mut_ptr())
     });
     if status == metis_sys::rstatus_et_METIS_ERROR_MEMORY {
         return Err(Error::memory(METIS_MEMORY, format!("METIS ran out of memory ordering a graph of {n} nodes and {} edges", adjncy.len() / 2)));
@@ -197,10 +187,18 @@ mod tests {
         let mut adj = vec![];
         for j in 0..k {
             for i in 0..k {
-                if i > 0 { adj.push(j * k + i - 1); }
-                if i + 1 < k { adj.push(j * k + i + 1); }
-                if j > 0 { adj.push((j - 1) * k + i); }
-                if j + 1 < k { adj.push((j + 1) * k + i); }
+                if i > 0 {
+                    adj.push(j * k + i - 1);
+                }
+                if i + 1 < k {
+                    adj.push(j * k + i + 1);
+                }
+                if j > 0 {
+                    adj.push((j - 1) * k + i);
+                }
+                if j + 1 < k {
+                    adj.push((j + 1) * k + i);
+                }
                 xadj.push(adj.len());
             }
         }

@@ -24,10 +24,7 @@ impl SymCsc {
 
     /// The faer view (lower triangle only; use with `Side::Lower`).
     pub fn as_faer(&self) -> SparseColMatRef<'_, usize, f64> {
-        SparseColMatRef::new(
-            SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx),
-            &self.values,
-        )
+        SparseColMatRef::new(SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx), &self.values)
     }
 
     /// Position of entry (i, j), i ≥ j, in `values`.

@@ -14,8 +14,7 @@ fn hex_face(hexes: &[Cell], e: usize, f: usize) -> Facet {
 }
 
 /// Names of the box sides, in the order of the local hex faces that lie on them.
-pub const SIDES: [(&str, usize); 6] =
-    [("xmin", 5), ("xmax", 3), ("ymin", 2), ("ymax", 4), ("zmin", 0), ("zmax", 1)];
+pub const SIDES: [(&str, usize); 6] = [("xmin", 5), ("xmax", 3), ("ymin", 2), ("ymax", 4), ("zmin", 0), ("zmax", 1)];
 
 /// A box `[min, max]` with `n = [nx, ny, nz]` nodes per direction (each ≥ 2); panics where
 /// memory runs out ([`try_generate`] returns the error).

@@ -66,7 +66,9 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     const CHUNK: usize = 1 << 22;
     let mut bytes: Vec<u8> = Vec::new();
     loop {
-        bytes.try_reserve(CHUNK).map_err(|_| Error::memory(&file, format!("the piped mesh does not fit in memory after {} read", crate::error::human_bytes(bytes.len() as f64))))?;
+        bytes
+            .try_reserve(CHUNK)
+            .map_err(|_| Error::memory(&file, format!("the piped mesh does not fit in memory after {} read", crate::error::human_bytes(bytes.len() as f64))))?;
         let n = f.by_ref().take(CHUNK as u64).read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
         if n == 0 {
             return Ok(bytes);
@@ -169,14 +171,9 @@ fn parse(bytes: &[u8], volume: Option<&str>) -> Result<BodyGeometry, String> {
     let encoding = check_header(bytes)?;
     // mshio still has a few `unimplemented!`/overflow paths on malformed input: never let them
     // escape as a panic.
-    let msh = std::panic::catch_unwind(|| {
-        mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e))
-    })
-    .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
-    for (present, section) in [
-        (msh.data.nodes.is_some(), "$Nodes"),
-        (msh.data.elements.is_some(), "$Elements"),
-    ] {
+    let msh = std::panic::catch_unwind(|| mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e)))
+        .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
+    for (present, section) in [(msh.data.nodes.is_some(), "$Nodes"), (msh.data.elements.is_some(), "$Elements")] {
         if !present {
             return Err(format!("{UNREADABLE}: it has no {section} section"));
         }
@@ -205,32 +202,21 @@ fn check_header(bytes: &[u8]) -> Result<Encoding, String> {
         return Err(format!("{UNREADABLE}: it does not start with $MeshFormat"));
     }
     let line = lines.next().unwrap_or_default();
-    let fields: Vec<&str> = std::str::from_utf8(line)
-        .unwrap_or("")
-        .split_whitespace()
-        .collect();
+    let fields: Vec<&str> = std::str::from_utf8(line).unwrap_or("").split_whitespace().collect();
     match fields.as_slice() {
         ["4.1", "0", _] => Ok(Encoding::Ascii),
         ["4.1", "1", size @ ("1" | "2" | "4" | "8" | "16")] => {
             // The header line is followed by the binary int 1, which tells the byte order.
             let at = first.len() + 1 + line.len() + 1;
-            let one = bytes
-                .get(at..at + 4)
-                .ok_or_else(|| format!("{UNREADABLE}: truncated $MeshFormat header"))?;
+            let one = bytes.get(at..at + 4).ok_or_else(|| format!("{UNREADABLE}: truncated $MeshFormat header"))?;
             if one != [1, 0, 0, 0] && one != [0, 0, 0, 1] {
-                return Err(format!(
-                    "{UNREADABLE}: the header says binary (file-type 1) but no binary integer 1 follows it (line 3)"
-                ));
+                return Err(format!("{UNREADABLE}: the header says binary (file-type 1) but no binary integer 1 follows it (line 3)"));
             }
-            Ok(Encoding::Binary {
-                size_t: size.parse().unwrap_or(8),
-                big_endian: one == [0, 0, 0, 1],
-            })
+            Ok(Encoding::Binary { size_t: size.parse().unwrap_or(8), big_endian: one == [0, 0, 0, 1] })
         }
-        [version, ..] if *version != "4.1" => Err(format!(
-            "{UNREADABLE}: format version {}, re-export it with `-format msh41`",
-            version.chars().take(10).collect::<String>()
-        )),
+        [version, ..] if *version != "4.1" => {
+            Err(format!("{UNREADABLE}: format version {}, re-export it with `-format msh41`", version.chars().take(10).collect::<String>()))
+        }
         _ => Err(format!("{UNREADABLE}: malformed $MeshFormat header")),
     }
 }
@@ -241,9 +227,7 @@ fn describe(bytes: &[u8], encoding: Encoding, err: &MshParserError<&[u8]>) -> St
     let trace = err.filtered_backtrace();
     let what = trace.iter().find_map(|(_, kind)| match kind {
         K::UnsupportedMshVersion => Some("unsupported format version".to_string()),
-        K::UnsupportedTypeSize(ty, n) => {
-            Some(format!("unsupported size {n} of binary {ty} values"))
-        }
+        K::UnsupportedTypeSize(ty, n) => Some(format!("unsupported size {n} of binary {ty} values")),
         K::InvalidFileHeader => Some("invalid $MeshFormat header".to_string()),
         K::InvalidSectionHeader => Some("expected the start of a section".to_string()),
         K::UnknownElement => Some("unknown element type".to_string()),
@@ -257,43 +241,24 @@ fn describe(bytes: &[u8], encoding: Encoding, err: &MshParserError<&[u8]>) -> St
         K::Context(_) | K::NomError(_) => None,
     });
     // Outermost first: section, block, item (mshio's "Expected N ..." notes only repeat counts).
-    let contexts: Vec<&str> = trace
-        .iter()
-        .rev()
-        .filter_map(|(_, k)| k.context())
-        .filter(|c| !c.starts_with("Expected "))
-        .collect();
-    let rest = trace
-        .first()
-        .or(err.backtrace.first())
-        .map_or(&[][..], |(rest, _)| *rest);
+    let contexts: Vec<&str> = trace.iter().rev().filter_map(|(_, k)| k.context()).filter(|c| !c.starts_with("Expected ")).collect();
+    let rest = trace.first().or(err.backtrace.first()).map_or(&[][..], |(rest, _)| *rest);
     let place = if rest.is_empty() {
         "at the end of the file".to_string()
     } else {
         let offset = bytes.len().saturating_sub(rest.len());
         match encoding {
-            Encoding::Ascii => format!(
-                "line {}",
-                bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1
-            ),
+            Encoding::Ascii => format!("line {}", bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1),
             Encoding::Binary { .. } => format!("byte {offset}"),
         }
     };
     if let (None, true, Encoding::Ascii) = (&what, contexts.is_empty(), encoding) {
         let offset = bytes.len().saturating_sub(rest.len());
         if let Some(name) = open_section(&bytes[..offset]) {
-            return format!(
-                "{UNREADABLE}: expected $End{name} to close the ${name} section ({place})"
-            );
+            return format!("{UNREADABLE}: expected $End{name} to close the ${name} section ({place})");
         }
     }
-    let what = what.unwrap_or_else(|| {
-        if rest.is_empty() {
-            "unexpected end of file".to_string()
-        } else {
-            "unexpected content".to_string()
-        }
-    });
+    let what = what.unwrap_or_else(|| if rest.is_empty() { "unexpected end of file".to_string() } else { "unexpected content".to_string() });
     if contexts.is_empty() {
         format!("{UNREADABLE}: {what} ({place})")
     } else {
@@ -349,13 +314,8 @@ fn physical_names(bytes: &[u8]) -> Result<HashMap<(i32, i32), String>, String> {
         return Ok(names);
     };
     let bad = |what: &str| format!("{UNREADABLE}: malformed $PhysicalNames section ({what})");
-    let mut lines = bytes[start..]
-        .split(|&b| b == b'\n')
-        .map(|l| String::from_utf8_lossy(l).trim().to_string());
-    let count: usize = lines
-        .next()
-        .and_then(|l| l.parse().ok())
-        .ok_or_else(|| bad("no count"))?;
+    let mut lines = bytes[start..].split(|&b| b == b'\n').map(|l| String::from_utf8_lossy(l).trim().to_string());
+    let count: usize = lines.next().and_then(|l| l.parse().ok()).ok_or_else(|| bad("no count"))?;
     for i in 0..count {
         let line = lines.next().unwrap_or_default();
         let parsed = (|| {
@@ -375,11 +335,7 @@ fn physical_names(bytes: &[u8]) -> Result<HashMap<(i32, i32), String>, String> {
 }
 
 /// The node tags of the `$Nodes` section in file order (one per node of mshio's node blocks).
-fn node_tags(
-    bytes: &[u8],
-    encoding: Encoding,
-    msh: &MshFile<u64, i32, f64>,
-) -> Result<Vec<u64>, String> {
+fn node_tags(bytes: &[u8], encoding: Encoding, msh: &MshFile<u64, i32, f64>) -> Result<Vec<u64>, String> {
     let Some(nodes) = &msh.data.nodes else {
         return Ok(Vec::new());
     };
@@ -388,17 +344,13 @@ fn node_tags(
     let sizes: Vec<usize> = nodes.node_blocks.iter().map(|b| b.nodes.len()).collect();
     let tags = match encoding {
         Encoding::Ascii => ascii_node_tags(&bytes[start..], &sizes),
-        Encoding::Binary { size_t, big_endian } => {
-            binary_node_tags(&bytes[start..], &sizes, size_t, big_endian)
-        }
+        Encoding::Binary { size_t, big_endian } => binary_node_tags(&bytes[start..], &sizes, size_t, big_endian),
     };
     tags.ok_or_else(bad)
 }
 
 fn ascii_node_tags(text: &[u8], sizes: &[usize]) -> Option<Vec<u64>> {
-    let mut tokens = text
-        .split(|b| b.is_ascii_whitespace())
-        .filter(|t| !t.is_empty());
+    let mut tokens = text.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
     let num = |t: &[u8]| -> Option<u64> { std::str::from_utf8(t).ok()?.parse().ok() };
     if num(tokens.next()?)? != sizes.len() as u64 {
         return None;
@@ -424,12 +376,7 @@ fn ascii_node_tags(text: &[u8], sizes: &[usize]) -> Option<Vec<u64>> {
     Some(tags)
 }
 
-fn binary_node_tags(
-    data: &[u8],
-    sizes: &[usize],
-    size_t: usize,
-    big_endian: bool,
-) -> Option<Vec<u64>> {
+fn binary_node_tags(data: &[u8], sizes: &[usize], size_t: usize, big_endian: bool) -> Option<Vec<u64>> {
     let mut pos = 0usize;
     let mut take = |len: usize| -> Option<&[u8]> {
         let s = data.get(pos..pos.checked_add(len)?)?;
@@ -470,10 +417,7 @@ fn binary_node_tags(
 
 /// A physical group's display name: its `$PhysicalNames` entry, or its number.
 fn group_name(names: &HashMap<(i32, i32), String>, dim: i32, tag: i32) -> String {
-    names
-        .get(&(dim, tag))
-        .cloned()
-        .unwrap_or_else(|| tag.to_string())
+    names.get(&(dim, tag)).cloned().unwrap_or_else(|| tag.to_string())
 }
 
 /// `"Hex8: 54, Qua4: 18"`, by element type number.
@@ -483,67 +427,33 @@ fn type_counts(counts: &HashMap<ElementType, usize>) -> String {
     if v.is_empty() {
         return "no elements".to_string();
     }
-    v.iter()
-        .map(|(t, c)| format!("{t:?}: {c}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    v.iter().map(|(t, c)| format!("{t:?}: {c}")).collect::<Vec<_>>().join(", ")
 }
 
-fn build(
-    msh: &MshFile<u64, i32, f64>,
-    names: &HashMap<(i32, i32), String>,
-    tags: &[u64],
-    volume: Option<&str>,
-) -> Result<BodyGeometry, String> {
+fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: Option<&str>) -> Result<BodyGeometry, String> {
     let entities = msh.data.entities.as_ref();
     let surfaces = entities.map_or(&[][..], |e| e.surfaces.as_slice());
     let volumes = entities.map_or(&[][..], |e| e.volumes.as_slice());
-    let surf_groups: HashMap<i32, &[i32]> = surfaces
-        .iter()
-        .map(|s| (s.tag, s.physical_tags.as_slice()))
-        .collect();
-    let vol_groups: HashMap<i32, &[i32]> = volumes
-        .iter()
-        .map(|v| (v.tag, v.physical_tags.as_slice()))
-        .collect();
+    let surf_groups: HashMap<i32, &[i32]> = surfaces.iter().map(|s| (s.tag, s.physical_tags.as_slice())).collect();
+    let vol_groups: HashMap<i32, &[i32]> = volumes.iter().map(|v| (v.tag, v.physical_tags.as_slice())).collect();
 
     // Which volume entities make up the body.
     let selected: Option<HashSet<i32>> = match volume {
         None => None,
         Some(name) => {
-            let mut known: BTreeMap<i32, String> = names
-                .iter()
-                .filter(|((d, _), _)| *d == 3)
-                .map(|((_, t), n)| (*t, n.clone()))
-                .collect();
+            let mut known: BTreeMap<i32, String> = names.iter().filter(|((d, _), _)| *d == 3).map(|((_, t), n)| (*t, n.clone())).collect();
             for v in volumes {
                 for &t in &v.physical_tags {
                     known.entry(t).or_insert_with(|| group_name(names, 3, t));
                 }
             }
-            let wanted: HashSet<i32> = known
-                .iter()
-                .filter(|(_, n)| n.as_str() == name)
-                .map(|(t, _)| *t)
-                .collect();
+            let wanted: HashSet<i32> = known.iter().filter(|(_, n)| n.as_str() == name).map(|(t, _)| *t).collect();
             if wanted.is_empty() {
                 let list: Vec<String> = known.values().map(|n| format!("\"{n}\"")).collect();
-                let list = if list.is_empty() {
-                    "none".to_string()
-                } else {
-                    list.join(", ")
-                };
-                return Err(format!(
-                    "no physical volume named \"{name}\" (known: {list})"
-                ));
+                let list = if list.is_empty() { "none".to_string() } else { list.join(", ") };
+                return Err(format!("no physical volume named \"{name}\" (known: {list})"));
             }
-            Some(
-                vol_groups
-                    .iter()
-                    .filter(|(_, g)| g.iter().any(|t| wanted.contains(t)))
-                    .map(|(&e, _)| e)
-                    .collect(),
-            )
+            Some(vol_groups.iter().filter(|(_, g)| g.iter().any(|t| wanted.contains(t))).map(|(&e, _)| e).collect())
         }
     };
     let in_body = |entity: i32| selected.as_ref().is_none_or(|s| s.contains(&entity));
@@ -572,10 +482,7 @@ fn build(
         None => "the file".to_string(),
     };
     if !unsupported.is_empty() {
-        return Err(format!(
-            "{body} contains volume elements of a type not supported ({}); supported: {SUPPORTED}",
-            type_counts(&unsupported)
-        ));
+        return Err(format!("{body} contains volume elements of a type not supported ({}); supported: {SUPPORTED}", type_counts(&unsupported)));
     }
     if file_cells.is_empty() {
         let (what, found) = match volume {
@@ -586,13 +493,7 @@ fn build(
     }
 
     // Nodes: file index of every tag, then a compact numbering of the used ones in file order.
-    let coords: Vec<[f64; 3]> = msh
-        .data
-        .nodes
-        .iter()
-        .flat_map(|n| &n.node_blocks)
-        .flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z]))
-        .collect();
+    let coords: Vec<[f64; 3]> = msh.data.nodes.iter().flat_map(|n| &n.node_blocks).flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z])).collect();
     if coords.len() != tags.len() {
         return Err(format!("{UNREADABLE}: malformed $Nodes section"));
     }
@@ -602,10 +503,7 @@ fn build(
             return Err(format!("node {t} is defined twice in $Nodes"));
         }
         if p.iter().any(|x| !x.is_finite()) {
-            return Err(format!(
-                "node {t} has a non-finite coordinate ({}, {}, {})",
-                p[0], p[1], p[2]
-            ));
+            return Err(format!("node {t} has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]));
         }
     }
     // Surface elements must not name nodes the file does not define (those of other volumes
@@ -628,9 +526,7 @@ fn build(
         }
         let mut h = Vec::with_capacity(nodes.len());
         for t in nodes {
-            let i = *index
-                .get(t)
-                .ok_or_else(|| format!("{} {etag} refers to node {t}, which is not in $Nodes", singular(kind)))?;
+            let i = *index.get(t).ok_or_else(|| format!("{} {etag} refers to node {t}, which is not in $Nodes", singular(kind)))?;
             used[i] = true;
             h.push(i);
         }
@@ -643,11 +539,7 @@ fn build(
         let mut key = h.clone();
         key.sort_unstable();
         if let Some(first) = seen.insert((kind, key), etag) {
-            return Err(format!(
-                "{} {first} and {etag} have the same {} nodes (an element listed twice); remove one",
-                plural(kind),
-                kind.len()
-            ));
+            return Err(format!("{} {first} and {etag} have the same {} nodes (an element listed twice); remove one", plural(kind), kind.len()));
         }
     }
     drop(seen);
@@ -836,10 +728,7 @@ fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind
 /// `None` if one of them is not a node of the body.
 fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Option<Vec<usize>> {
     let n = if q.len() == 3 || q.len() == 6 { 3 } else { 4 };
-    q.get(..n)?
-        .iter()
-        .map(|t| local.get(*index.get(t)?).copied().filter(|&l| l != usize::MAX))
-        .collect()
+    q.get(..n)?.iter().map(|t| local.get(*index.get(t)?).copied().filter(|&l| l != usize::MAX)).collect()
 }
 
 /// Orients `cell` (coordinates `x`): a cell whose corner Jacobians are all positive is kept,
@@ -914,32 +803,18 @@ fn wedge_corner_jacobians(p: &[[f64; 3]]) -> Vec<f64> {
 fn corner_jacobians(p: &[[f64; 3]; 8]) -> [f64; 8] {
     // For each corner: its neighbours along ξ, η, ζ and whether the corner sits at the + end of
     // that direction (then the edge points backwards and its sign flips).
-    const NEIGHBOURS: [[usize; 3]; 8] = [
-        [1, 3, 4],
-        [0, 2, 5],
-        [3, 1, 6],
-        [2, 0, 7],
-        [5, 7, 0],
-        [4, 6, 1],
-        [7, 5, 2],
-        [6, 4, 3],
-    ];
+    const NEIGHBOURS: [[usize; 3]; 8] = [[1, 3, 4], [0, 2, 5], [3, 1, 6], [2, 0, 7], [5, 7, 0], [4, 6, 1], [7, 5, 2], [6, 4, 3]];
     const FLIPS: [usize; 8] = [0, 1, 2, 1, 1, 2, 3, 2];
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
     let mut out = [0.0; 8];
     for (c, o) in out.iter_mut().enumerate() {
         let [a, b, d] = NEIGHBOURS[c].map(|n| sub(p[n], p[c]));
-        let det = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0])
-            + a[2] * (b[0] * d[1] - b[1] * d[0]);
+        let det = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) + a[2] * (b[0] * d[1] - b[1] * d[0]);
         let scale = norm(a) * norm(b) * norm(d);
         let s = if scale > 0.0 { det / scale } else { 0.0 };
         let s = if FLIPS[c] % 2 == 1 { -s } else { s };
-        *o = if s.abs() <= 1e-12 || !s.is_finite() {
-            0.0
-        } else {
-            s
-        };
+        *o = if s.abs() <= 1e-12 || !s.is_finite() { 0.0 } else { s };
     }
     out
 }
@@ -949,41 +824,25 @@ mod tests {
     use super::*;
 
     fn mesh_file(name: &str) -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("mesh")
-            .join(name)
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("mesh").join(name)
     }
 
     fn normal(g: &BodyGeometry, q: &[usize]) -> [f64; 3] {
         let p: Vec<[f64; 3]> = q.iter().map(|&v| g.nodes[v]).collect();
         let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
         let b = [p[3][0] - p[0][0], p[3][1] - p[0][1], p[3][2] - p[0][2]];
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
     }
 
     /// Checks face `name`: `count` quads, each normal along `sign * e_axis`, each a face of its element.
     fn check_face(g: &BodyGeometry, name: &str, count: usize, axis: usize, sign: f64) {
-        let (_, quads) = g
-            .faces
-            .iter()
-            .find(|(n, _)| n == name)
-            .unwrap_or_else(|| panic!("no face {name}"));
+        let (_, quads) = g.faces.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no face {name}"));
         assert_eq!(quads.len(), count, "{name}");
         for q in quads {
             let n = normal(g, q.nodes());
             assert!(n[axis] * sign > 0.0, "{name}: quad not outward");
-            assert!(
-                n[(axis + 1) % 3].abs() < 1e-12 && n[(axis + 2) % 3].abs() < 1e-12,
-                "{name}"
-            );
-            assert!(
-                q.nodes().iter().all(|v| g.cells[q.elem].nodes().contains(v)),
-                "{name}: quad not on its element"
-            );
+            assert!(n[(axis + 1) % 3].abs() < 1e-12 && n[(axis + 2) % 3].abs() < 1e-12, "{name}");
+            assert!(q.nodes().iter().all(|v| g.cells[q.elem].nodes().contains(v)), "{name}: quad not on its element");
         }
     }
 
@@ -991,17 +850,12 @@ mod tests {
         assert_eq!(g.nodes.len(), 7 * 4 * 4);
         assert_eq!(g.cells.len(), 54);
         for p in &g.nodes {
-            assert!(
-                (0.0..=2.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]),
-                "{p:?}"
-            );
+            assert!((0.0..=2.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]), "{p:?}");
             assert!((zmin..=zmin + 1.0).contains(&p[2]), "{p:?}");
         }
         for h in &g.cells {
             let h: [usize; 8] = h.nodes().try_into().unwrap();
-            assert!(corner_jacobians(&h.map(|v| g.nodes[v]))
-                .iter()
-                .all(|&j| j > 0.0));
+            assert!(corner_jacobians(&h.map(|v| g.nodes[v])).iter().all(|&j| j > 0.0));
         }
         let mut used = vec![false; g.nodes.len()];
         g.cells.iter().flat_map(|c| c.nodes().to_vec()).for_each(|v| used[v] = true);
@@ -1013,10 +867,7 @@ mod tests {
         let g = read(&mesh_file("two_blocks.msh"), Some("upper")).expect("upper");
         check_body(&g, 1.0);
         let names: Vec<&str> = g.faces.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(
-            names,
-            ["upper_top", "upper_bottom", "upper_left", "upper_right"]
-        );
+        assert_eq!(names, ["upper_top", "upper_bottom", "upper_left", "upper_right"]);
         check_face(&g, "upper_top", 18, 2, 1.0);
         check_face(&g, "upper_bottom", 18, 2, -1.0);
         check_face(&g, "upper_left", 9, 0, -1.0);
@@ -1064,13 +915,8 @@ mod tests {
 
     #[test]
     fn unknown_volume_lists_known_ones() {
-        let e = read(&mesh_file("two_blocks.msh"), Some("nope"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("\"nope\"") && e.contains("\"upper\"") && e.contains("\"lower\""),
-            "{e}"
-        );
+        let e = read(&mesh_file("two_blocks.msh"), Some("nope")).unwrap_err().to_string();
+        assert!(e.contains("\"nope\"") && e.contains("\"upper\"") && e.contains("\"lower\""), "{e}");
         assert!(!e.contains('\n'), "{e}");
     }
 
@@ -1088,14 +934,8 @@ mod tests {
     fn truncated_file_is_an_error() {
         let bytes = std::fs::read(mesh_file("two_blocks.msh")).expect("mesh");
         let dir = std::env::temp_dir();
-        for (i, cut) in [bytes.len() / 2, bytes.len() / 3, 40, 5, 0]
-            .into_iter()
-            .enumerate()
-        {
-            let p = dir.join(format!(
-                "tresca_feti_gmsh_truncated_{}_{i}.msh",
-                std::process::id()
-            ));
+        for (i, cut) in [bytes.len() / 2, bytes.len() / 3, 40, 5, 0].into_iter().enumerate() {
+            let p = dir.join(format!("tresca_feti_gmsh_truncated_{}_{i}.msh", std::process::id()));
             std::fs::write(&p, &bytes[..cut]).expect("temp file");
             let r = read(&p, Some("upper"));
             let _ = std::fs::remove_file(&p);
@@ -1105,10 +945,7 @@ mod tests {
             assert!(!msg.contains('\n') && msg.len() < 300, "{msg}");
         }
         let bytes = std::fs::read(mesh_file("two_blocks_binary.msh")).expect("mesh");
-        let p = dir.join(format!(
-            "tresca_feti_gmsh_truncated_bin_{}.msh",
-            std::process::id()
-        ));
+        let p = dir.join(format!("tresca_feti_gmsh_truncated_bin_{}.msh", std::process::id()));
         std::fs::write(&p, &bytes[..bytes.len() / 2]).expect("temp file");
         let r = read(&p, None);
         let _ = std::fs::remove_file(&p);
@@ -1118,20 +955,13 @@ mod tests {
 
     #[test]
     fn garbage_and_other_versions_are_errors() {
-        for text in [
-            "hello",
-            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n",
-            "$MeshFormat\n4.1 1 3\n$EndMeshFormat\n",
-        ] {
+        for text in ["hello", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n", "$MeshFormat\n4.1 1 3\n$EndMeshFormat\n"] {
             let msg = parse(text.as_bytes(), None).unwrap_err();
             assert!(msg.starts_with(UNREADABLE) && !msg.contains('\n'), "{msg}");
         }
         let garbage = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 x\n$EndNodes\n";
         let msg = parse(garbage.as_bytes(), None).unwrap_err();
-        assert!(
-            msg.starts_with(UNREADABLE) && msg.contains("line 5"),
-            "{msg}"
-        );
+        assert!(msg.starts_with(UNREADABLE) && msg.contains("line 5"), "{msg}");
     }
 
     #[test]
@@ -1143,16 +973,7 @@ mod tests {
     /// A single unit hex with one physical surface (its top), no `$PhysicalNames`, its nodes
     /// listed in the permuted tag order `tags`, and hex connectivity `conn` (as tags).
     fn one_hex(tags: [u64; 8], conn: [u64; 8], top: [u64; 4]) -> String {
-        let corners = [
-            [0, 0, 0],
-            [1, 0, 0],
-            [1, 1, 0],
-            [0, 1, 0],
-            [0, 0, 1],
-            [1, 0, 1],
-            [1, 1, 1],
-            [0, 1, 1],
-        ];
+        let corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
         let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 1 1\n");
         s += "1 0 0 1 1 1 1 1 5 0\n1 0 0 0 1 1 1 1 7 1 1\n$EndEntities\n$Nodes\n1 8 1 8\n3 1 0 8\n";
         for t in tags {
@@ -1181,27 +1002,17 @@ mod tests {
         let text = one_hex(ids, ids, [5, 6, 7, 8]);
         let err = |t: String| parse(t.as_bytes(), None).unwrap_err();
         let msg = err(text.replacen("\n0 1 1\n", "\n0 nan 1\n", 1));
-        assert!(
-            msg.contains("node 8 has a non-finite coordinate (0, NaN, 1)"),
-            "{msg}"
-        );
+        assert!(msg.contains("node 8 has a non-finite coordinate (0, NaN, 1)"), "{msg}");
         let msg = err(one_hex([1, 2, 3, 4, 5, 6, 7, 7], ids, [5, 6, 7, 8]));
         assert!(msg.contains("node 7 is defined twice"), "{msg}");
         let msg = err(one_hex(ids, ids, [5, 6, 7, 9]));
         assert!(msg.contains("quadrangle 1 refers to node 9"), "{msg}");
         let msg = err(text.replacen("$EndNodes\n", "", 1));
-        assert!(
-            msg.starts_with(UNREADABLE)
-                && msg.contains("expected $EndNodes to close the $Nodes section"),
-            "{msg}"
-        );
+        assert!(msg.starts_with(UNREADABLE) && msg.contains("expected $EndNodes to close the $Nodes section"), "{msg}");
         let msg = err(text[..text.find("$Elements").unwrap()].to_string());
         assert!(msg.contains("no $Elements section"), "{msg}");
         let msg = err(text.replacen("4.1 0 8", "4.1 1 8", 1));
-        assert!(
-            msg.contains("binary") && msg.contains("line 3") && !msg.contains('\n'),
-            "{msg}"
-        );
+        assert!(msg.contains("binary") && msg.contains("line 3") && !msg.contains('\n'), "{msg}");
     }
 
     #[test]
@@ -1215,16 +1026,7 @@ mod tests {
         for (i, &t) in tags.iter().enumerate() {
             assert_eq!(
                 g.nodes[i],
-                [
-                    [0., 0., 0.],
-                    [1., 0., 0.],
-                    [1., 1., 0.],
-                    [0., 1., 0.],
-                    [0., 0., 1.],
-                    [1., 0., 1.],
-                    [1., 1., 1.],
-                    [0., 1., 1.]
-                ][(t - 1) as usize]
+                [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.], [0., 0., 1.], [1., 0., 1.], [1., 1., 1.], [0., 1., 1.]][(t - 1) as usize]
             );
         }
         assert_eq!(g.faces.len(), 1);
@@ -1233,9 +1035,7 @@ mod tests {
         // Mirrored connectivity (all corner Jacobians negative) is reordered.
         let mirrored = [1, 4, 3, 2, 5, 8, 7, 6];
         let g = parse(one_hex(tags, mirrored, [5, 6, 7, 8]).as_bytes(), None).expect("mirrored");
-        assert!(corner_jacobians(&<[usize; 8]>::try_from(g.cells[0].nodes()).unwrap().map(|v| g.nodes[v]))
-            .iter()
-            .all(|&j| j > 0.0));
+        assert!(corner_jacobians(&<[usize; 8]>::try_from(g.cells[0].nodes()).unwrap().map(|v| g.nodes[v])).iter().all(|&j| j > 0.0));
         check_face(&g, "5", 1, 2, 1.0);
 
         // A twisted hex (two nodes swapped) is refused, naming the element.

@@ -93,17 +93,9 @@ impl Mesh {
         self.nodes.extend_from_slice(&geom.nodes);
         self.cells.extend(geom.cells.iter().map(|h| h.map(|v| v + n0)));
         for (fname, facets) in geom.faces {
-            self.faces.push(Face {
-                name: format!("{name}.{fname}"),
-                body,
-                facets: facets.into_iter().map(|q| q.map(q.elem + e0, |v| v + n0)).collect(),
-            });
+            self.faces.push(Face { name: format!("{name}.{fname}"), body, facets: facets.into_iter().map(|q| q.map(q.elem + e0, |v| v + n0)).collect() });
         }
-        self.bodies.push(BodyMesh {
-            name: name.to_string(),
-            nodes: n0..self.nodes.len(),
-            elems: e0..self.cells.len(),
-        });
+        self.bodies.push(BodyMesh { name: name.to_string(), nodes: n0..self.nodes.len(), elems: e0..self.cells.len() });
         Ok(())
     }
 

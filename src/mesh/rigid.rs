@@ -64,7 +64,11 @@ pub fn describe(u: &[f64; 6]) -> String {
     let axis = |w: [f64; 3]| {
         let names = ["x", "y", "z"];
         let big: Vec<usize> = (0..3).filter(|&d| w[d].abs() > 1e-6).collect();
-        if big.len() == 1 { names[big[0]].to_string() } else { format!("({:.3}, {:.3}, {:.3})", w[0], w[1], w[2]) }
+        if big.len() == 1 {
+            names[big[0]].to_string()
+        } else {
+            format!("({:.3}, {:.3}, {:.3})", w[0], w[1], w[2])
+        }
     };
     let (t, w) = ([u[0], u[1], u[2]], [u[3], u[4], u[5]]);
     let (nt, nw) = (t.iter().map(|a| a * a).sum::<f64>().sqrt(), w.iter().map(|a| a * a).sum::<f64>().sqrt());
@@ -90,7 +94,11 @@ pub fn dominant(u: &[f64; 6]) -> String {
     let mut parts: Vec<usize> = (0..6).filter(|&i| u[i].abs() >= top / 3.0 && top > 0.0).collect();
     parts.sort_by(|&a, &b| u[b].abs().total_cmp(&u[a].abs()));
     let words: Vec<&str> = parts.iter().map(|&i| names[i]).collect();
-    if words.is_empty() { "no motion".into() } else { words.join(" with ") }
+    if words.is_empty() {
+        "no motion".into()
+    } else {
+        words.join(" with ")
+    }
 }
 
 #[cfg(test)]
@@ -105,4 +113,3 @@ mod tests {
         assert_eq!(describe(&[0.0, 3.0, 0.0, 0.0, 0.0, 0.0]), "translation along y");
     }
 }
-

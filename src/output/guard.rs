@@ -79,13 +79,19 @@ pub fn check_paths(inputs: &[Named], results: &[Named]) -> Result<()> {
     for input in inputs {
         let id = Identity::of(&input.path);
         if let Some(r) = results.iter().zip(&ids).find_map(|(r, rid)| id.same(rid).then_some(r)) {
-            return Err(Error::scene(&r.key, format!("{} {} would overwrite {} {}; choose another path", r.what, r.path.display(), input.what, input.path.display())));
+            return Err(Error::scene(
+                &r.key,
+                format!("{} {} would overwrite {} {}; choose another path", r.what, r.path.display(), input.what, input.path.display()),
+            ));
         }
     }
     // a result must not be another result
     for (j, b) in results.iter().enumerate() {
         if let Some(a) = (0..j).find(|&i| ids[i].same(&ids[j])).map(|i| &results[i]) {
-            return Err(Error::scene(&b.key, format!("{} {} is also {} {} ({}); give each result its own path", b.what, b.path.display(), a.what, a.path.display(), a.key)));
+            return Err(Error::scene(
+                &b.key,
+                format!("{} {} is also {} {} ({}); give each result its own path", b.what, b.path.display(), a.what, a.path.display(), a.key),
+            ));
         }
     }
     Ok(())

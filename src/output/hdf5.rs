@@ -252,9 +252,7 @@ fn validate(data: &OutputData) -> std::result::Result<(), String> {
             return Err("empty attribute name".into());
         }
         if name.contains('\0') || value.contains('\0') {
-            return Err(format!(
-                "attribute {name:?}: name or value contains a NUL character"
-            ));
+            return Err(format!("attribute {name:?}: name or value contains a NUL character"));
         }
         if !names.insert(name.as_str()) {
             return Err(format!("attribute {name:?} appears twice"));
@@ -287,12 +285,7 @@ fn validate_fields(data: &OutputData, fields: &[Field], rows: &Rows) -> std::res
         };
         let got = values_len(&f.values);
         if got != expected * f.ncomp {
-            return Err(format!(
-                "field {:?}: {got} values, expected {expected} {}s × {} components",
-                f.name,
-                center_str(f.center),
-                f.ncomp
-            ));
+            return Err(format!("field {:?}: {got} values, expected {expected} {}s × {} components", f.name, center_str(f.center), f.ncomp));
         }
     }
     Ok(())
@@ -407,10 +400,7 @@ fn write_file<C: Comm>(comm: &C, tmp: &Path, data: &OutputData, reserve: &mut Re
                 Some(raw) => p.mpio(raw, None),
                 None => p,
             })
-            .with_fcpl(|p| {
-                p.attr_creation_order(AttrCreationOrder::Indexed)
-                    .link_creation_order(LinkCreationOrder::Indexed)
-            })
+            .with_fcpl(|p| p.attr_creation_order(AttrCreationOrder::Indexed).link_creation_order(LinkCreationOrder::Indexed))
             .create(tmp)
             .map_err(ctx("cannot create file")),
     )?;
@@ -665,14 +655,13 @@ fn read_cells(mesh: &Group) -> R<Vec<Cell>> {
 /// attributes (so [`read`] gives them back in that order).
 /// Collective: agreed over the ranks.
 fn create_group<C: Comm>(w: &Writer<'_, C>, parent: &Group, name: &str) -> Result<Group> {
-    w.all(parent
-        .create_group_builder()
-        .with_gcpl(|p| {
-            p.link_creation_order(LinkCreationOrder::Indexed)
-                .attr_creation_order(AttrCreationOrder::Indexed)
-        })
-        .create(name)
-        .map_err(ctx(format!("creating {}/{name}", parent.name().trim_end_matches('/')))))
+    w.all(
+        parent
+            .create_group_builder()
+            .with_gcpl(|p| p.link_creation_order(LinkCreationOrder::Indexed).attr_creation_order(AttrCreationOrder::Indexed))
+            .create(name)
+            .map_err(ctx(format!("creating {}/{name}", parent.name().trim_end_matches('/')))),
+    )
 }
 
 /// Writes `fields` into `group`, one dataset each with its `center` attribute: the rows `rows`
@@ -681,19 +670,12 @@ fn write_fields<C: Comm>(w: &Writer<'_, C>, group: &Group, data: &OutputData, fi
     for f in fields {
         let len = mesh_len(data, f.center);
         let rows = rows.get(&f.name).map(Vec::as_slice);
-        let shape = if f.ncomp == 1 {
-            vec![len]
-        } else {
-            vec![len, f.ncomp]
-        };
+        let shape = if f.ncomp == 1 { vec![len] } else { vec![len, f.ncomp] };
         let ds = match &f.values {
             Values::F64(v) => write_dataset(w, group, &f.name, &shape, rows, v)?,
             Values::I32(v) => write_dataset(w, group, &f.name, &shape, rows, v)?,
         };
-        w.all(
-            write_str_attr(&ds, CENTER_ATTR, center_str(f.center))
-                .map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name))),
-        )?;
+        w.all(write_str_attr(&ds, CENTER_ATTR, center_str(f.center)).map_err(|m| Error::output(String::new(), format!("{}/{}: {m}", group.name(), f.name))))?;
     }
     Ok(())
 }
@@ -874,16 +856,9 @@ fn write_rows<T: Bits, C: Comm>(w: &Writer<'_, C>, group: &Group, name: &str, sh
 
 /// Writes a scalar variable-length UTF-8 string attribute on `loc`.
 fn write_str_attr(loc: &Location, name: &str, value: &str) -> std::result::Result<(), String> {
-    let v: VarLenUnicode = value
-        .parse()
-        .map_err(|e| format!("attribute {name:?}: {e}"))?;
-    let attr = loc
-        .new_attr::<VarLenUnicode>()
-        .shape(())
-        .create(name)
-        .map_err(|e| format!("creating attribute {name:?}: {}", h5_text(&e)))?;
-    attr.write_scalar(&v)
-        .map_err(|e| format!("writing attribute {name:?}: {}", h5_text(&e)))
+    let v: VarLenUnicode = value.parse().map_err(|e| format!("attribute {name:?}: {e}"))?;
+    let attr = loc.new_attr::<VarLenUnicode>().shape(()).create(name).map_err(|e| format!("creating attribute {name:?}: {}", h5_text(&e)))?;
+    attr.write_scalar(&v).map_err(|e| format!("writing attribute {name:?}: {}", h5_text(&e)))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -962,16 +937,9 @@ fn read_file(path: &Path) -> R<OutputData> {
     let file = File::open(path).map_err(h5e("cannot open"))?;
     let mesh = file.group(MESH).map_err(h5e("opening /mesh"))?;
 
-    let (shape, coords) = read_f64(
-        &mesh
-            .dataset(COORDINATES)
-            .map_err(h5e("opening /mesh/coordinates"))?,
-    )
-    .map_err(|m| format!("/mesh/coordinates: {m}"))?;
+    let (shape, coords) = read_f64(&mesh.dataset(COORDINATES).map_err(h5e("opening /mesh/coordinates"))?).map_err(|m| format!("/mesh/coordinates: {m}"))?;
     if shape.len() != 2 || shape[1] != 3 {
-        return Err(format!(
-            "/mesh/coordinates: shape {shape:?}, expected n × 3"
-        ));
+        return Err(format!("/mesh/coordinates: shape {shape:?}, expected n × 3"));
     }
     let coordinates = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
 
@@ -986,21 +954,11 @@ fn read_file(path: &Path) -> R<OutputData> {
     let root = file.group("/").map_err(h5e("opening /"))?;
     let mut attributes = Vec::new();
     for name in attr_names(&root).map_err(h5e("listing root attributes"))? {
-        let attr = root
-            .attr(&name)
-            .map_err(h5e(format!("opening attribute {name:?}")))?;
+        let attr = root.attr(&name).map_err(h5e(format!("opening attribute {name:?}")))?;
         let value = read_str_attr(&attr).map_err(|m| format!("attribute {name:?}: {m}"))?;
         attributes.push((name, value));
     }
-    Ok(OutputData {
-        coordinates,
-        cells,
-        mesh_rows: None,
-        fields,
-        attributes,
-        rows: Default::default(),
-        steps,
-    })
+    Ok(OutputData { coordinates, cells, mesh_rows: None, fields, attributes, rows: Default::default(), steps })
 }
 
 /// Every field dataset in `group`, in creation order (by name where the group does not track
@@ -1046,20 +1004,9 @@ fn read_time_attr(group: &Group) -> R<f64> {
 
 /// Link names in creation order, or by name where the group does not track creation order.
 fn link_names(g: &Group) -> ::hdf5::Result<Vec<String>> {
-    let tracked = g
-        .gcpl()
-        .map(|p| p.get_link_creation_order().ok())
-        .ok()
-        .flatten();
-    let ordered = matches!(
-        tracked,
-        Some(LinkCreationOrder::Indexed | LinkCreationOrder::Tracked)
-    );
-    let index = if ordered {
-        IndexType::CreationOrder
-    } else {
-        IndexType::Name
-    };
+    let tracked = g.gcpl().map(|p| p.get_link_creation_order().ok()).ok().flatten();
+    let ordered = matches!(tracked, Some(LinkCreationOrder::Indexed | LinkCreationOrder::Tracked));
+    let index = if ordered { IndexType::CreationOrder } else { IndexType::Name };
     g.member_names_by(index, IterationOrder::Increasing)
 }
 
@@ -1068,20 +1015,9 @@ fn link_names(g: &Group) -> ::hdf5::Result<Vec<String>> {
 /// Asks the group's own creation property list: the one `H5Fget_create_plist` gives for the
 /// file reports attribute creation order as untracked even when the root group tracks it.
 fn attr_names(g: &Group) -> ::hdf5::Result<Vec<String>> {
-    let tracked = g
-        .gcpl()
-        .map(|p| p.get_attr_creation_order().ok())
-        .ok()
-        .flatten();
-    let ordered = matches!(
-        tracked,
-        Some(AttrCreationOrder::Indexed | AttrCreationOrder::Tracked)
-    );
-    let index = if ordered {
-        IndexType::CreationOrder
-    } else {
-        IndexType::Name
-    };
+    let tracked = g.gcpl().map(|p| p.get_attr_creation_order().ok()).ok().flatten();
+    let ordered = matches!(tracked, Some(AttrCreationOrder::Indexed | AttrCreationOrder::Tracked));
+    let index = if ordered { IndexType::CreationOrder } else { IndexType::Name };
     g.attr_names_by(index, IterationOrder::Increasing)
 }
 
@@ -1095,11 +1031,7 @@ fn read_raw<T: H5Type>(ds: &Dataset) -> ::hdf5::Result<Vec<T>> {
 }
 
 fn read_f64(ds: &Dataset) -> R<(Vec<usize>, Vec<f64>)> {
-    match ds
-        .dtype()
-        .and_then(|t| t.to_descriptor())
-        .map_err(h5e("datatype"))?
-    {
+    match ds.dtype().and_then(|t| t.to_descriptor()).map_err(h5e("datatype"))? {
         TypeDescriptor::Float(_) => {}
         other => return Err(format!("datatype {other:?}, expected a float")),
     }
@@ -1114,67 +1046,31 @@ fn read_field(group: &Group, name: &str) -> R<Field> {
         [_, n] if *n > 0 => *n,
         _ => return Err(format!("shape {shape:?}, expected len or len × ncomp")),
     };
-    let values = match ds
-        .dtype()
-        .and_then(|t| t.to_descriptor())
-        .map_err(h5e("datatype"))?
-    {
+    let values = match ds.dtype().and_then(|t| t.to_descriptor()).map_err(h5e("datatype"))? {
         TypeDescriptor::Float(_) => Values::F64(read_raw(&ds).map_err(h5e("reading"))?),
-        TypeDescriptor::Integer(IntSize::U1 | IntSize::U2 | IntSize::U4)
-        | TypeDescriptor::Unsigned(IntSize::U1 | IntSize::U2) => {
+        TypeDescriptor::Integer(IntSize::U1 | IntSize::U2 | IntSize::U4) | TypeDescriptor::Unsigned(IntSize::U1 | IntSize::U2) => {
             Values::I32(read_raw(&ds).map_err(h5e("reading"))?)
         }
         other => return Err(format!("unsupported datatype {other:?}")),
     };
-    let attr = ds
-        .attr(CENTER_ATTR)
-        .map_err(h5e("no \"center\" attribute"))?;
-    let center = match read_str_attr(&attr)
-        .map_err(|m| format!("attribute \"center\": {m}"))?
-        .as_str()
-    {
+    let attr = ds.attr(CENTER_ATTR).map_err(h5e("no \"center\" attribute"))?;
+    let center = match read_str_attr(&attr).map_err(|m| format!("attribute \"center\": {m}"))?.as_str() {
         "node" => Center::Node,
         "cell" => Center::Cell,
-        other => {
-            return Err(format!(
-                "attribute \"center\" is {other:?}, expected \"node\" or \"cell\""
-            ))
-        }
+        other => return Err(format!("attribute \"center\" is {other:?}, expected \"node\" or \"cell\"")),
     };
-    Ok(Field {
-        name: name.to_owned(),
-        center,
-        ncomp,
-        values,
-    })
+    Ok(Field { name: name.to_owned(), center, ncomp, values })
 }
 
 /// Reads a scalar variable-length string attribute (UTF-8 or ASCII).
 fn read_str_attr(attr: &Attribute) -> R<String> {
     if !attr.is_scalar() {
-        return Err(format!(
-            "shape {:?}, expected a scalar string",
-            attr.shape()
-        ));
+        return Err(format!("shape {:?}, expected a scalar string", attr.shape()));
     }
-    match attr
-        .dtype()
-        .and_then(|t| t.to_descriptor())
-        .map_err(h5e("datatype"))?
-    {
-        TypeDescriptor::VarLenUnicode => Ok(attr
-            .read_scalar::<VarLenUnicode>()
-            .map_err(h5e("reading"))?
-            .as_str()
-            .to_owned()),
-        TypeDescriptor::VarLenAscii => Ok(attr
-            .read_scalar::<VarLenAscii>()
-            .map_err(h5e("reading"))?
-            .as_str()
-            .to_owned()),
-        other => Err(format!(
-            "datatype {other:?}, expected a variable-length string"
-        )),
+    match attr.dtype().and_then(|t| t.to_descriptor()).map_err(h5e("datatype"))? {
+        TypeDescriptor::VarLenUnicode => Ok(attr.read_scalar::<VarLenUnicode>().map_err(h5e("reading"))?.as_str().to_owned()),
+        TypeDescriptor::VarLenAscii => Ok(attr.read_scalar::<VarLenAscii>().map_err(h5e("reading"))?.as_str().to_owned()),
+        other => Err(format!("datatype {other:?}, expected a variable-length string")),
     }
 }
 
@@ -1195,44 +1091,19 @@ mod tests {
             p[1] += 1e-300;
             p[2] /= -3.0;
         }
-        let big: String = (0..50 * 1024)
-            .map(|i| char::from(b'a' + (i % 26) as u8))
-            .collect();
+        let big: String = (0..50 * 1024).map(|i| char::from(b'a' + (i % 26) as u8)).collect();
         OutputData {
             coordinates: g.nodes,
             cells: g.cells,
             mesh_rows: None,
             fields: vec![
-                Field {
-                    name: "displacement".into(),
-                    center: Center::Node,
-                    ncomp: 3,
-                    values: Values::F64((0..36).map(|i| i as f64 * 1.25e-7 - 3.0).collect()),
-                },
-                Field {
-                    name: "von_mises".into(),
-                    center: Center::Cell,
-                    ncomp: 1,
-                    values: Values::F64(vec![std::f64::consts::PI, f64::MIN_POSITIVE]),
-                },
-                Field {
-                    name: "subdomain".into(),
-                    center: Center::Cell,
-                    ncomp: 1,
-                    values: Values::I32(vec![-7, i32::MAX]),
-                },
-                Field {
-                    name: "a field with spaces, ünïcode".into(),
-                    center: Center::Node,
-                    ncomp: 2,
-                    values: Values::I32((0..24).collect()),
-                },
+                Field { name: "displacement".into(), center: Center::Node, ncomp: 3, values: Values::F64((0..36).map(|i| i as f64 * 1.25e-7 - 3.0).collect()) },
+                Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(vec![std::f64::consts::PI, f64::MIN_POSITIVE]) },
+                Field { name: "subdomain".into(), center: Center::Cell, ncomp: 1, values: Values::I32(vec![-7, i32::MAX]) },
+                Field { name: "a field with spaces, ünïcode".into(), center: Center::Node, ncomp: 2, values: Values::I32((0..24).collect()) },
             ],
             // Deliberately not in name order: creation order must survive.
-            attributes: vec![
-                ("version".into(), "tresca-feti 0.1.0 — ✓".into()),
-                ("report".into(), big),
-            ],
+            attributes: vec![("version".into(), "tresca-feti 0.1.0 — ✓".into()), ("report".into(), big)],
             rows: Default::default(),
             steps: Vec::new(),
         }
@@ -1258,12 +1129,7 @@ mod tests {
             assert_same_fields(&sa.fields, &sb.fields);
         }
         // Compared piecewise: a failing assert_eq! on a 50 KB string floods the output.
-        let names = |d: &OutputData| {
-            d.attributes
-                .iter()
-                .map(|(n, v)| (n.clone(), v.len()))
-                .collect::<Vec<_>>()
-        };
+        let names = |d: &OutputData| d.attributes.iter().map(|(n, v)| (n.clone(), v.len())).collect::<Vec<_>>();
         assert_eq!(names(a), names(b));
         for ((name, va), (_, vb)) in a.attributes.iter().zip(&b.attributes) {
             assert!(va == vb, "attribute {name:?} differs");
@@ -1317,19 +1183,8 @@ mod tests {
     fn many_attributes_keep_their_order() {
         // More than the 8 compact attributes: the root group switches to dense storage.
         let mut data = sample();
-        data.attributes = (0..20)
-            .rev()
-            .map(|i| (format!("k{i:02}"), format!("v{i}")))
-            .collect();
-        data.fields = (0..12)
-            .rev()
-            .map(|i| Field {
-                name: format!("f{i:02}"),
-                center: Center::Cell,
-                ncomp: 1,
-                values: Values::I32(vec![i, -i]),
-            })
-            .collect();
+        data.attributes = (0..20).rev().map(|i| (format!("k{i:02}"), format!("v{i}"))).collect();
+        data.fields = (0..12).rev().map(|i| Field { name: format!("f{i:02}"), center: Center::Cell, ncomp: 1, values: Values::I32(vec![i, -i]) }).collect();
         let path = tmp("many.h5");
         write(&path, &data).unwrap();
         assert_same(&data, &read(&path).unwrap());
@@ -1356,10 +1211,7 @@ mod tests {
 
         let mut data = sample();
         data.cells[1].nodes_mut()[7] = 12;
-        assert!(write(&path, &data)
-            .unwrap_err()
-            .to_string()
-            .contains("cell 1 references node"));
+        assert!(write(&path, &data).unwrap_err().to_string().contains("cell 1 references node"));
         let mut data = sample();
         data.fields[0].name = "a/b".into();
         assert!(write(&path, &data).is_err());
@@ -1373,10 +1225,7 @@ mod tests {
     fn errors_name_the_file() {
         let missing = tmp("does_not_exist.h5");
         let err = read(&missing).unwrap_err().to_string();
-        assert!(
-            err.starts_with("output ") && err.contains("does_not_exist.h5"),
-            "{err}"
-        );
+        assert!(err.starts_with("output ") && err.contains("does_not_exist.h5"), "{err}");
         assert!(!err.contains('\n'), "{err}");
 
         let dir = tmp("no_such_dir").join("x.h5");
@@ -1410,18 +1259,8 @@ mod tests {
                             ncomp: 3,
                             values: Values::F64((0..36).map(|i| time * (i as f64 * 1.25e-7 - 3.0)).collect()),
                         },
-                        Field {
-                            name: "von_mises".into(),
-                            center: Center::Cell,
-                            ncomp: 1,
-                            values: Values::F64(vec![k / 3.0, -k * f64::MIN_POSITIVE]),
-                        },
-                        Field {
-                            name: "contact status".into(),
-                            center: Center::Cell,
-                            ncomp: 1,
-                            values: Values::I32(vec![k as i32, -1]),
-                        },
+                        Field { name: "von_mises".into(), center: Center::Cell, ncomp: 1, values: Values::F64(vec![k / 3.0, -k * f64::MIN_POSITIVE]) },
+                        Field { name: "contact status".into(), center: Center::Cell, ncomp: 1, values: Values::I32(vec![k as i32, -1]) },
                     ],
                     rows: Default::default(),
                 }
@@ -1438,9 +1277,7 @@ mod tests {
         let back = read(&path).unwrap();
         assert_same(&data, &back);
         assert_eq!(back.steps.iter().map(|s| s.time).collect::<Vec<_>>(), [0.25, 0.5, 1.0]);
-        let values: usize = (data.fields.iter().chain(data.steps.iter().flat_map(|s| &s.fields)))
-            .map(|f| values_len(&f.values))
-            .sum();
+        let values: usize = (data.fields.iter().chain(data.steps.iter().flat_map(|s| &s.fields))).map(|f| values_len(&f.values)).sum();
         let mesh = 3 * 12 + 8 * 2;
         assert_eq!(verify(&path, &data).unwrap(), mesh + values + 3);
 
@@ -1564,7 +1401,12 @@ mod tests {
         type Case = (Vec<Cell>, &'static str, Vec<usize>, Vec<i64>);
         let cases: Vec<Case> = vec![
             (vec![cell(CellKind::Tet4, 0), cell(CellKind::Tet4, 4), cell(CellKind::Tet4, 8)], "tetrahedra", vec![3, 4], (0..12).collect()),
-            (vec![cell(CellKind::Tet10, 0), cell(CellKind::Tet10, 2)], "tetrahedra10", vec![2, 10], vec![0, 1, 2, 3, 4, 5, 6, 7, 9, 8, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10]),
+            (
+                vec![cell(CellKind::Tet10, 0), cell(CellKind::Tet10, 2)],
+                "tetrahedra10",
+                vec![2, 10],
+                vec![0, 1, 2, 3, 4, 5, 6, 7, 9, 8, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10],
+            ),
             (vec![cell(CellKind::Wedge6, 6), cell(CellKind::Wedge6, 0)], "wedges", vec![2, 6], vec![6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]),
             (
                 vec![cell(CellKind::Hex8, 0), cell(CellKind::Tet10, 2), cell(CellKind::Tet4, 8), cell(CellKind::Wedge6, 1)],

@@ -117,13 +117,7 @@ fn check_step_times(steps: &[Step]) -> std::result::Result<(), String> {
             return Err(format!("step {}: time {} is not finite", step_name(i), step.time));
         }
         if i > 0 && step.time <= steps[i - 1].time {
-            return Err(format!(
-                "step {}: time {} is not after step {}'s {}",
-                step_name(i),
-                step.time,
-                step_name(i - 1),
-                steps[i - 1].time
-            ));
+            return Err(format!("step {}: time {} is not after step {}'s {}", step_name(i), step.time, step_name(i - 1), steps[i - 1].time));
         }
     }
     Ok(())

@@ -41,18 +41,13 @@ pub fn write(xdmf_path: &Path, h5_file_name: &str, data: &OutputData, cells: Cel
 fn render(h5: &str, data: &OutputData, cells: CellLayout) -> std::result::Result<String, String> {
     if h5.is_empty() || h5.contains(':') {
         // XDMF splits `file:/path` at the colon.
-        return Err(format!(
-            "HDF5 file name {h5:?} must be non-empty and contain no ':'"
-        ));
+        return Err(format!("HDF5 file name {h5:?} must be non-empty and contain no ':'"));
     }
     let h5 = escape(h5)?;
     let mut s = String::new();
     // Writing into a String cannot fail: the fmt::Results below are ignored on purpose.
     let _ = writeln!(s, r#"<?xml version="1.0" encoding="utf-8"?>"#);
-    let _ = writeln!(
-        s,
-        r#"<Xdmf xmlns:xi="http://www.w3.org/2001/XInclude" Version="3.0">"#
-    );
+    let _ = writeln!(s, r#"<Xdmf xmlns:xi="http://www.w3.org/2001/XInclude" Version="3.0">"#);
     let _ = writeln!(s, "  <Domain>");
     if data.steps.is_empty() {
         let _ = writeln!(s, r#"    <Grid Name="mesh" GridType="Uniform">"#);
@@ -61,18 +56,14 @@ fn render(h5: &str, data: &OutputData, cells: CellLayout) -> std::result::Result
         let _ = writeln!(s, "    </Grid>");
     } else {
         check_step_times(&data.steps)?;
-        let _ = writeln!(
-            s,
-            r#"    <Grid Name="load path" GridType="Collection" CollectionType="Temporal">"#
-        );
+        let _ = writeln!(s, r#"    <Grid Name="load path" GridType="Collection" CollectionType="Temporal">"#);
         for (i, step) in data.steps.iter().enumerate() {
             let name = step_name(i);
             let _ = writeln!(s, r#"      <Grid Name="step {name}" GridType="Uniform">"#);
             // Debug formatting: the shortest text that reads back as the same f64.
             let _ = writeln!(s, r#"        <Time Value="{:?}"/>"#, step.time);
             mesh(&mut s, 8, &h5, data, cells);
-            attributes(&mut s, 8, &h5, &format!("/steps/{name}"), data, &step.fields, &step.rows)
-                .map_err(|m| format!("step {name}: {m}"))?;
+            attributes(&mut s, 8, &h5, &format!("/steps/{name}"), data, &step.fields, &step.rows).map_err(|m| format!("step {name}: {m}"))?;
             let _ = writeln!(s, "      </Grid>");
         }
         let _ = writeln!(s, "    </Grid>");
@@ -91,10 +82,7 @@ fn mesh(s: &mut String, indent: usize, h5: &str, data: &OutputData, cells: CellL
         CellLayout::Uniform(kind) => (kind.xdmf_name(), format!("{nelems} {}", kind.len())),
         CellLayout::Mixed { len } => ("Mixed", len.to_string()),
     };
-    let _ = writeln!(
-        s,
-        r#"{pad}<Topology TopologyType="{topology}" NumberOfElements="{nelems}">"#
-    );
+    let _ = writeln!(s, r#"{pad}<Topology TopologyType="{topology}" NumberOfElements="{nelems}">"#);
     data_item(s, indent + 2, &dims, "Int", 8, h5, &format!("/mesh/{}", cells.dataset()));
     let _ = writeln!(s, "{pad}</Topology>");
     let _ = writeln!(s, r#"{pad}<Geometry GeometryType="XYZ">"#);
@@ -120,10 +108,7 @@ fn attributes(
             Values::I32(v) => ("Int", 4, v.len()),
         };
         if f.ncomp == 0 || nvalues % f.ncomp != 0 {
-            return Err(format!(
-                "field {:?}: {nvalues} values do not split into {} components",
-                f.name, f.ncomp
-            ));
+            return Err(format!("field {:?}: {nvalues} values do not split into {} components", f.name, f.ncomp));
         }
         let (center, expected) = match f.center {
             Center::Node => ("Node", data.nnodes()),
@@ -132,11 +117,7 @@ fn attributes(
         // a distributed field holds this rank's rows only; the file has them all
         let len = if rows.contains_key(&f.name) { expected } else { nvalues / f.ncomp };
         if len != expected {
-            return Err(format!(
-                "field {:?}: {len} tuples on a mesh with {expected} {}s",
-                f.name,
-                center.to_lowercase()
-            ));
+            return Err(format!("field {:?}: {len} tuples on a mesh with {expected} {}s", f.name, center.to_lowercase()));
         }
         let attribute_type = match f.ncomp {
             1 => "Scalar",
@@ -145,16 +126,9 @@ fn attributes(
             9 => "Tensor",
             _ => "Matrix",
         };
-        let dims = if f.ncomp == 1 {
-            format!("{len}")
-        } else {
-            format!("{len} {}", f.ncomp)
-        };
+        let dims = if f.ncomp == 1 { format!("{len}") } else { format!("{len} {}", f.ncomp) };
         let name = escape(&f.name)?;
-        let _ = writeln!(
-            s,
-            r#"{pad}<Attribute Name="{name}" AttributeType="{attribute_type}" Center="{center}">"#
-        );
+        let _ = writeln!(s, r#"{pad}<Attribute Name="{name}" AttributeType="{attribute_type}" Center="{center}">"#);
         data_item(s, indent + 2, &dims, number_type, precision, h5, &format!("{group}/{name}"));
         let _ = writeln!(s, "{pad}</Attribute>");
     }
@@ -165,10 +139,7 @@ fn attributes(
 /// already escaped.
 fn data_item(s: &mut String, indent: usize, dims: &str, number_type: &str, precision: u32, h5: &str, path: &str) {
     let pad = " ".repeat(indent);
-    let _ = writeln!(
-        s,
-        r#"{pad}<DataItem Dimensions="{dims}" NumberType="{number_type}" Precision="{precision}" Format="HDF">{h5}:{path}</DataItem>"#
-    );
+    let _ = writeln!(s, r#"{pad}<DataItem Dimensions="{dims}" NumberType="{number_type}" Precision="{precision}" Format="HDF">{h5}:{path}</DataItem>"#);
 }
 
 /// Escapes `raw` for use in XML text or a double-quoted attribute value; characters XML 1.0
@@ -187,9 +158,7 @@ fn escape(raw: &str) -> std::result::Result<String, String> {
                 let _ = write!(out, "&#{};", c as u32);
             }
             c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => {
-                return Err(format!(
-                    "name {raw:?} contains a character XML cannot represent"
-                ));
+                return Err(format!("name {raw:?} contains a character XML cannot represent"));
             }
             c => out.push(c),
         }
@@ -213,9 +182,7 @@ mod tests {
                 let end = after.find(';').ok_or_else(|| format!("bare & in {t:?}"))?;
                 let ent = &after[..end];
                 let ok = matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos")
-                    || ent
-                        .strip_prefix('#')
-                        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()));
+                    || ent.strip_prefix('#').is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()));
                 if !ok {
                     return Err(format!("bad entity &{ent};"));
                 }
@@ -269,9 +236,7 @@ mod tests {
             let tag = &rest[1..close];
             rest = &rest[close + 1..];
             if let Some(name) = tag.strip_prefix('/') {
-                let top = stack
-                    .pop()
-                    .ok_or_else(|| format!("</{name}> without opening tag"))?;
+                let top = stack.pop().ok_or_else(|| format!("</{name}> without opening tag"))?;
                 if top != name.trim() {
                     return Err(format!("</{name}> closes <{top}>"));
                 }
@@ -281,11 +246,7 @@ mod tests {
             let tag = tag.trim_end_matches('/');
             let name_end = tag.find(char::is_whitespace).unwrap_or(tag.len());
             let name = &tag[..name_end];
-            if name.is_empty()
-                || !name
-                    .chars()
-                    .all(|c| c.is_alphanumeric() || ":_-.".contains(c))
-            {
+            if name.is_empty() || !name.chars().all(|c| c.is_alphanumeric() || ":_-.".contains(c)) {
                 return Err(format!("bad element name {name:?}"));
             }
             if stack.is_empty() {
@@ -298,19 +259,13 @@ mod tests {
             let mut attrs = tag[name_end..].trim();
             let mut attr_names = std::collections::HashSet::new();
             while !attrs.is_empty() {
-                let eq = attrs
-                    .find('=')
-                    .ok_or_else(|| format!("attribute without value in <{name}>"))?;
+                let eq = attrs.find('=').ok_or_else(|| format!("attribute without value in <{name}>"))?;
                 let an = attrs[..eq].trim();
                 if an.is_empty() || an.contains(char::is_whitespace) || !attr_names.insert(an) {
                     return Err(format!("bad or repeated attribute {an:?} in <{name}>"));
                 }
                 let v = attrs[eq + 1..].trim_start();
-                let q = v
-                    .chars()
-                    .next()
-                    .filter(|c| *c == '"' || *c == '\'')
-                    .ok_or("unquoted attribute")?;
+                let q = v.chars().next().filter(|c| *c == '"' || *c == '\'').ok_or("unquoted attribute")?;
                 let vend = v[1..].find(q).ok_or("unterminated attribute value")?;
                 check_entities(&v[1..1 + vend])?;
                 attrs = v[vend + 2..].trim_start();
@@ -337,42 +292,12 @@ mod tests {
             cells: g.cells,
             mesh_rows: None,
             fields: vec![
-                Field {
-                    name: "displacement".into(),
-                    center: Center::Node,
-                    ncomp: 3,
-                    values: Values::F64(vec![0.0; 36]),
-                },
-                Field {
-                    name: "von <Mises> & \"co\"".into(),
-                    center: Center::Cell,
-                    ncomp: 1,
-                    values: Values::F64(vec![1.0, 2.0]),
-                },
-                Field {
-                    name: "subdomain".into(),
-                    center: Center::Cell,
-                    ncomp: 1,
-                    values: Values::I32(vec![0, 1]),
-                },
-                Field {
-                    name: "stress".into(),
-                    center: Center::Cell,
-                    ncomp: 6,
-                    values: Values::F64(vec![0.0; 12]),
-                },
-                Field {
-                    name: "grad".into(),
-                    center: Center::Cell,
-                    ncomp: 9,
-                    values: Values::F64(vec![0.0; 18]),
-                },
-                Field {
-                    name: "pair".into(),
-                    center: Center::Node,
-                    ncomp: 2,
-                    values: Values::I32(vec![0; 24]),
-                },
+                Field { name: "displacement".into(), center: Center::Node, ncomp: 3, values: Values::F64(vec![0.0; 36]) },
+                Field { name: "von <Mises> & \"co\"".into(), center: Center::Cell, ncomp: 1, values: Values::F64(vec![1.0, 2.0]) },
+                Field { name: "subdomain".into(), center: Center::Cell, ncomp: 1, values: Values::I32(vec![0, 1]) },
+                Field { name: "stress".into(), center: Center::Cell, ncomp: 6, values: Values::F64(vec![0.0; 12]) },
+                Field { name: "grad".into(), center: Center::Cell, ncomp: 9, values: Values::F64(vec![0.0; 18]) },
+                Field { name: "pair".into(), center: Center::Node, ncomp: 2, values: Values::I32(vec![0; 24]) },
             ],
             attributes: vec![("scene".into(), "x".repeat(100))],
             rows: Default::default(),
@@ -394,28 +319,18 @@ mod tests {
 
         let names = check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));
         assert_eq!(names.iter().filter(|n| *n == "Grid").count(), 1);
-        assert_eq!(
-            names.iter().filter(|n| *n == "Attribute").count(),
-            data.fields.len()
-        );
-        assert_eq!(
-            names.iter().filter(|n| *n == "DataItem").count(),
-            data.fields.len() + 2
-        );
+        assert_eq!(names.iter().filter(|n| *n == "Attribute").count(), data.fields.len());
+        assert_eq!(names.iter().filter(|n| *n == "DataItem").count(), data.fields.len() + 2);
 
         assert!(doc.contains(r#"<Topology TopologyType="Hexahedron" NumberOfElements="2">"#));
         assert!(doc.contains(r#"Dimensions="2 8" NumberType="Int" Precision="8" Format="HDF">r&amp;d result.h5:/mesh/hexahedra<"#));
         assert!(doc.contains(r#"<Geometry GeometryType="XYZ">"#));
         assert!(doc.contains(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/mesh/coordinates<"#));
-        assert!(
-            doc.contains(r#"<Attribute Name="displacement" AttributeType="Vector" Center="Node">"#)
-        );
+        assert!(doc.contains(r#"<Attribute Name="displacement" AttributeType="Vector" Center="Node">"#));
         assert!(doc.contains(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/fields/displacement<"#));
         assert!(doc.contains(r#"<Attribute Name="von &lt;Mises&gt; &amp; &quot;co&quot;" AttributeType="Scalar" Center="Cell">"#));
         assert!(doc.contains(r#"Dimensions="2" NumberType="Float" Precision="8""#));
-        assert!(
-            doc.contains(r#"<Attribute Name="subdomain" AttributeType="Scalar" Center="Cell">"#)
-        );
+        assert!(doc.contains(r#"<Attribute Name="subdomain" AttributeType="Scalar" Center="Cell">"#));
         assert!(doc.contains(r#"Dimensions="2" NumberType="Int" Precision="4" Format="HDF">r&amp;d result.h5:/fields/subdomain<"#));
         assert!(doc.contains(r#"<Attribute Name="stress" AttributeType="Tensor6" Center="Cell">"#));
         assert!(doc.contains(r#"Dimensions="2 6""#));
@@ -489,7 +404,9 @@ mod tests {
             let grid = at(&format!(r#"<Grid Name="step {name}" GridType="Uniform">"#));
             let t = at(&format!(r#"<Time Value="{time}"/>"#));
             let u = at(&format!(r#"Dimensions="12 3" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/steps/{name}/displacement<"#));
-            let vm = at(&format!(r#"Dimensions="2" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/steps/{name}/von &lt;Mises&gt; &amp; &quot;co&quot;<"#));
+            let vm = at(&format!(
+                r#"Dimensions="2" NumberType="Float" Precision="8" Format="HDF">r&amp;d result.h5:/steps/{name}/von &lt;Mises&gt; &amp; &quot;co&quot;<"#
+            ));
             let st = at(&format!(r#"Dimensions="2" NumberType="Int" Precision="4" Format="HDF">r&amp;d result.h5:/steps/{name}/status<"#));
             assert!(last < grid && grid < t && t < u && u < vm && vm < st, "step {name} out of order\n{doc}");
             last = st;

@@ -58,7 +58,11 @@ impl Equilibrium {
 
     /// ‖K x − rhs‖ / ‖rhs‖ (the residual itself where rhs = 0).
     pub fn relative(&self) -> f64 {
-        if self.rhs > 0.0 { self.residual / self.rhs } else { self.residual }
+        if self.rhs > 0.0 {
+            self.residual / self.rhs
+        } else {
+            self.residual
+        }
     }
 
     /// How far past the guard it lies, with `scale` the largest [`Equilibrium::scale`] of the
@@ -67,7 +71,11 @@ impl Equilibrium {
     pub fn excess(&self, scale: f64) -> f64 {
         let rounding = if scale > 0.0 { self.residual / (scale * ROUNDING_BOUND) } else { f64::INFINITY };
         let e = (self.relative() / EQUILIBRIUM_BOUND).min(rounding);
-        if e.is_nan() { f64::INFINITY } else { e }
+        if e.is_nan() {
+            f64::INFINITY
+        } else {
+            e
+        }
     }
 
     /// Whether it passes on its own (its own scale the problem's).
@@ -107,7 +115,8 @@ impl Verdict {
         }
         // `TRESCA_FETI_FAULT=accuracy@<rank>`: that rank's equilibrium reads as missed (to test
         // the guard's refusal end to end)
-        let injected = std::env::var("TRESCA_FETI_FAULT").is_ok_and(|f| f.split_once('@').is_some_and(|(p, r)| p == "accuracy" && r.parse::<usize>().ok() == Some(comm.rank())));
+        let injected = std::env::var("TRESCA_FETI_FAULT")
+            .is_ok_and(|f| f.split_once('@').is_some_and(|(p, r)| p == "accuracy" && r.parse::<usize>().ok() == Some(comm.rank())));
         if injected {
             (excess, relative) = (f64::INFINITY, f64::INFINITY);
         }
@@ -192,7 +201,11 @@ impl Guard {
 
 /// The problem's force scale for the KKT residuals: ‖b‖/σ_max(A) (0 when σ is unknown).
 pub fn force_scale(bnorm: f64, sigma: f64) -> f64 {
-    if sigma > 0.0 && sigma.is_finite() { bnorm / sigma } else { 0.0 }
+    if sigma > 0.0 && sigma.is_finite() {
+        bnorm / sigma
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]

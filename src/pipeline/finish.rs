@@ -6,15 +6,15 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::accuracy::Equilibrium;
 use super::{LocalFields, LocalMesh, Solution, Timings};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::cell::cell_center_stress;
 use crate::fem::material::von_mises;
-use crate::linalg::sparse::SymCsc;
 use crate::fem::material::Lame;
+use crate::linalg::sparse::SymCsc;
 use crate::model::MeshSize;
-use super::accuracy::Equilibrium;
 
 /// A piece of this rank (a body, or a TFETI subdomain): its part of the mesh, all that the
 /// post-solve path reads of it.
@@ -114,7 +114,16 @@ pub type Finished = (Solution, Vec<(PieceStats, usize)>, f64);
 /// this rank's rows and mesh everywhere), the figures and interface nodes of every piece in
 /// index order and the relative gluing jump (both on rank 0). Nothing here reads the whole mesh.
 #[allow(clippy::too_many_arguments)]
-pub fn finish<C: Comm>(comm: &C, lame: &[Lame], size: MeshSize, pieces: usize, layout: &[PieceLayout], mine: &[PieceSolution<'_>], hint: &str, t: &mut Timings) -> Result<Finished> {
+pub fn finish<C: Comm>(
+    comm: &C,
+    lame: &[Lame],
+    size: MeshSize,
+    pieces: usize,
+    layout: &[PieceLayout],
+    mine: &[PieceSolution<'_>],
+    hint: &str,
+    t: &mut Timings,
+) -> Result<Finished> {
     assert_eq!(layout.len(), mine.len(), "one layout per piece of this rank");
     // the equilibrium of every piece, judged against the rounding of the whole problem
     let eqs: Vec<Equilibrium> = mine.iter().map(PieceSolution::equilibrium).collect();

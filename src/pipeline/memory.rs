@@ -105,7 +105,8 @@ impl MeshCount {
                 c.transient = c.transient.max(tetrahedralize_bytes(n, kind));
                 box_counts(n, kind)
             } else if let Some(g) = &b.gmsh {
-                let (nodes, elements, bytes) = crate::mesh::gmsh::header_counts(&ls.dir().join(&g.file)).map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));
+                let (nodes, elements, bytes) =
+                    crate::mesh::gmsh::header_counts(&ls.dir().join(&g.file)).map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));
                 c.files += bytes + GMSH_NODE_BYTES * nodes + GMSH_ELEMENT_BYTES * elements;
                 // a hexahedral mesh's boundary: about 6 e^(2/3) quadrilaterals
                 (nodes, elements, 6.0 * elements.powf(2.0 / 3.0))

@@ -24,17 +24,17 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::comm::Comm;
+use crate::contact::state::{contact_fields, contact_state, ContactState, CONTACT, OPEN, SLIP, STICK};
+use crate::dual::monolithic::MonolithicDual;
+use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
 use crate::linalg::ordering::{expand_to_dofs, order_last_if_cheap, NodeOrder};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
-use crate::dual::monolithic::MonolithicDual;
-use crate::dual::DualProblem;
 use crate::qp::params::CoulombSolve;
 use crate::qp::{self, Method, Operator, Qp, Space};
-use crate::contact::state::{contact_fields, contact_state, ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::scene::{LoadedScene, OrderingKind, Preconditioner};
 
 pub use crate::dual::monolithic::LocalBody;
@@ -97,8 +97,7 @@ impl Timings {
 fn injected_fault<C: Comm>(comm: &C, phase: &str) -> Option<Error> {
     let spec = std::env::var("TRESCA_FETI_FAULT").ok()?;
     let (p, r) = spec.split_once('@')?;
-    (p == phase && r.parse::<usize>().ok() == Some(comm.rank()))
-        .then(|| Error::numerical("injected fault", format!("phase {phase} on rank {}", comm.rank())))
+    (p == phase && r.parse::<usize>().ok() == Some(comm.rank())).then(|| Error::numerical("injected fault", format!("phase {phase} on rank {}", comm.rank())))
 }
 
 /// `TRESCA_FETI_PAUSE=<phase>` sleeps 60 s at a point of that phase (`output`: the result
@@ -251,8 +250,7 @@ pub fn assemble_and_factorize<C: Comm>(comm: &C, model: &Model, ordering: Orderi
                     }
                     OrderingKind::Amd => Ordering::Amd,
                 };
-                let chol = Cholesky::factorize(&sys.k, ord)
-                    .map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))?;
+                let chol = Cholesky::factorize(&sys.k, ord).map_err(|e| Error::numerical(format!("body \"{}\"", body.name), e.to_string()))?;
                 Ok(LocalBody { body: b, dofs, sys, chol, trailing })
             })
             .collect::<Result<Vec<_>>>()
@@ -294,7 +292,16 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
     sol.bodies = stats
         .iter()
         .zip(&mesh.bodies)
-        .map(|((s, _), body)| BodyStats { name: body.name.clone(), nodes: s.nodes, elements: s.elements, free_dofs: s.dofs, nnz_k: s.nnz_k, nnz_l: s.nnz_l, residual: s.residual, rank: s.rank })
+        .map(|((s, _), body)| BodyStats {
+            name: body.name.clone(),
+            nodes: s.nodes,
+            elements: s.elements,
+            free_dofs: s.dofs,
+            nnz_k: s.nnz_k,
+            nnz_l: s.nnz_l,
+            residual: s.residual,
+            rank: s.rank,
+        })
         .collect();
     Ok(sol)
 }
@@ -306,7 +313,13 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
     if let Some(g) = model.floating.first() {
-        return Err(Error::scene("decomposition", format!("{} is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)", crate::contact::hold::group_name(&model.mesh, g))));
+        return Err(Error::scene(
+            "decomposition",
+            format!(
+                "{} is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)",
+                crate::contact::hold::group_name(&model.mesh, g)
+            ),
+        ));
     }
     let s = &solver_for(ls, model);
     let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, true, t)?;
@@ -328,12 +341,17 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
             b = t.phase(comm, "load", || {
                 let (cons, loads) = model.state(k);
                 let by_body = model::constraints_by_body(&model.mesh, &cons);
-                Ok(dual.set_load(contact, |lb| {
-                    let body = &model.mesh.bodies[lb.body];
-                    let dofs = DofMap::new(body.nodes.clone(), &by_body[lb.body]);
-                    let f = crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
-                    (dofs, f)
-                }, &walk.jump))
+                Ok(dual.set_load(
+                    contact,
+                    |lb| {
+                        let body = &model.mesh.bodies[lb.body];
+                        let dofs = DofMap::new(body.nodes.clone(), &by_body[lb.body]);
+                        let f =
+                            crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
+                        (dofs, f)
+                    },
+                    &walk.jump,
+                ))
             })?;
         }
         // the accuracy guard: a result that misses its checks is continued at a tighter ε
@@ -350,7 +368,8 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
             let set_k = coulomb_set.as_ref().unwrap_or(&set);
             let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
             let kkt = qp::kkt::residuals_scaled(set_k, &rec.lambda, &rec.gap, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
-            let pieces: Vec<_> = dual.blocks.iter().zip(&rec.u).zip(&rec.rhs).map(|((blk, u), f)| accuracy::Equilibrium::of(&blk.local.sys.k, u, f, &[])).collect();
+            let pieces: Vec<_> =
+                dual.blocks.iter().zip(&rec.u).zip(&rec.rhs).map(|((blk, u), f)| accuracy::Equilibrium::of(&blk.local.sys.k, u, f, &[])).collect();
             let verdict = accuracy::Verdict::new(comm, &pieces, kkt.worst(), params.common.eps);
             match guard.next(k, &verdict, &walk.name(name, k), &t.live)? {
                 None => break (sol, rec, coulomb_set, kkt),
@@ -392,7 +411,14 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
 /// `output.export_dual`: the Coulomb problem on the monolithic dual in the local form of the
 /// frictional-contact literature, u = W r + q with per contact (normal, t₁, t₂): W = A (by
 /// 3m products), q = −b, μ, our r = λ and u = W r + q; rank 0 writes.
-fn export_dual<C: Comm>(comm: &C, dual: &MonolithicDual<'_, C>, b: &[f64], contact: &crate::contact::pairing::Contact, lambda: &[f64], path: &std::path::Path) -> Result<()> {
+fn export_dual<C: Comm>(
+    comm: &C,
+    dual: &MonolithicDual<'_, C>,
+    b: &[f64],
+    contact: &crate::contact::pairing::Contact,
+    lambda: &[f64],
+    path: &std::path::Path,
+) -> Result<()> {
     use crate::qp::cone::Coefficient;
     let m = contact.len();
     let mu: Vec<f64> = contact
@@ -404,7 +430,14 @@ fn export_dual<C: Comm>(comm: &C, dual: &MonolithicDual<'_, C>, b: &[f64], conta
         })
         .collect::<Result<_>>()?;
     let layout = qp::Layout::contact(m, true);
-    let idx = |k: usize| -> usize { let (a, i) = (k / 3, k % 3); if i == 0 { layout.normal(a) } else { layout.tangent(a, i - 1) } };
+    let idx = |k: usize| -> usize {
+        let (a, i) = (k / 3, k % 3);
+        if i == 0 {
+            layout.normal(a)
+        } else {
+            layout.tangent(a, i - 1)
+        }
+    };
     let n = 3 * m;
     let mut w = vec![0.0; n * n];
     let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
@@ -432,7 +465,11 @@ pub enum DualKind {
     /// TFETI with the oblique projector P̃ (`orthogonal`: SMALSE-M's penalized operator);
     /// `contact`: with contact rows (else plain CG on the gluing and Dirichlet rows);
     /// `projected`: `decomposition.projected_cg`.
-    Tfeti { orthogonal: bool, contact: bool, projected: bool },
+    Tfeti {
+        orthogonal: bool,
+        contact: bool,
+        projected: bool,
+    },
 }
 
 impl DualKind {
@@ -481,7 +518,9 @@ pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> R
         format!("acts in the inner solves of {} only; \"{}\" takes none", names.join(", "), method.name())
     };
     match dual {
-        DualKind::Monolithic => refuse("acts on the TFETI dual; this scene is solved on the monolithic dual (set decomposition.subdomains or decomposition.tfeti = true)".into()),
+        DualKind::Monolithic => {
+            refuse("acts on the TFETI dual; this scene is solved on the monolithic dual (set decomposition.subdomains or decomposition.tfeti = true)".into())
+        }
         DualKind::Tfeti { orthogonal: true, contact, .. } if !contact || method.takes_preconditioner() => Ok(Some(kind)),
         DualKind::Tfeti { orthogonal: false, projected: false, .. } => refuse("acts in the projected inner solves (decomposition.projected_cg = true)".into()),
         _ if projected(method, dual) => Ok(Some(kind)),
@@ -540,7 +579,8 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         output::guard::check(&ls, out_key)?;
         Ok(ls)
     })?;
-    let mut model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|mut m| m.check_held().map(|()| m)))?;
+    let mut model =
+        t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|mut m| m.check_held().map(|()| m)))?;
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
@@ -564,7 +604,11 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     comm.sum_f64(&mut peak_sum);
     comm.max_f64(&mut peak_max);
     let after_phase = t.peaks.iter().map(|(phase, bytes)| report::PhasePeak { phase: phase.clone(), bytes: *bytes }).collect();
-    report.memory = Some(report::Memory { peak_rss_bytes_sum_over_ranks: peak_sum[0], peak_rss_bytes_max_rank: peak_max[0], peak_rss_bytes_max_rank_after_phase: after_phase });
+    report.memory = Some(report::Memory {
+        peak_rss_bytes_sum_over_ranks: peak_sum[0],
+        peak_rss_bytes_max_rank: peak_max[0],
+        peak_rss_bytes_max_rank_after_phase: after_phase,
+    });
     let before_output = t.clone();
     // every rank writes its rows; the root attributes carry rank 0's report
     // collective: a failure on one rank must stop all of them before the broadcast below
@@ -599,7 +643,10 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     pause_for_tests("committed");
     if let Some(stop) = &model.path.stopped {
         let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-        return Err(Error::numerical(&stop.what, format!("{}; the path stops there: steps 1–{} are solved and written to {}", stop.why, stop.at - 1, names.join(", "))));
+        return Err(Error::numerical(
+            &stop.what,
+            format!("{}; the path stops there: steps 1–{} are solved and written to {}", stop.why, stop.at - 1, names.join(", ")),
+        ));
     }
     Ok(Summary { report, files, solution: sol })
 }
@@ -645,7 +692,10 @@ pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Mo
 pub fn pair_notes(c: &crate::contact::pairing::Contact, i: usize, length: &str) -> Vec<String> {
     let mut out = c.outside.get(i).map_or_else(Vec::new, |o| outside_lines(i, o, length));
     if let Some(f) = c.interference.get(i).filter(|f| f.nodes > 0) {
-        out.push(format!("  initial interference: {} slave nodes start inside the master, at most {:.3e}{length} deep (the solution removes it)", f.nodes, f.depth));
+        out.push(format!(
+            "  initial interference: {} slave nodes start inside the master, at most {:.3e}{length} deep (the solution removes it)",
+            f.nodes, f.depth
+        ));
     }
     out
 }
@@ -692,12 +742,12 @@ pub fn peak_rss_bytes() -> f64 {
 fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings) -> report::Report {
     use report::*;
     let mesh = &model.mesh;
-    let (umax, at) = sol
-        .displacement
-        .iter()
-        .enumerate()
-        .map(|(v, u)| ((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt(), v))
-        .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
+    let (umax, at) =
+        sol.displacement
+            .iter()
+            .enumerate()
+            .map(|(v, u)| ((u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt(), v))
+            .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
     let body_of_node = mesh.bodies.iter().position(|b| b.nodes.contains(&at)).unwrap_or(0);
     let dec = &ls.scene.decomposition;
     let solver = &ls.scene.solver.params;
@@ -764,7 +814,11 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
                     .iter()
                     .filter(|w| w.1.starts_with("warning"))
                     .map(|w| w.1.clone())
-                    .chain((0..c.outside.len()).flat_map(|i| pair_notes(c, i, &length).into_iter().map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })))
+                    .chain((0..c.outside.len()).flat_map(|i| {
+                        pair_notes(c, i, &length)
+                            .into_iter()
+                            .map(move |l| if l.starts_with("warning") { l } else { format!("contact pair {i}: {}", l.trim_start()) })
+                    }))
                     .collect(),
                 stick: o.state.count(STICK),
                 slip: o.state.count(SLIP),
@@ -816,7 +870,16 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
 /// This rank's share of the result file: its rows of u and of the stresses, the replicated
 /// fields whole.
 #[allow(clippy::too_many_arguments)]
-fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, outcome: Option<&ContactOutcome>, t: &Timings, report: &str, history: &str) -> OutputData {
+fn output_data<C: Comm>(
+    comm: &C,
+    ls: &LoadedScene,
+    model: &Model,
+    sol: &Solution,
+    outcome: Option<&ContactOutcome>,
+    t: &Timings,
+    report: &str,
+    history: &str,
+) -> OutputData {
     let want = |f: &str| ls.scene.output.fields.iter().any(|x| x == f);
     let (mut fields, mut rows) = distributed_fields(&sol.local, &want);
     let lm = &sol.local_mesh;
@@ -862,7 +925,8 @@ fn output_data<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solutio
             steps.push(output::Step { time: s.report.step as f64, fields, rows });
         }
     }
-    let mesh_rows = Some(MeshRows { nodes: model.size.nodes, cells: model.size.elements, node_rows: sol.local.nodes.clone(), cell_rows: sol.local.cells.clone() });
+    let mesh_rows =
+        Some(MeshRows { nodes: model.size.nodes, cells: model.size.elements, node_rows: sol.local.nodes.clone(), cell_rows: sol.local.cells.clone() });
     OutputData { coordinates: lm.coordinates.clone(), cells: lm.cells.clone(), mesh_rows, fields, attributes, rows, steps }
 }
 
@@ -873,7 +937,12 @@ fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec
     let mut fields = Vec::new();
     let mut rows = std::collections::BTreeMap::new();
     if want("displacement") {
-        fields.push(Field { name: "displacement".into(), center: Center::Node, ncomp: 3, values: Values::F64(local.displacement.iter().flatten().copied().collect()) });
+        fields.push(Field {
+            name: "displacement".into(),
+            center: Center::Node,
+            ncomp: 3,
+            values: Values::F64(local.displacement.iter().flatten().copied().collect()),
+        });
         rows.insert("displacement".to_string(), local.nodes.clone());
     }
     if want("von_mises") {
@@ -904,7 +973,8 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     } else {
         None
     };
-    let needs = memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks, ls.scene.solver.precision);
+    let needs =
+        memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks, ls.scene.solver.precision);
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let mesh = &model.mesh;
@@ -955,7 +1025,8 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
                 format!("p = ({}, {}, {}){stress}", p[0], p[1], p[2])
             }
         };
-        let _ = writeln!(s, "traction[{i}] on {}: {load} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, r[0], r[1], r[2]);
+        let _ =
+            writeln!(s, "traction[{i}] on {}: {load} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, r[0], r[1], r[2]);
         if let Some(c) = mesh.faces.iter().position(|f| f.name == t.face).and_then(|k| model.cut_faces.iter().find(|c| c.face == k)) {
             if (a / c.region_area - 1.0).abs() > crate::model::CUT_AREA_TOLERANCE {
                 let _ = writeln!(
@@ -1018,10 +1089,23 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
     if dec.is_tfeti(&body_dofs(&model)) {
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
         let d = crate::feti::decomposition::decompose_each(mesh, &parts)?;
-        let _ = writeln!(s, "TFETI: {} subdomains ({} per body), {} interface nodes", d.subdomains.len(), parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "), d.interface_nodes());
+        let _ = writeln!(
+            s,
+            "TFETI: {} subdomains ({} per body), {} interface nodes",
+            d.subdomains.len(),
+            parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "),
+            d.interface_nodes()
+        );
         for (i, sd) in d.subdomains.iter().enumerate() {
             let iface = sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count();
-            let _ = writeln!(s, "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes", mesh.bodies[sd.body].name, sd.elems.len(), sd.nodes.len(), 3 * sd.nodes.len());
+            let _ = writeln!(
+                s,
+                "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes",
+                mesh.bodies[sd.body].name,
+                sd.elems.len(),
+                sd.nodes.len(),
+                3 * sd.nodes.len()
+            );
         }
     }
     if let Some(p) = priced {

@@ -8,14 +8,14 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use super::accuracy::Tightening;
 use super::monitor::Live;
+use super::report::UnitsReport;
 use super::{ContactOutcome, LocalFields, Solution};
 use crate::contact::pairing::Contact;
 use crate::contact::state::{ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::model::LoadPath;
 use crate::qp::Params;
-use super::accuracy::Tightening;
-use super::report::UnitsReport;
 
 /// The walk along a load path: the warm start y and the last step's tangential jump B_T u, the
 /// solver's settings with σ_max measured at the first step and reused (A does not change along
@@ -40,7 +40,18 @@ pub struct Walk {
 impl Walk {
     /// Before the first step, on a dual of length `dim`.
     pub fn new(path: &LoadPath, dim: usize, params: &Params, units: Option<UnitsReport>) -> Self {
-        Walk { steps: path.steps, of: path.asked(), on_path: path.is_path(), y: vec![0.0; dim], jump: vec![0.0; dim], params: params.clone(), units, records: vec![], tightenings: vec![], start: Instant::now() }
+        Walk {
+            steps: path.steps,
+            of: path.asked(),
+            on_path: path.is_path(),
+            y: vec![0.0; dim],
+            jump: vec![0.0; dim],
+            params: params.clone(),
+            units,
+            records: vec![],
+            tightenings: vec![],
+            start: Instant::now(),
+        }
     }
 
     /// Step k begins (its time starts).
@@ -52,7 +63,16 @@ impl Walk {
     /// and σ_max (`None`: measure again) for the next step. After the last step returns the
     /// records (empty off a path).
     #[allow(clippy::too_many_arguments)]
-    pub fn end(&mut self, k: usize, solution: &Solution, contact: Option<(&Contact, &ContactOutcome)>, live: &Live, y: Vec<f64>, jump: Vec<f64>, sigma: Option<f64>) -> Option<Vec<StepOutput>> {
+    pub fn end(
+        &mut self,
+        k: usize,
+        solution: &Solution,
+        contact: Option<(&Contact, &ContactOutcome)>,
+        live: &Live,
+        y: Vec<f64>,
+        jump: Vec<f64>,
+        sigma: Option<f64>,
+    ) -> Option<Vec<StepOutput>> {
         if let Some((_, o)) = contact {
             self.tightenings.extend(o.tightenings.iter().cloned());
         }
@@ -76,7 +96,11 @@ impl Walk {
 
     /// The solver's name in an error, with the load step on a path.
     pub fn name(&self, name: &str, k: usize) -> String {
-        if self.on_path { format!("{} (load step {k}/{})", name.to_uppercase(), self.of) } else { name.to_uppercase() }
+        if self.on_path {
+            format!("{} (load step {k}/{})", name.to_uppercase(), self.of)
+        } else {
+            name.to_uppercase()
+        }
     }
 }
 

@@ -89,7 +89,11 @@ pub struct Candidate {
 
 impl Candidate {
     pub fn label(&self) -> String {
-        if self.tfeti { format!("TFETI {}", self.parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("/")) } else { "monolithic".into() }
+        if self.tfeti {
+            format!("TFETI {}", self.parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("/"))
+        } else {
+            "monolithic".into()
+        }
     }
 
     pub fn dual_rows(&self) -> usize {
@@ -142,7 +146,13 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
     };
     // a candidate from its pieces' fills, ranks and DOFs, its rows of B and its nA
     #[allow(clippy::too_many_arguments)]
-    let candidate = |parts: Vec<usize>, target_dofs: Option<usize>, f: &[Fill], rank_of: &dyn Fn(usize) -> usize, dofs_of: &dyn Fn(usize) -> f64, rows: (usize, usize), n_a: f64| {
+    let candidate = |parts: Vec<usize>,
+                     target_dofs: Option<usize>,
+                     f: &[Fill],
+                     rank_of: &dyn Fn(usize) -> usize,
+                     dofs_of: &dyn Fn(usize) -> f64,
+                     rows: (usize, usize),
+                     n_a: f64| {
         let (mut nnz, mut flops, mut dofs) = (vec![0.0; ranks], vec![0.0; ranks], vec![0.0; ranks]);
         for (i, x) in f.iter().enumerate() {
             let r = rank_of(i);
@@ -196,7 +206,9 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             for b in 0..nb {
                 let last = super::contact_nodes(model, b);
                 let dofs = DofMap::new(mesh.bodies[b].nodes.clone(), &by_body[b]);
-                let n = (0..last.len()).filter(|&l| last[l]).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count()).sum::<usize>() as f64;
+                let n =
+                    (0..last.len()).filter(|&l| last[l]).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count()).sum::<usize>()
+                        as f64;
                 dense[super::owner(b, ranks)] += n * n;
             }
             mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
@@ -223,11 +235,8 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
     let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
     let per: Vec<f64> = specs.iter().map(|(_, _, parts)| total_nodes as f64 / parts.iter().sum::<usize>() as f64).collect();
     let samples: Vec<usize> = specs.iter().zip(&per).map(|((_, _, parts), &p)| sample_size(parts.iter().sum(), p)).collect();
-    let work: Vec<f64> = specs
-        .iter()
-        .enumerate()
-        .map(|(j, (s, _, _))| total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per[j] * samples[j] as f64)
-        .collect();
+    let work: Vec<f64> =
+        specs.iter().enumerate().map(|(j, (s, _, _))| total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per[j] * samples[j] as f64).collect();
     let pricer = balance(&work, workers);
     const FIGURES: usize = 8;
     let mut figures = vec![0.0; FIGURES * specs.len()];
@@ -272,7 +281,16 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             Ok(candidate(parts.clone(), Some(*target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a))
         })();
         match priced {
-            Ok(c) => figures[FIGURES * j..FIGURES * (j + 1)].copy_from_slice(&[c.nnz_l, c.nnz_l_rank, c.gluing_rows as f64, c.dirichlet_rows as f64, c.n_a, c.t_product, c.t_factor, c.time]),
+            Ok(c) => figures[FIGURES * j..FIGURES * (j + 1)].copy_from_slice(&[
+                c.nnz_l,
+                c.nnz_l_rank,
+                c.gluing_rows as f64,
+                c.dirichlet_rows as f64,
+                c.n_a,
+                c.t_product,
+                c.t_factor,
+                c.time,
+            ]),
             Err(e) => {
                 failed = Err(e);
                 break;
@@ -350,7 +368,11 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
     use std::fmt::Write;
     let best = cheapest(cands).map(Candidate::label);
     let mut s = format!("decomposition by cost ({ranks} rank{}):\n", if ranks == 1 { "" } else { "s" });
-    let _ = writeln!(s, "  {:<16} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}", "candidate", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s");
+    let _ = writeln!(
+        s,
+        "  {:<16} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}",
+        "candidate", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s"
+    );
     for c in cands {
         let dual = c.dual_rows();
         let _ = writeln!(

@@ -266,7 +266,11 @@ impl UnitsReport {
 pub fn contact_phrase(laws: &[(usize, &str)]) -> String {
     match laws.first() {
         Some(&(_, first)) if laws.iter().all(|l| l.1 == first) => {
-            if first == "frictionless" { "frictionless contact".into() } else { format!("contact with {first} friction") }
+            if first == "frictionless" {
+                "frictionless contact".into()
+            } else {
+                format!("contact with {first} friction")
+            }
         }
         _ => format!("contact: {}", laws.iter().map(|(e, l)| format!("pair {e} {l}")).collect::<Vec<_>>().join(", ")),
     }

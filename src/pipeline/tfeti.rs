@@ -8,19 +8,19 @@
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
 use super::{accuracy, BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
-use crate::feti::decomposition::{decompose_each, Decomposition};
+use crate::contact::state::contact_state;
 use crate::error::{Error, Result};
+use crate::feti::cluster::{ClusterSystem, Clustering};
 use crate::feti::coarse::{self, Coarse};
 use crate::feti::constraints::{self, LocalRhs};
+use crate::feti::decomposition::{decompose_each, Decomposition};
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
-use crate::feti::cluster::{ClusterSystem, Clustering};
 use crate::feti::subdomain::{SubdomainMesh, SubdomainSystem};
 use crate::feti::{assign_ranks, eliminated, subdomain_loads};
 use crate::model::Model;
 use crate::qp::{self, Lambda, Operator, Qp, Space};
-use crate::contact::state::contact_state;
 use crate::scene::{CoarseSolve, LoadedScene, Precision, Projector};
 
 /// Figures of one subdomain: those of every piece, and its interface.
@@ -103,7 +103,21 @@ impl DistributionStats {
         let (owned, ghosts) = (dist.owned.len(), dist.local_len() - dist.owned.len());
         let (fwd, rev, nbrs) = dist.message_sizes();
         let c = &dist.clock;
-        let mut mx = [owned as f64, -(owned as f64), ghosts as f64, nbrs as f64, c.apply.get(), c.pinv.get(), c.exchange.get(), c.reduce.get(), c.coarse_solve.get(), -c.pinv.get(), c.restricted.get(), c.restricted_factor.get(), corner];
+        let mut mx = [
+            owned as f64,
+            -(owned as f64),
+            ghosts as f64,
+            nbrs as f64,
+            c.apply.get(),
+            c.pinv.get(),
+            c.exchange.get(),
+            c.reduce.get(),
+            c.coarse_solve.get(),
+            -c.pinv.get(),
+            c.restricted.get(),
+            c.restricted_factor.get(),
+            corner,
+        ];
         comm.max_f64(&mut mx);
         let mut sent = [(2 * fwd + rev) as u64];
         comm.sum_u64(&mut sent);
@@ -195,8 +209,17 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
                         let p = share.position(s);
                         let pl = &share.layout[p];
                         let body = &model.mesh.bodies[pl.body];
-                        let part = SubdomainMesh { coords: &pl.coords, cells: &pl.cells, elems: &pl.elems, body: &body.name, body_elems_start: body.elems.start };
-                        SubdomainSystem::from_part(&part, s, model.lame[pl.body], ls.scene.factorization.ordering, loads[s].clone(), share.eliminated[p].clone(), held[p].clone())
+                        let part =
+                            SubdomainMesh { coords: &pl.coords, cells: &pl.cells, elems: &pl.elems, body: &body.name, body_elems_start: body.elems.start };
+                        SubdomainSystem::from_part(
+                            &part,
+                            s,
+                            model.lame[pl.body],
+                            ls.scene.factorization.ordering,
+                            loads[s].clone(),
+                            share.eliminated[p].clone(),
+                            held[p].clone(),
+                        )
                     })
                     .collect::<Result<Vec<_>>>()?;
                 ClusterSystem::new(c, subs, clusters.bc[c].0.clone(), clusters.bc[c].1)
@@ -273,7 +296,14 @@ pub struct Share {
 
 impl Share {
     /// The share of the subdomains `own` and of the owned rows of `dist`.
-    fn new<C: Comm>(model: &Model, d: &Decomposition, elim: &[Vec<usize>], own: &[usize], cons: &constraints::Constraints, dist: &Distribution<'_, C>) -> Share {
+    fn new<C: Comm>(
+        model: &Model,
+        d: &Decomposition,
+        elim: &[Vec<usize>],
+        own: &[usize],
+        cons: &constraints::Constraints,
+        dist: &Distribution<'_, C>,
+    ) -> Share {
         let mesh = &model.mesh;
         let mut own = own.to_vec();
         own.sort_unstable();
@@ -307,7 +337,15 @@ impl Share {
             }
         }
         let eliminated = own.iter().map(|&s| elim[s].clone()).collect();
-        Share { layout, eliminated, held_entry, loaded, rhs: LocalRhs::new(cons, &dist.owned), subdomains: d.subdomains.len(), eliminated_dofs: elim.iter().map(Vec::len).sum() }
+        Share {
+            layout,
+            eliminated,
+            held_entry,
+            loaded,
+            rhs: LocalRhs::new(cons, &dist.owned),
+            subdomains: d.subdomains.len(),
+            eliminated_dofs: elim.iter().map(Vec::len).sum(),
+        }
     }
 
     /// The position of subdomain `s` (one of this rank's) in `layout`.
@@ -341,7 +379,12 @@ impl Share {
             kernels[c] = p.sys.kernel().0;
         }
         let e = dual.coarse.rigid_loads(&dual.dist, &|c| kernels[c], &fc);
-        let mine = dual.dist.subs.iter().map(|sr| clusters.members[sr.index].iter().map(|&s| (f[self.position(s)].clone(), g[self.position(s)].clone())).collect()).collect();
+        let mine = dual
+            .dist
+            .subs
+            .iter()
+            .map(|sr| clusters.members[sr.index].iter().map(|&s| (f[self.position(s)].clone(), g[self.position(s)].clone())).collect())
+            .collect();
         (mine, e, self.rhs.at(&values))
     }
 }
@@ -361,7 +404,8 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
     let dec = &ls.scene.decomposition;
     let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { clusters, constraints: cons, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } = setup(comm, ls, model, t)?;
+    let TfetiProblem { clusters, constraints: cons, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } =
+        setup(comm, ls, model, t)?;
     let model = &*model;
     // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
     let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows, cons.tie_rows];
@@ -389,9 +433,11 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
             let (sol, smalse) = t.phase(comm, "iterate", || {
                 let m = dual.preconditioner();
                 let projected = super::projected(params.method(), super::DualKind::of(ls, model));
-                let qp = Qp::new(&dual, &b, &set)
-                    .with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner))
-                    .with_coarse(if projected { Some(&dual as &dyn qp::Coarse) } else { None });
+                let qp = Qp::new(&dual, &b, &set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner)).with_coarse(if projected {
+                    Some(&dual as &dyn qp::Coarse)
+                } else {
+                    None
+                });
                 let r = match (orthogonal, contact.is_some()) {
                     (true, _) => {
                         // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
@@ -475,7 +521,15 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
         }
         let mut outcome = contact.zip(judged).map(|(c, (set_i, li, ri, kkt))| {
             let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
-            ContactOutcome { dim: dual.space().count(dual.dim()), state, info: sol.info.clone(), bnorm, kkt, steps: vec![], tightenings: guard.tightenings.clone() }
+            ContactOutcome {
+                dim: dual.space().count(dual.dim()),
+                state,
+                info: sol.info.clone(),
+                bnorm,
+                kkt,
+                steps: vec![],
+                tightenings: guard.tightenings.clone(),
+            }
         });
         // σ_max of SMALSE-M's penalized operator is its own business: measured every step
         let sigma = (!orthogonal).then_some(sol.info.sigma_est);
@@ -550,7 +604,15 @@ fn equilibria<C: Comm>(dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>]
 /// share): checks K_s u_s = f_s − B_sᵀλ on the free DOFs (u_s − g_s against f̂_s − B_sᵀλ),
 /// stresses, gather on rank 0 with the gluing jump; the bodies' figures summed over their
 /// subdomains.
-fn finish_subdomains<C: Comm>(comm: &C, model: &Model, share: &Share, dual: &TfetiDual<'_, C>, u: &[Vec<f64>], rhs: &[Vec<f64>], t: &mut Timings) -> Result<Solution> {
+fn finish_subdomains<C: Comm>(
+    comm: &C,
+    model: &Model,
+    share: &Share,
+    dual: &TfetiDual<'_, C>,
+    u: &[Vec<f64>],
+    rhs: &[Vec<f64>],
+    t: &mut Timings,
+) -> Result<Solution> {
     let mesh = &model.mesh;
     let (members, w) = members(dual, u, rhs);
     let mine: Vec<PieceSolution<'_>> = members

@@ -28,10 +28,28 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, monitor: 
         None => None,
     };
     loop {
-        let opts = Pcg { system: &Whole, preconditioner: qp.preconditioner.map(|m| (m, 1.0)), coarse: coarse.as_deref(), coefficients: Coefficients::Standard, feasible: false, max_iter: limit - total, outer: total, relax: None, lanczos: false };
-        let cg = pcg(qp, &opts, &mut x, &mut r, |_| c.eps * bnorm, |h| {
-            drv.record(Step { err: h / bnorm, tol: 0.0, q: 0.0, normal_active: 0, stick: 0, slip: 0, inner: 1, n_a: 0, kind: StepKind::Cg, time: 0.0 });
-        }, None)?;
+        let opts = Pcg {
+            system: &Whole,
+            preconditioner: qp.preconditioner.map(|m| (m, 1.0)),
+            coarse: coarse.as_deref(),
+            coefficients: Coefficients::Standard,
+            feasible: false,
+            max_iter: limit - total,
+            outer: total,
+            relax: None,
+            lanczos: false,
+        };
+        let cg = pcg(
+            qp,
+            &opts,
+            &mut x,
+            &mut r,
+            |_| c.eps * bnorm,
+            |h| {
+                drv.record(Step { err: h / bnorm, tol: 0.0, q: 0.0, normal_active: 0, stick: 0, slip: 0, inner: 1, n_a: 0, kind: StepKind::Cg, time: 0.0 });
+            },
+            None,
+        )?;
         total += cg.iterations;
         drv.info.preconditioner_applications += cg.applications;
         // confirm with a fresh product: the recurrences drift

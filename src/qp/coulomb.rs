@@ -6,12 +6,12 @@
 //! any dual), so this layer knows nothing of meshes or FETI. [`newton`] is the other way: the
 //! semi-smooth Newton method on the Coulomb law itself (the default for isotropic μ).
 
+use super::cone::{bounds, Coefficient};
 use super::driver::Monitor;
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
 use super::params::{MethodParams, Params, Ssn, Tssn};
 use super::Qp;
-use super::cone::{bounds, Coefficient};
 use super::{Info, QpError, QpSolution};
 
 /// Settings of the fixed point.
@@ -73,7 +73,13 @@ pub fn solve<S: Space>(
         // relative to the new λν; λν falling to 0 (every pair opening) is a change of 1, not an
         // overflow; both 0 is no change
         let (dn, nn) = (space.norm(&diff), space.norm(&new));
-        change = if nn > 0.0 { dn / nn } else if dn > 0.0 { 1.0 } else { 0.0 };
+        change = if nn > 0.0 {
+            dn / nn
+        } else if dn > 0.0 {
+            1.0
+        } else {
+            0.0
+        };
         if !change.is_finite() {
             return Err(QpError::NotFinite { what: "the Coulomb fixed point's normal multipliers", outer: it });
         }
@@ -121,8 +127,8 @@ pub fn lagged<A: Operator>(qp: &Qp<'_, A>, mu: &[Coefficient], lambda0: &[f64], 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::tssn::tests::{lcg, Dense};
     use crate::qp::sets::{Disc, TangentSet};
+    use crate::qp::tssn::tests::{lcg, Dense};
     use crate::qp::{kkt, Method, Qp, Replicated, Silent};
 
     /// m pairs, A random SPD, pressing loads (b_ν > 0) with tangential pushes, Λ with zero discs.
@@ -139,10 +145,9 @@ mod tests {
         let n = 3 * m;
         let mu = vec![Coefficient::Isotropic(0.3); m];
         let p = crate::qp::Params::new(Method::Tssn).with_eps(1e-10);
-        let (sol, fixed, info) = solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| {
-            crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent)
-        })
-        .expect("the fixed point converges");
+        let (sol, fixed, info) =
+            solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent))
+                .expect("the fixed point converges");
         assert!(info.iterations > 1 && info.change <= 1e-10, "{info:?}");
         // the bounds it satisfies are μ times its own normals (to ε)
         for k in 0..m {
@@ -181,7 +186,9 @@ mod tests {
         let n = 3 * m;
         let mu = vec![Coefficient::Orthotropic(0.4, 0.1); m];
         let mut p = crate::qp::Params::new(Method::Tssn).with_eps(1e-10);
-        let (sol, ..) = solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent)).unwrap();
+        let (sol, ..) =
+            solve(&Replicated, &set, &mu, &vec![0.0; n], &p, &FixedPoint::default(), |s, x, p| crate::qp::solve(&Qp::new(&a, &b, s), x, p, &mut Silent))
+                .unwrap();
         p.common.coulomb = crate::qp::params::CoulombSolve::Lagged;
         let l = crate::qp::solve_friction(&Qp::new(&a, &b, &set), Some(&mu), &vec![0.0; n], &p, &mut Silent).unwrap();
         let d = l.lambda.iter().zip(&sol.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);

@@ -277,7 +277,16 @@ impl<'q, 'm, A: Operator> Driver<'q, 'm, A> {
     /// r become P_Λ(x) and its gradient (the solver goes on from there) and the error there is
     /// returned. `z`, `rz` are workspace, r̃ goes to `rt`.
     #[allow(clippy::too_many_arguments)]
-    pub fn confirm_projected(&mut self, k: usize, mu: Option<&[Coefficient]>, x: &mut Vec<f64>, r: &mut Vec<f64>, z: &mut Vec<f64>, rz: &mut Vec<f64>, rt: &mut [f64]) -> Result<QpSolution, f64> {
+    pub fn confirm_projected(
+        &mut self,
+        k: usize,
+        mu: Option<&[Coefficient]>,
+        x: &mut Vec<f64>,
+        r: &mut Vec<f64>,
+        z: &mut Vec<f64>,
+        rz: &mut Vec<f64>,
+        rt: &mut [f64],
+    ) -> Result<QpSolution, f64> {
         cut(self.qp.set, mu, x).project(x, z);
         self.residual(z, rz);
         let ez = err_of(self.space(), &cut(self.qp.set, mu, z), z, rz, &self.st, rt);

@@ -135,7 +135,16 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, variant: 
 /// so q stays monotone. x and g = r(x) (by the recurrence) are updated; returns the CG
 /// iterations (one A-product each) and the preconditioner's applications.
 #[allow(clippy::too_many_arguments)]
-fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g: &mut [f64], threshold: impl FnOnce(f64) -> f64, max_inner: usize, feasible: bool, outer: usize) -> Result<(usize, usize), QpError> {
+fn cg_free<A: Operator>(
+    drv: &Driver<'_, '_, A>,
+    free: &[bool],
+    x: &mut [f64],
+    g: &mut [f64],
+    threshold: impl FnOnce(f64) -> f64,
+    max_inner: usize,
+    feasible: bool,
+    outer: usize,
+) -> Result<(usize, usize), QpError> {
     let qp = drv.qp;
     let m = qp.preconditioner.filter(|_| feasible);
     let coarse = match (m, qp.coarse) {
@@ -144,7 +153,17 @@ fn cg_free<A: Operator>(drv: &Driver<'_, '_, A>, free: &[bool], x: &mut [f64], g
     };
     let coefficients = if m.is_some() { Coefficients::Standard } else { Coefficients::Conjugated };
     let system = Masked(free);
-    let opts = Pcg { system: &system, preconditioner: m.map(|m| (m, drv.st.rho)), coarse: coarse.as_deref(), coefficients, feasible, max_iter: max_inner, outer, relax: None, lanczos: false };
+    let opts = Pcg {
+        system: &system,
+        preconditioner: m.map(|m| (m, drv.st.rho)),
+        coarse: coarse.as_deref(),
+        coefficients,
+        feasible,
+        max_iter: max_inner,
+        outer,
+        relax: None,
+        lanczos: false,
+    };
     let info = pcg(qp, &opts, x, g, threshold, |_| {}, None)?;
     Ok((info.iterations, info.applications))
 }
@@ -160,7 +179,16 @@ pub(crate) struct FeasibleStep {
 /// P_Λ(λ − ρr) (one product for its gradient), then CGMfeas to `threshold`. q does not increase
 /// for ρ < 2/σ_max. (TSSN's safeguard.)
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn feasible_step<A: Operator>(drv: &Driver<'_, '_, A>, set: &Lambda, lambda: &[f64], r: &[f64], rho: f64, threshold: f64, max_inner: usize, outer: usize) -> Result<FeasibleStep, QpError> {
+pub(crate) fn feasible_step<A: Operator>(
+    drv: &Driver<'_, '_, A>,
+    set: &Lambda,
+    lambda: &[f64],
+    r: &[f64],
+    rho: f64,
+    threshold: f64,
+    max_inner: usize,
+    outer: usize,
+) -> Result<FeasibleStep, QpError> {
     let sets = set.active_sets(lambda, r, rho);
     let y: Vec<f64> = lambda.iter().zip(r).map(|(l, g)| l - rho * g).collect();
     let mut x = vec![0.0; y.len()];

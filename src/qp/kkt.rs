@@ -27,9 +27,7 @@ pub struct Kkt {
 impl Kkt {
     /// The largest of the residuals.
     pub fn worst(&self) -> f64 {
-        [self.penetration, self.normal_sign, self.complementarity, self.friction_bound, self.friction_law]
-            .into_iter()
-            .fold(0.0, f64::max)
+        [self.penetration, self.normal_sign, self.complementarity, self.friction_bound, self.friction_law].into_iter().fold(0.0, f64::max)
     }
 }
 

@@ -68,7 +68,15 @@ fn right<'a>(m: &mut Option<&mut dyn FnMut(&[f64], &mut [f64])>, v: &'a [f64], b
 
 /// z = P_W Π M̂ Π h: the preconditioner M on its block, `scale`·I on the other components,
 /// restricted to the system's subspace and projected onto Ker G ∩ W (`work`: scratch).
-pub(crate) fn precondition(m: &dyn Preconditioner, scale: f64, system: &dyn InnerSystem, coarse: Option<&dyn CoarseProjector>, h: &[f64], z: &mut [f64], work: &mut [f64]) {
+pub(crate) fn precondition(
+    m: &dyn Preconditioner,
+    scale: f64,
+    system: &dyn InnerSystem,
+    coarse: Option<&dyn CoarseProjector>,
+    h: &[f64],
+    z: &mut [f64],
+    work: &mut [f64],
+) {
     m.apply(h, work);
     let block = m.block();
     for (k, (p, hk)) in work.iter_mut().zip(h).enumerate() {

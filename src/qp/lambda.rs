@@ -23,7 +23,11 @@ impl Layout {
 
     /// Number of contact multipliers (λν and λτ): the free ones start here.
     pub fn contact_dim(&self) -> usize {
-        if self.friction { 3 * self.m } else { self.m }
+        if self.friction {
+            3 * self.m
+        } else {
+            self.m
+        }
     }
 
     pub fn dim(&self) -> usize {
@@ -119,8 +123,7 @@ impl Lambda {
 
     /// Whether x ∈ Λ up to `tol` per block.
     pub fn contains(&self, x: &[f64], tol: f64) -> bool {
-        (0..self.layout.m).all(|i| HalfLine.contains(&x[i..i + 1], tol))
-            && self.tangent.iter().enumerate().all(|(i, s)| s.contains(&self.pair(x, i), tol))
+        (0..self.layout.m).all(|i| HalfLine.contains(&x[i..i + 1], tol)) && self.tangent.iter().enumerate().all(|(i, s)| s.contains(&self.pair(x, i), tol))
     }
 
     /// Largest α ≥ 0 with x − α d ∈ Λ (x ∈ Λ).

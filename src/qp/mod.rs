@@ -87,7 +87,13 @@ pub fn coulomb_solve<A: Operator>(qp: &Qp<'_, A>, mu: &[cone::Coefficient], how:
 /// `lambda0` as [`coulomb_solve`] says: by the semi-smooth Newton method on the Coulomb law
 /// ([`coulomb::newton`]), by TSSN with lagged bounds ([`coulomb::lagged`]) or by the fixed point
 /// of [`coulomb::solve`] (default settings) with the method of `p`.
-pub fn solve_friction<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[cone::Coefficient]>, lambda0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+pub fn solve_friction<A: Operator>(
+    qp: &Qp<'_, A>,
+    coulomb: Option<&[cone::Coefficient]>,
+    lambda0: &[f64],
+    p: &Params,
+    monitor: &mut dyn Monitor,
+) -> Result<QpSolution, QpError> {
     match coulomb {
         Some(mu) => {
             let how = coulomb_solve(qp, mu, p.common.coulomb, p.method());

@@ -31,8 +31,8 @@
 
 use super::driver::{curvature, Driver, Monitor, Setup};
 use super::krylov::{precondition, InnerSystem, Masked};
-use super::operator::CoarseProjector;
 use super::lambda::Lambda;
+use super::operator::CoarseProjector;
 use super::operator::{Operator, Space};
 use super::params::{Common, Mpgp};
 use super::sets::ConvexSet;

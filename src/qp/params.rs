@@ -120,7 +120,17 @@ pub struct Common {
 
 impl Default for Common {
     fn default() -> Self {
-        Common { eps: 1e-8, rho_factor: 1.9, max_outer: 1000, max_inner: 10_000, power_iterations: 10, sigma_estimate: SigmaEstimate::Lanczos, coulomb: CoulombSolve::Auto, max_products: usize::MAX, sigma: None }
+        Common {
+            eps: 1e-8,
+            rho_factor: 1.9,
+            max_outer: 1000,
+            max_inner: 10_000,
+            power_iterations: 10,
+            sigma_estimate: SigmaEstimate::Lanczos,
+            coulomb: CoulombSolve::Auto,
+            max_products: usize::MAX,
+            sigma: None,
+        }
     }
 }
 
@@ -305,15 +315,27 @@ pub struct Invalid {
 }
 
 fn positive(key: &'static str, v: f64) -> Result<(), Invalid> {
-    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(Invalid { key, msg: format!("must be finite and > 0, got {v}") }) }
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid { key, msg: format!("must be finite and > 0, got {v}") })
+    }
 }
 
 fn fraction(key: &'static str, v: f64) -> Result<(), Invalid> {
-    if v > 0.0 && v < 1.0 { Ok(()) } else { Err(Invalid { key, msg: format!("must lie in (0, 1), got {v}") }) }
+    if v > 0.0 && v < 1.0 {
+        Ok(())
+    } else {
+        Err(Invalid { key, msg: format!("must lie in (0, 1), got {v}") })
+    }
 }
 
 fn floor(v: f64) -> Result<(), Invalid> {
-    if v >= 0.0 && v.is_finite() { Ok(()) } else { Err(Invalid { key: "inner_floor", msg: format!("must be finite and ≥ 0, got {v}") }) }
+    if v >= 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(Invalid { key: "inner_floor", msg: format!("must be finite and ≥ 0, got {v}") })
+    }
 }
 
 impl Params {

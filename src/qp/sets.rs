@@ -459,11 +459,7 @@ impl Ellipse {
             }
             // Converged: residual at rounding level (r is accurate to ~2 eps), step below
             // rounding, or bracket exhausted; or NaN.
-            if !((r - 1.0).abs() > 2.0 * EPS)
-                || !(delta.abs() > 4.0 * EPS * tau)
-                || !(hi - lo > 4.0 * EPS * hi)
-                || iters >= MAX_NEWTON
-            {
+            if !((r - 1.0).abs() > 2.0 * EPS) || !(delta.abs() > 4.0 * EPS * tau) || !(hi - lo > 4.0 * EPS * hi) || iters >= MAX_NEWTON {
                 break;
             }
             let newton = tau + delta;
@@ -514,11 +510,7 @@ impl Ellipse {
         // k = p_m²/(4c); the largest τ found with (B + τ)²τ ≤ k is (k/4)^{1/3} if that is ≥ B,
         // else min(B, k/(4B²)) (written without squaring the possibly tiny p_m).
         let pm = p[m].abs();
-        let t = if pm > 1e-150 {
-            (pm * pm / (16.0 * c)).cbrt()
-        } else {
-            pm.cbrt().powi(2) / (16.0 * c).cbrt()
-        };
+        let t = if pm > 1e-150 { (pm * pm / (16.0 * c)).cbrt() } else { pm.cbrt().powi(2) / (16.0 * c).cbrt() };
         let cubic = if t >= b { t } else { b.min((pm / b).powi(2) / (16.0 * c)) };
         let t2 = if c < 1.0 { pm / (2.0 * (1.0 - c)).sqrt() - b } else { f64::INFINITY };
         nonneg(cubic.min(t2))
@@ -631,9 +623,7 @@ impl Ellipse {
     #[cfg(test)]
     fn newton_iters(&self, y: &[f64]) -> u32 {
         match self.shape() {
-            Shape::Proper { ax, s, ah } if Self::proper_outside(ax, y) => {
-                Self::proper_project_outside(ax, s, ah, y).iters
-            }
+            Shape::Proper { ax, s, ah } if Self::proper_outside(ax, y) => Self::proper_project_outside(ax, s, ah, y).iters,
             _ => 0,
         }
     }
@@ -1022,11 +1012,7 @@ mod tests {
                     assert!(outside);
                     assert_eq!(f.point, x);
                     let en = norm(e);
-                    assert!(
-                        (f.distance - en).abs() <= 1e-10 * en + 1e-14 * (s + ny),
-                        "{set:?} y={y:?}: distance {} vs {en}",
-                        f.distance
-                    );
+                    assert!((f.distance - en).abs() <= 1e-10 * en + 1e-14 * (s + ny), "{set:?} y={y:?}: distance {} vs {en}", f.distance);
                     assert!((norm(f.normal) - 1.0).abs() < 1e-15);
                     assert!(f.tangent[0] * f.normal[0] + f.tangent[1] * f.normal[1] == 0.0);
                     if en > 1e-6 * s {
@@ -1035,11 +1021,7 @@ mod tests {
                     }
                     assert_eq!(f.slant(), slant(&set, y), "{set:?} y={y:?}");
                     let mu2 = 1.0 / (1.0 + f.curvature * f.distance);
-                    assert!(
-                        (f.mu - mu2).abs() <= 1e-12 * f.mu.max(mu2) + 1e-300,
-                        "{set:?} y={y:?}: mu {} vs 1/(1+κd) {mu2}",
-                        f.mu
-                    );
+                    assert!((f.mu - mu2).abs() <= 1e-12 * f.mu.max(mu2) + 1e-300, "{set:?} y={y:?}: mu {} vs 1/(1+κd) {mu2}", f.mu);
                     assert!((0.0..=1.0).contains(&f.mu));
                     if proper {
                         let k = set.curvature(&x);
@@ -1101,10 +1083,7 @@ mod tests {
                         lo = m;
                     }
                 }
-                assert!(
-                    (alpha - lo).abs() <= 1e-10 * lo,
-                    "{set:?} x={x:?} d={d:?}: max_step {alpha:e} vs bisection {lo:e}"
-                );
+                assert!((alpha - lo).abs() <= 1e-10 * lo, "{set:?} x={x:?} d={d:?}: max_step {alpha:e} vs bisection {lo:e}");
             }
         }
     }

@@ -41,7 +41,14 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Ssn, 
 /// The Newton iteration, on Λ or — with isotropic Coulomb coefficients `mu` — on Λ(λ), the cones
 /// cut at the iterate's own normals ([`super::coulomb::newton`]): then the slant derivative
 /// also carries the bound's dependence on λν.
-pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambda0: &[f64], c: &Common, p: &Ssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+pub(crate) fn run<A: Operator>(
+    qp: &Qp<'_, A>,
+    mu: Option<&[Coefficient]>,
+    lambda0: &[f64],
+    c: &Common,
+    p: &Ssn,
+    monitor: &mut dyn Monitor,
+) -> Result<QpSolution, QpError> {
     let (a, set) = (qp.a, qp.set);
     let sp = a.space();
     let n = a.dim();

@@ -102,7 +102,6 @@ impl System {
         }
         System { sets, slides }
     }
-
 }
 
 impl InnerSystem for System {
@@ -134,7 +133,14 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
 /// outer step takes Λ(λᵏ), the cones cut at the iterate's normals, as fixed for its Newton
 /// system (symmetric: the bound's dependence on λν is left out of the derivative), and the stop
 /// test is made on Λ(λ) at the result ([`super::coulomb::lagged`]).
-pub(crate) fn run<A: Operator>(qp: &Qp<'_, A>, mu: Option<&[Coefficient]>, lambda0: &[f64], c: &Common, p: &Tssn, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+pub(crate) fn run<A: Operator>(
+    qp: &Qp<'_, A>,
+    mu: Option<&[Coefficient]>,
+    lambda0: &[f64],
+    c: &Common,
+    p: &Tssn,
+    monitor: &mut dyn Monitor,
+) -> Result<QpSolution, QpError> {
     let (a, set) = (qp.a, qp.set);
     let at = |x: &[f64]| cut(set, mu, x);
     let sp = a.space();
@@ -283,7 +289,17 @@ const RECUT: f64 = 0.01;
 /// [`RECUT`] times the relative change of λν since their cut, or at most ε — the fixed point's
 /// rule, without its restarts. `m`: the pairs (normal components first); `work` is workspace.
 #[allow(clippy::too_many_arguments)]
-fn settle_bounds<'s, S: Space>(sp: &S, frozen: &mut Option<(Lambda, Vec<f64>)>, at: &impl Fn(&[f64]) -> Cow<'s, Lambda>, m: usize, x: &[f64], r: &[f64], (err, best, eps): (f64, f64, f64), st: &Setup, work: &mut [f64]) {
+fn settle_bounds<'s, S: Space>(
+    sp: &S,
+    frozen: &mut Option<(Lambda, Vec<f64>)>,
+    at: &impl Fn(&[f64]) -> Cow<'s, Lambda>,
+    m: usize,
+    x: &[f64],
+    r: &[f64],
+    (err, best, eps): (f64, f64, f64),
+    st: &Setup,
+    work: &mut [f64],
+) {
     // the normal part of a vector, as a whole vector of the space (the fixed point's measure)
     let normals = |v: &[f64]| -> Vec<f64> { v.iter().enumerate().map(|(i, a)| if i < m { *a } else { 0.0 }).collect() };
     match frozen {
@@ -470,7 +486,17 @@ mod recycle_tests {
         let b: Vec<f64> = (0..120).map(|_| lcg(&mut seed)).collect();
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 8, outer: 0, relax: None, lanczos: false };
+        let opts = Pcg {
+            system: &Whole,
+            preconditioner: None,
+            coarse: None,
+            coefficients: Coefficients::Standard,
+            feasible: false,
+            max_iter: 8,
+            outer: 0,
+            relax: None,
+            lanczos: false,
+        };
         let bnorm = Replicated.norm(&b);
         let restarts = |mut bank: Option<Recycle>| {
             let (mut x, mut g) = (vec![0.0; 120], b.iter().map(|v| -v).collect::<Vec<f64>>());
@@ -497,7 +523,17 @@ mod recycle_tests {
         let b = vec![1.0; 60];
         let set = Lambda::new(0, None);
         let qp = Qp::new(&a, &b, &set);
-        let opts = Pcg { system: &Whole, preconditioner: None, coarse: None, coefficients: Coefficients::Standard, feasible: false, max_iter: 30, outer: 0, relax: None, lanczos: true };
+        let opts = Pcg {
+            system: &Whole,
+            preconditioner: None,
+            coarse: None,
+            coefficients: Coefficients::Standard,
+            feasible: false,
+            max_iter: 30,
+            outer: 0,
+            relax: None,
+            lanczos: true,
+        };
         let (mut x, mut g) = (vec![0.0; 60], vec![-1.0; 60]);
         let info = pcg(&qp, &opts, &mut x, &mut g, |_| 0.0, |_| {}, None).expect("SPD");
         let kappa = info.kappa.expect("30 iterations");

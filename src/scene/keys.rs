@@ -302,7 +302,9 @@ mod tests {
     fn keys_cover_the_parser() {
         let keys = keys();
         let has = |p: &str| keys.iter().find(|k| k.path == p);
-        for p in ["title", "mesh.n", "body.box.sphere.centre", "contact.pair.friction.mu1", "output.fields", "solver.eps", "solver.slide_cap", "tie.search_distance"] {
+        for p in
+            ["title", "mesh.n", "body.box.sphere.centre", "contact.pair.friction.mu1", "output.fields", "solver.eps", "solver.slide_cap", "tie.search_distance"]
+        {
             assert!(has(p).is_some(), "{p} missing");
         }
         assert_eq!(has("solver.slide_cap").unwrap().methods, ["tssn"]);

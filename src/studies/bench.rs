@@ -11,8 +11,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use crate::pipeline::report::Report;
 use crate::error::{Error, Result};
+use crate::pipeline::report::Report;
 use crate::scene::Projector;
 
 /// What to run.
@@ -84,9 +84,29 @@ impl Row {
         let phases: Vec<String> = self.phases.iter().map(|t| format!("{t:.4}")).collect();
         format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{:.4},{},{:.3},{:.3},{:.3},{:.2e},{:.6e}",
-            self.mode, self.case, self.ranks, self.runs, self.n, self.s, self.projector, self.dofs, self.multipliers, self.coarse_dim,
-            self.outer, self.inner, self.n_a, self.n_a_power, phases.join(","), self.peak_gb_sum, self.peak_gb_max,
-            self.nnz_l, self.t_a * 1e3, self.floor * 1e3, self.t_a / self.floor, self.kkt, self.max_u
+            self.mode,
+            self.case,
+            self.ranks,
+            self.runs,
+            self.n,
+            self.s,
+            self.projector,
+            self.dofs,
+            self.multipliers,
+            self.coarse_dim,
+            self.outer,
+            self.inner,
+            self.n_a,
+            self.n_a_power,
+            phases.join(","),
+            self.peak_gb_sum,
+            self.peak_gb_max,
+            self.nnz_l,
+            self.t_a * 1e3,
+            self.floor * 1e3,
+            self.t_a / self.floor,
+            self.kkt,
+            self.max_u
         )
     }
 

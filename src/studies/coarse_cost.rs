@@ -64,9 +64,19 @@ pub fn run(args: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
         let kernels: Vec<_> = clusters.kernels(&model.mesh, &d, &elim).into_iter().map(Some).collect();
         let coarse = Coarse::new(&dist, &kernels, &cons, &clusters.concat(&loads), Kind::Oblique, &|_| String::new())?;
         let build_s = t.elapsed().as_secs_f64();
-        let mut row = Row { subdomains: d.subdomains.len(), pieces: clusters.len(), dim: coarse.dim(), nnz_c: coarse.nnz_c, nnz_l: 0, build_s, factor_solve_s: 0.0, rows: vec![] };
+        let mut row = Row {
+            subdomains: d.subdomains.len(),
+            pieces: clusters.len(),
+            dim: coarse.dim(),
+            nnz_c: coarse.nnz_c,
+            nnz_l: 0,
+            build_s,
+            factor_solve_s: 0.0,
+            rows: vec![],
+        };
         for &m in &args.pieces {
-            let c = coarse.inverse_costs(m, args.repeat).ok_or_else(|| Error::numerical("bench-coarse", "C is singular: every body needs Dirichlet conditions"))?;
+            let c =
+                coarse.inverse_costs(m, args.repeat).ok_or_else(|| Error::numerical("bench-coarse", "C is singular: every body needs Dirichlet conditions"))?;
             row.nnz_l = c.nnz_l;
             row.factor_solve_s = c.factor_solve_s;
             row.rows.push((c.rows_setup_s, c.rows_solve_s, c.rows_bytes));

@@ -20,10 +20,10 @@ use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, NonnegativeCone
 
 use crate::comm::Comm;
 use crate::dual::monolithic::MonolithicDual;
-use crate::qp::Layout;
 use crate::error::{Error, Result};
 use crate::qp::lambda::Lambda;
 use crate::qp::sets::TangentSet;
+use crate::qp::Layout;
 
 /// The assembled SOCP (Clarabel's form: min ½xᵀPx + qᵀx, Ax + s = h, s ∈ cones).
 pub struct PrimalSocp {
@@ -69,11 +69,14 @@ impl PrimalSocp {
         }
         let (m, nd) = (layout.m, layout.dim());
         let sizes: Vec<usize> = dual.blocks.iter().map(|blk| blk.local.dofs.nfree).collect();
-        let offsets: Vec<usize> = sizes.iter().scan(0, |o, s| {
-            let v = *o;
-            *o += s;
-            Some(v)
-        }).collect();
+        let offsets: Vec<usize> = sizes
+            .iter()
+            .scan(0, |o, s| {
+                let v = *o;
+                *o += s;
+                Some(v)
+            })
+            .collect();
         let nu: usize = sizes.iter().sum();
         let axes: Vec<[f64; 2]> = set
             .tangent
@@ -172,8 +175,8 @@ impl PrimalSocp {
             direct_solve_method: "faer".into(),
             ..DefaultSettings::default()
         };
-        let mut solver = DefaultSolver::new(&self.p, &self.q, &self.a, &self.h, &self.cones, settings)
-            .map_err(|e| Error::numerical("Clarabel", format!("{e:?}")))?;
+        let mut solver =
+            DefaultSolver::new(&self.p, &self.q, &self.a, &self.h, &self.cones, settings).map_err(|e| Error::numerical("Clarabel", format!("{e:?}")))?;
         solver.solve();
         let status = solver.solution.status;
         if !matches!(status, SolverStatus::Solved | SolverStatus::AlmostSolved) {

@@ -173,7 +173,10 @@ pub fn u_error<C: Comm>(comm: &C, u: &[Vec<f64>], reference: &[Vec<f64>]) -> f64
 /// The columns table1 can run: none with a preconditioner (the monolithic dual has none).
 pub fn check_columns(columns: &[Column]) -> Result<()> {
     match columns.iter().find(|c| preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err()) {
-        Some(c) => Err(Error::scene("--solvers", format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label()))),
+        Some(c) => Err(Error::scene(
+            "--solvers",
+            format!("table1 runs on the monolithic dual, which has no preconditioner: {} needs TFETI (work-precision --subdomains)", c.label()),
+        )),
         None => Ok(()),
     }
 }
@@ -191,7 +194,10 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut each: impl FnMut(&Cell), mut prog
         let contact = model.pairs.as_ref().ok_or_else(|| Error::scene("contact", "table1 needs a scene with contact"))?;
         if contact.is_coulomb() {
             // its rows time one QP solve per tolerance; Coulomb's fixed point runs in `solve`
-            return Err(Error::scene("contact.pair.friction", "table1 times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)"));
+            return Err(Error::scene(
+                "contact.pair.friction",
+                "table1 times Tresca solves; Coulomb friction is solved by `tresca-feti solve` (its fixed point)",
+            ));
         }
         let mut t = Timings::default();
         let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, true, &mut t)?;
@@ -231,13 +237,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut each: impl FnMut(&Cell), mut prog
         }
         let mut dofs = [model.mesh.nodes.len() as f64 * 3.0];
         comm.max_f64(&mut dofs);
-        let row = Row {
-            n,
-            dofs: dofs[0] as usize,
-            pairs: contact.len(),
-            factorize_s: t.phases.iter().map(|p| p.1).sum(),
-            cells,
-        };
+        let row = Row { n, dofs: dofs[0] as usize, pairs: contact.len(), factorize_s: t.phases.iter().map(|p| p.1).sum(), cells };
         progress(&row);
         rows.push(row);
     }
@@ -316,12 +316,31 @@ fn write_rows(f: &mut Vec<u8>, args: &Args, rows: &[Row]) -> std::io::Result<()>
                 Ok(i) => writeln!(
                     f,
                     "{},{},{},{},{preset},{:e},{},{},{},{},{:.4},{:e},{:e},{ue},{:.3},{pi},{pn},ok",
-                    r.n, r.dofs, r.pairs, c.column.method.name(), args.eps, i.iterations, i.n_a, i.n_a_power, i.inner_iterations, c.seconds, i.err, c.kkt, r.factorize_s
+                    r.n,
+                    r.dofs,
+                    r.pairs,
+                    c.column.method.name(),
+                    args.eps,
+                    i.iterations,
+                    i.n_a,
+                    i.n_a_power,
+                    i.inner_iterations,
+                    c.seconds,
+                    i.err,
+                    c.kkt,
+                    r.factorize_s
                 ),
                 Err(e) => writeln!(
                     f,
                     "{},{},{},{},{preset},{:e},,,,,{:.4},,,,{:.3},{pi},{pn},\"{}\"",
-                    r.n, r.dofs, r.pairs, c.column.method.name(), args.eps, c.seconds, r.factorize_s, e.replace('"', "'")
+                    r.n,
+                    r.dofs,
+                    r.pairs,
+                    c.column.method.name(),
+                    args.eps,
+                    c.seconds,
+                    r.factorize_s,
+                    e.replace('"', "'")
                 ),
             }?;
         }

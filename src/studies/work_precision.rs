@@ -21,8 +21,8 @@ use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::error::{Error, Result};
 use crate::pipeline::tfeti::setup;
-use crate::qp::cone::Coefficient;
 use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
+use crate::qp::cone::Coefficient;
 use crate::qp::{self, kkt, Lambda, Method, Operator, Params, Preconditioner, Qp, QpSolution, Silent, Space};
 use crate::scene::Projector;
 use crate::studies::socp::PrimalSocp;
@@ -158,7 +158,18 @@ fn blank(n: usize, subdomains: usize, solver: Solver, setup_s: f64) -> Point {
 /// One dual solver's ε sweep (loose → tight) on the operator `a`; the sweep stops once a solve
 /// fails or takes longer than `max_seconds`.
 #[allow(clippy::too_many_arguments)]
-fn sweep<A: Operator>(qp: &Qp<'_, A>, coulomb: Option<&[Coefficient]>, column: Column, base: &Params, args: &Args, eps: &[f64], template: &Point, measure: &Measure<'_>, on_point: &mut impl FnMut(&Point), points: &mut Vec<Point>) {
+fn sweep<A: Operator>(
+    qp: &Qp<'_, A>,
+    coulomb: Option<&[Coefficient]>,
+    column: Column,
+    base: &Params,
+    args: &Args,
+    eps: &[f64],
+    template: &Point,
+    measure: &Measure<'_>,
+    on_point: &mut impl FnMut(&Point),
+    points: &mut Vec<Point>,
+) {
     let zero = vec![0.0; qp.a.dim()];
     let mut stop = false;
     for &e in eps {
@@ -244,7 +255,15 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         let dofs = 3 * model.mesh.nodes.len();
         for &s in &args.subdomains {
             if s == 0 {
-                let problem = Problem { n, subdomains: 0, dofs, pairs: contact.len(), factorize_s, reference: reference.info.clone(), default: default_method(&ls, DualKind::Monolithic) };
+                let problem = Problem {
+                    n,
+                    subdomains: 0,
+                    dofs,
+                    pairs: contact.len(),
+                    factorize_s,
+                    reference: reference.info.clone(),
+                    default: default_method(&ls, DualKind::Monolithic),
+                };
                 on_problem(&problem);
                 let measure = |sol: &QpSolution| {
                     let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &u_ref);
@@ -254,8 +273,31 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
                     match solver {
                         // the monolithic dual has no preconditioner
                         Solver::Dual(c) if preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err() => {}
-                        Solver::Dual(c) => sweep(&qp_mono, coulomb.as_deref(), c, base, args, &eps_dual, &blank(n, 0, solver, factorize_s), &measure, &mut on_point, &mut points),
-                        Solver::Clarabel => clarabel(comm, &dual, &b, &set, &reference.lambda, &u_ref, bnorm, &eps_clarabel, &blank(n, 0, solver, factorize_s), &mut on_point, &mut points)?,
+                        Solver::Dual(c) => sweep(
+                            &qp_mono,
+                            coulomb.as_deref(),
+                            c,
+                            base,
+                            args,
+                            &eps_dual,
+                            &blank(n, 0, solver, factorize_s),
+                            &measure,
+                            &mut on_point,
+                            &mut points,
+                        ),
+                        Solver::Clarabel => clarabel(
+                            comm,
+                            &dual,
+                            &b,
+                            &set,
+                            &reference.lambda,
+                            &u_ref,
+                            bnorm,
+                            &eps_clarabel,
+                            &blank(n, 0, solver, factorize_s),
+                            &mut on_point,
+                            &mut points,
+                        )?,
                     }
                 }
                 problems.push(problem);
@@ -266,7 +308,15 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
             let mut tt = Timings::default();
             let mut prob = setup(comm, &tls, &mut tmodel, &mut tt)?;
             let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
-            let problem = Problem { n, subdomains: s, dofs, pairs: contact.len(), factorize_s: setup_s, reference: reference.info.clone(), default: default_method(&tls, DualKind::of(&tls, &tmodel)) };
+            let problem = Problem {
+                n,
+                subdomains: s,
+                dofs,
+                pairs: contact.len(),
+                factorize_s: setup_s,
+                reference: reference.info.clone(),
+                default: default_method(&tls, DualKind::of(&tls, &tmodel)),
+            };
             on_problem(&problem);
             let ni = set.layout.dim();
             for &solver in &args.solvers {
@@ -313,7 +363,10 @@ fn tfeti_scene(args: &Args, sets: &[String], s: usize) -> Result<crate::scene::L
     let ls = crate::scene::load(&args.scene, &sets)?;
     let d = &ls.scene.decomposition;
     if d.target_dofs.is_some() || d.projector != Projector::Oblique {
-        return Err(Error::scene("--subdomains", "the TFETI rows need decomposition.projector = \"oblique\" and no decomposition.target_dofs (--subdomains sets the count)"));
+        return Err(Error::scene(
+            "--subdomains",
+            "the TFETI rows need decomposition.projector = \"oblique\" and no decomposition.target_dofs (--subdomains sets the count)",
+        ));
     }
     Ok(ls)
 }
@@ -453,7 +506,23 @@ pub fn write_csv(path: &Path, problems: &[Problem], points: &[Point]) -> Result<
         writeln!(
             f,
             "{},{},{},{},{},{},{:e},{status},{},{},{},{},{:.4},{:.5},{:e},{:e},{:e},{:e}",
-            p.n, p.subdomains, pr.dofs, pr.pairs, p.solver.label(), is_default as u8, p.eps, p.iterations, p.n_a, p.n_a_power, p.inner, p.setup_s, p.solve_s, p.err_u, p.err_lambda, p.kkt, p.residual
+            p.n,
+            p.subdomains,
+            pr.dofs,
+            pr.pairs,
+            p.solver.label(),
+            is_default as u8,
+            p.eps,
+            p.iterations,
+            p.n_a,
+            p.n_a_power,
+            p.inner,
+            p.setup_s,
+            p.solve_s,
+            p.err_u,
+            p.err_lambda,
+            p.kkt,
+            p.residual
         )
         .map_err(io)?;
     }
