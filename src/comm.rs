@@ -128,6 +128,13 @@ impl MpiComm {
     }
 }
 
+/// The most values one rank sends per round of [`Comm::gather_f64`] with `p` ranks: (2³¹ − 1)/p,
+/// or `TRESCA_FETI_GATHER_CHUNK` when set (to test the rounds on small models).
+fn gather_chunk(p: usize) -> usize {
+    let most = i32::MAX as usize / p.max(1);
+    std::env::var("TRESCA_FETI_GATHER_CHUNK").ok().and_then(|v| v.parse::<usize>().ok()).filter(|&c| c > 0).map_or(most, |c| c.min(most))
+}
+
 impl Comm for MpiComm {
     fn rank(&self) -> usize {
         self.world.rank() as usize
@@ -158,31 +165,44 @@ impl Comm for MpiComm {
         }
     }
     fn gather_f64(&self, root: usize, local: &[f64]) -> Option<Vec<Vec<f64>>> {
+        // MPI counts and displacements are i32: the values go in rounds of at most
+        // `gather_chunk()` per rank, so that no round's total passes 2³¹ − 1 (one round for
+        // any field of a model under 2³¹ values)
         let r = self.world.process_at_rank(root as i32);
-        let count = [local.len() as i32];
-        if self.rank() == root {
-            let mut counts = vec![0i32; self.size()];
-            r.gather_into_root(&count[..], &mut counts[..]);
-            let displs: Vec<i32> = counts
-                .iter()
-                .scan(0, |acc, &c| {
-                    let d = *acc;
-                    *acc += c;
-                    Some(d)
-                })
-                .collect();
-            let total: i32 = counts.iter().sum();
-            let mut all = vec![0.0; total as usize];
-            {
-                let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
-                r.gather_varcount_into_root(local, &mut part);
+        let p = self.size();
+        let mut lens = vec![0u64; p];
+        self.world.all_gather_into(&(local.len() as u64), &mut lens[..]);
+        let chunk = gather_chunk(p);
+        let rounds = lens.iter().map(|&n| (n as usize).div_ceil(chunk)).max().unwrap_or(0);
+        let mut out: Vec<Vec<f64>> = if self.rank() == root { lens.iter().map(|&n| Vec::with_capacity(n as usize)).collect() } else { Vec::new() };
+        for k in 0..rounds {
+            let part = |n: usize| n.saturating_sub(k * chunk).min(chunk);
+            let mine = &local[(k * chunk).min(local.len())..(k * chunk + part(local.len())).min(local.len())];
+            if self.rank() == root {
+                let counts: Vec<i32> = lens.iter().map(|&n| part(n as usize) as i32).collect();
+                let displs: Vec<i32> = counts
+                    .iter()
+                    .scan(0, |acc, &c| {
+                        let d = *acc;
+                        *acc += c;
+                        Some(d)
+                    })
+                    .collect();
+                let total: usize = counts.iter().map(|&c| c as usize).sum();
+                // never an empty buffer (a null pointer to some MPI libraries): one unused value
+                let mut all = vec![0.0; total.max(1)];
+                {
+                    let mut recv = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+                    r.gather_varcount_into_root(mine, &mut recv);
+                }
+                for (q, (&c, &d)) in counts.iter().zip(&displs).enumerate() {
+                    out[q].extend_from_slice(&all[d as usize..(d + c) as usize]);
+                }
+            } else {
+                r.gather_varcount_into(mine);
             }
-            Some(counts.iter().zip(&displs).map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec()).collect())
-        } else {
-            r.gather_into(&count[..]);
-            r.gather_varcount_into(local);
-            None
         }
+        (self.rank() == root).then_some(out)
     }
     fn all_gather_f64(&self, local: &[f64]) -> Vec<Vec<f64>> {
         let count = |n: usize| Count::try_from(n).expect("all_gather_f64: more than 2^31 values");

@@ -110,3 +110,27 @@ fn a_plain_run_equals_mpirun_with_one_rank_bitwise() {
         assert_eq!(i32_field(&plain, "contact_status"), i32_field(&mpi, "contact_status"), "{name}: status differs");
     }
 }
+
+/// The gather of the solution to rank 0 goes in rounds of at most (2³¹ − 1)/p values per rank
+/// (MPI's counts are i32; before, a length above 2³¹ wrapped): forced to rounds of 7 values
+/// (`TRESCA_FETI_GATHER_CHUNK=7`), TFETI on 2 ranks reports the same results to the last bit.
+#[test]
+fn the_solution_gather_in_rounds_gives_the_same_report() {
+    let dir = tmpdir("gather-rounds");
+    let scene = root().join("run/seed.toml");
+    let report = |name: &str, chunk: Option<&str>| {
+        let out = dir.join(format!("{name}.h5"));
+        let args = ["solve", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--set", "mesh.n=4", "--set", "decomposition.subdomains=2"];
+        let mut cmd = common::mpirun_cmd(2, &args);
+        if let Some(c) = chunk {
+            cmd.env("TRESCA_FETI_GATHER_CHUNK", c);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
+        (json["results"].clone(), json["tfeti"]["subdomains"].clone())
+    };
+    let (whole, rounds) = (report("whole", None), report("rounds", Some("7")));
+    assert!(whole.0["max_displacement"].as_f64().unwrap() > 0.0, "{:?}", whole.0);
+    assert_eq!(whole, rounds);
+}
