@@ -1,6 +1,6 @@
 //! tresca-feti: a TFETI solver for 3D linear-elastic contact with Tresca friction.
 //!
-//! Data flows one way (DESIGN §5): [`scene`] (TOML, every settings enum) → [`model`] ([`mesh`]:
+//! Data flows one way (docs/method.md, "Code layout"): [`scene`] (TOML, every settings enum) → [`model`] ([`mesh`]:
 //! boxes, Gmsh; [`contact`]: pairs and slip bounds) → [`fem`] (hex8 kernels, assembly) →
 //! [`linalg`] → the dual problem ([`dual`]: monolithic; [`feti`]: TFETI) → [`qp`] (the solvers,
 //! the floor of the crate: it imports nothing of the rest) → back to the primal solution, the

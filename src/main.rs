@@ -117,7 +117,7 @@ enum Cmd {
         repeat: usize,
         #[arg(long, default_value_t = 1e-6)]
         eps: f64,
-        /// Memory bandwidth (GB/s) for the A-product floor (STACK.md: about 15 on this machine).
+        /// Memory bandwidth (GB/s) for the A-product floor (about 15 on the 2-core development machine).
         #[arg(long, default_value_t = 15.0)]
         bandwidth: f64,
         #[arg(long, default_value = "out/bench_tfeti.csv")]

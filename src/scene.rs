@@ -788,7 +788,7 @@ impl Serialize for SolverSettings {
     }
 }
 
-/// How each body is split (TFETI, DESIGN §2): the `[decomposition]` table.
+/// How each body is split (TFETI, docs/method.md, "TFETI and H-TFETI"): the `[decomposition]` table.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 // `rename`: the messages for a malformed table keep saying "expected struct Decomposition"
 #[serde(deny_unknown_fields, rename = "Decomposition")]

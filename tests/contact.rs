@@ -1,5 +1,5 @@
 //! The contact solvers on the seed scene (monolithic dual): KKT conditions of the result,
-//! GIMSSN's monotonicity and feasibility, and the sanity figures of DESIGN §4.
+//! GIMSSN's monotonicity and feasibility, and the sanity figures of docs/validation.md, "The paper's benchmark".
 
 use std::path::Path;
 
@@ -77,12 +77,12 @@ fn gimssn_seed_kkt_monotone_and_sanity_figures() {
         }
         assert!(set.tangent[i].contains(&lt, 1e-14 * g));
     }
-    // DESIGN §4 sanity figures for N = 8
+    // the paper's sanity figures (docs/validation.md, "The paper's benchmark") for N = 8
     assert_eq!((carrying, sliding), (32, 48));
     let u = dual.recover(&lam).u;
     let umax =
         dual.blocks.iter().zip(&u).flat_map(|(blk, ub)| blk.local.dofs.expand(ub)).map(|v| v.iter().fold(0.0f64, |a, c| a.max(c.abs()))).fold(0.0, f64::max);
-    // the largest displacement component (DESIGN's "max |u|" is the max-norm of u ∈ Rⁿ)
+    // the largest displacement component (the paper's "max |u|" is the max-norm of u ∈ Rⁿ)
     assert!((umax - 8.7e-5).abs() < 0.05e-5, "max |u| = {umax:e}");
 }
 

@@ -1,4 +1,4 @@
-//! The crate's shape (DESIGN §5): the graph of its top-level modules, read from the `crate::…`
+//! The crate's shape (docs/method.md, "Code layout"): the graph of its top-level modules, read from the `crate::…`
 //! paths in the sources (comments and test modules left out), has no cycle, and the solver layer
 //! `qp` is the floor: it uses nothing of the crate but `error` and `comm`.
 

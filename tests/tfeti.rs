@@ -302,7 +302,7 @@ fn every_solver_runs_unchanged_on_the_tfeti_dual() {
     for method in ["gimssn", "imssn", "mssn", "mpgp", "ssn-bicgstab", "tssn"] {
         let sets = vec!["mesh.n=6".to_string(), "solver.eps=1e-9".to_string(), format!("solver.method=\"{method}\"")];
         // MSSN with interfaces (S ≥ 2) stalls near ‖r̃‖/‖b‖ ≈ 3e-6 since the contact rows left
-        // the prescribed DOFs (README, issue 17): its slip directions converge as a fixed point
+        // the prescribed DOFs (Dirichlet conditions eliminated in the subdomains): its slip directions converge as a fixed point
         let parts: &[usize] = if method == "mssn" { &[1] } else { &[4] };
         let worst = equivalence_within("run/seed.toml", &sets, parts, 1e-6, 1e-7);
         eprintln!("{method}: max|Δu|/max|u| = {worst:.2e}");

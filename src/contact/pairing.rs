@@ -18,7 +18,7 @@
 //! (T u)ᵢ = ((u_s − u_m)·t₁ᵢ, (u_s − u_m)·t₂ᵢ)   (relative tangential displacement)
 //! ```
 //!
-//! which for the seed scene (slave = upper face z = 1, n = −z) is exactly DESIGN §4's
+//! which for the seed scene (slave = upper face z = 1, n = −z) is exactly the paper's (docs/validation.md, "The paper's benchmark")
 //! `Nᵢu = u_z(lower) − u_z(upper)` and `Tᵢu = (u_x, u_y)(upper) − (u_x, u_y)(lower)`.
 //! The nodal area wᵢ = ∫ φᵢ dA over the slave face (2×2 Gauss; a quarter of a quad at corners
 //! of a uniform grid), and the slip bound gᵢ = g·wᵢ (orthotropic: g₁wᵢ along t₁, g₂wᵢ along t₂).

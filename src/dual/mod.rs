@@ -1,4 +1,4 @@
-//! The dual problem as a transform of the primal one (DESIGN §5): the multipliers λ of the
+//! The dual problem as a transform of the primal one (docs/method.md, "Code layout"): the multipliers λ of the
 //! constraint rows B, the operator A = B K⁻¹ Bᵀ applied matrix-free (a [`crate::qp::Operator`]),
 //! the right-hand side b, and the map back to the primal solution u = K⁻¹(f − Bᵀλ)
 //! ([`DualProblem::recover`], PERMON's post-solve). [`monolithic`] is the paper's setting (one

@@ -1,4 +1,4 @@
-//! H-TFETI clusters (DESIGN §3e): groups of subdomains of one body that the outer dual treats
+//! H-TFETI clusters (docs/method.md, "Scale-out: H-TFETI"): groups of subdomains of one body that the outer dual treats
 //! as one floating piece. Inside a cluster the subdomains are joined by the gluing rows of a few
 //! **corner nodes** per adjacent pair (B_c), enforced exactly by every application of the
 //! cluster's generalized inverse — a small saddle-point problem per cluster — so the cluster's

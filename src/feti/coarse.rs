@@ -1,7 +1,7 @@
 //! The natural coarse space of TFETI: G = RᵀBᵀ (a row per column of each piece's kernel — a
 //! subdomain's, or an H-TFETI cluster's: six for a floating one, fewer where held DOFs are
 //! eliminated), e = Rᵀf, the coarse
-//! matrix C = G_E G_Eᵀ (sparse, factorized once) and the oblique projector of DESIGN §2,
+//! matrix C = G_E G_Eᵀ (sparse, factorized once) and the oblique projector of docs/method.md, "TFETI and H-TFETI",
 //!
 //! ```text
 //! P̃x = x − Gᵀ C⁻¹ G_E x_E,    P̃ᵀy = y − [G_E 0]ᵀ C⁻¹ G y,    λ̂ = (G_Eᵀ C⁻¹ e, 0),
@@ -21,7 +21,7 @@
 //! C⁻¹ (and (GGᵀ)⁻¹) of its own pieces — ESPRESO's explicit coarse inverse, held distributed —
 //! and a C⁻¹ solve becomes those rows' products with the reduced G x and a second reduction
 //! of the result: no triangular solve of dimension 6S on every rank. Vectors are distributed
-//! ([`Distribution`]); the measurements behind both are in the README.
+//! ([`Distribution`]); the measurements behind both are in docs/performance.md, "Scale-out: many subdomains".
 
 use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};

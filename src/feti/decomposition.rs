@@ -1,4 +1,4 @@
-//! Decomposition of each body into S subdomains (TFETI, DESIGN §2): a METIS k-way partition of
+//! Decomposition of each body into S subdomains (TFETI, docs/method.md, "TFETI and H-TFETI"): a METIS k-way partition of
 //! the body's element graph (elements adjacent when they share a face, `ncommon = 4`; contiguous
 //! parts requested, `METIS_OPTION_CONTIG`, so that every floating subdomain has exactly six
 //! rigid-body modes), the nodes of each subdomain in a local numbering (sorted global ids, so

@@ -1,7 +1,7 @@
 //! The TFETI dual operator (a [`crate::qp::Operator`] and [`DualProblem`]): A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
 //! matrix-free (one K_s⁺ solve per subdomain of this rank, the neighbour exchanges of
 //! [`Distribution`]) on distributed dual vectors, and the
-//! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (DESIGN §2). The solvers minimize
+//! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (docs/method.md, "TFETI and H-TFETI"). The solvers minimize
 //! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`DualProblem::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
 //! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s (+ g_s on the DOFs held
 //! inside the subdomain), ũ = K⁺(f̂ − Bᵀλ).

@@ -1,4 +1,4 @@
-//! Total FETI (DESIGN §2): every body split into floating subdomains (the METIS partition,
+//! Total FETI (docs/method.md, "TFETI and H-TFETI"): every body split into floating subdomains (the METIS partition,
 //! [`decomposition`]; [`subdomain`]: K_s, R_s, K_s⁺), optionally grouped into H-TFETI clusters
 //! that the outer dual treats as its pieces ([`cluster`]: K_c⁺, R_c), the constraint rows
 //! B = [B_I; B_E] and c ([`constraints`]), the natural coarse space G = RᵀBᵀ, e = Rᵀf and the projectors

@@ -1,4 +1,4 @@
-//! The FETI preconditioner of the whole TFETI dual (DESIGN §3c): with the scaled
+//! The FETI preconditioner of the whole TFETI dual (docs/method.md, "TFETI and H-TFETI": the FETI preconditioner): with the scaled
 //! B̃ = (BΔBᵀ)⁻¹BΔ (Δ = diag(Δ_s), Δ_s = μ_min/μ_s the stiffness weighting of subdomain s;
 //! for one material B̃ = (BBᵀ)⁻¹B),
 //!

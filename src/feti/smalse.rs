@@ -1,5 +1,5 @@
 //! SMALSE-M on the TFETI dual: the alternative to the oblique projector that keeps the
-//! orthogonal projector P = I − Gᵀ(GGᵀ)⁻¹G (DESIGN §2, Dostál's SMALSE-M with the QP solver as
+//! orthogonal projector P = I − Gᵀ(GGᵀ)⁻¹G (docs/method.md, "TFETI and H-TFETI", Dostál's SMALSE-M with the QP solver as
 //! the inner loop), and the one that solves bodies held by contact alone: G = RᵀBᵀ spans every
 //! row, so Gλ = e holds with bounded multipliers and C = G_E G_Eᵀ may be singular. With
 //! Q = I − P and λ_e = Gᵀ(GGᵀ)⁻¹e (Gλ = e ⇔ Qλ = λ_e, and then λ = Pλ + λ_e) the problem is
@@ -13,7 +13,7 @@
 //! with any of the QP solvers, then updates ν_{k+1} = ν_k + ϱ(Qλ − λ_e). ϱ = penalty·σ_max(PFP)
 //! (σ measured once; penalty 1 by default): the penalty then does not raise ‖A‖, so the inner
 //! solvers keep their step length, and PFP on Ker G is far better conditioned than P̃FP̃ᵀ
-//! (DESIGN §3a). The inner tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k,
+//! (docs/method.md, "The solvers"). The inner tolerance follows the feasibility: ε_{k+1} = max(ε, min(ε_k,
 //! Mϱ‖Qλ − λ_e‖/‖P(d̃ − Fλ_e)‖)), M = 1, ε_1 = 1e-2. Stop when both ‖r̃_ρ‖ and ϱ‖Qλ − λ_e‖ (the
 //! infeasibility in the gradient's units) are below ε‖P(d̃ − Fλ_e)‖.
 //!

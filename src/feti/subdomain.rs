@@ -89,8 +89,8 @@ pub const HELD_SHARE: f64 = 1e-8;
 /// Least [`hold_ratio`] at which a subdomain eliminates its held DOFs: below it a motion held
 /// by a small patch of Dirichlet DOFs but glued along a large interface would turn into a soft
 /// mode of K_s (σ_max(F) up 8× on the seed at S = 4), so the subdomain floats and keeps its
-/// rows, and the coarse space takes the motion. Chosen on the benchmark set (README, "Dirichlet
-/// conditions in TFETI").
+/// rows, and the coarse space takes the motion. Chosen on the benchmark set (docs/method.md,
+/// "TFETI and H-TFETI").
 pub const HOLD_RATIO: f64 = 0.03;
 
 /// The rigid motions of the nodes at `coords` that leave the DOFs `held` (local, sorted) at

@@ -25,7 +25,7 @@
 //!
 //! The parts are summed although the setup's are freed before the factors are made: the
 //! estimate errs on the safe side. The constants were fitted to the peaks (VmHWM) of the seed
-//! scene at N = 16 … 41 (README, "Bad input"): the estimate is 1.02–1.15× the measured peak.
+//! scene at N = 16 … 41 (docs/performance.md, "The benchmark at growing size"): the estimate is 1.02–1.15× the measured peak.
 //!
 //! The limit is `--max-memory` ([`set_limit`]), else `TRESCA_FETI_MAX_MEMORY`, else
 //! `MemAvailable` of `/proc/meminfo` or, where smaller, what `ulimit -v` leaves of the address

@@ -501,7 +501,7 @@ pub fn projected(method: Method, dual: DualKind) -> bool {
 /// projector ([`projected`]), as `P M P + ϱ⁻¹Q` under SMALSE-M. Anything else is refused with
 /// the key named. `auto` (the default) is Dirichlet for the plain CG of a TFETI scene without
 /// contact (standard PCPG), lumped for TSSN under the oblique projector and none elsewhere
-/// (each measured in the README).
+/// (each measured: docs/method.md, "The default choice").
 pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> Result<Option<Preconditioner>> {
     match kind {
         Preconditioner::None => return Ok(None),
@@ -531,8 +531,8 @@ pub fn preconditioner(method: Method, kind: Preconditioner, dual: DualKind) -> R
 /// The automatic method (`solver.method` absent or `"auto"`) for the dual the scene is solved
 /// on: TSSN (with the FETI preconditioner where its CG runs projected, [`preconditioner`]),
 /// except under SMALSE-M's orthogonal projector, whose inner solves stay SSN-BiCGSTAB.
-/// Measured on the benchmark set and the stability suite (README, "The default solver and
-/// decomposition").
+/// Measured on the benchmark set and the stability suite (docs/method.md, "The default
+/// choice"; docs/performance.md).
 pub fn resolve_method(solver: &mut crate::scene::SolverSettings, dual: DualKind) {
     if !solver.auto {
         return;

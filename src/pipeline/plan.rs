@@ -19,8 +19,8 @@
 //!   solve for the monolithic dual, [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε)
 //!   product-equivalents (PCG with the Dirichlet preconditioner) for TFETI.
 //!
-//! The constants were fitted to the benchmark set on the development machine (README, "The
-//! decomposition chosen by cost"); the ranking, not the seconds, is what the choice uses.
+//! The constants were fitted to the benchmark set on the development machine (docs/method.md,
+//! "The default choice"); the ranking, not the seconds, is what the choice uses.
 
 use crate::comm::Comm;
 use crate::error::Result;

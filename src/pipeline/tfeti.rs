@@ -256,7 +256,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         let (mut dual, mut b) = TfetiDual::new(dist, &cons, pieces, coarse);
         dual.set_null(&clusters.null, &mut b);
         // the inner solves of a contact solve use them; the plain CG of a scene without
-        // contact does not (measured slower: README, performance)
+        // contact does not (measured slower: docs/performance.md, "Mixed precision")
         if s.precision != Precision::Double && contact.is_some() {
             dual.keep_single();
         }

@@ -10,8 +10,8 @@ use super::operator::{Operator, Space};
 use super::params::{Common, SigmaEstimate};
 use super::{Info, Qp, QpError, QpSolution, Step, StepKind};
 
-/// The safety factor on the power iterations' σ_max estimate (they underestimate it, DESIGN
-/// §3a): ρ = rho_factor/(SIGMA_SAFETY·σ_est).
+/// The safety factor on the power iterations' σ_max estimate (they underestimate it,
+/// docs/method.md, "The solvers"): ρ = rho_factor/(SIGMA_SAFETY·σ_est).
 pub const SIGMA_SAFETY: f64 = 1.1;
 
 /// Sees every outer step as the solver records it (PETSc's `-ksp_monitor`). Called on every rank

@@ -1,5 +1,5 @@
 //! GIMSSN — the globally convergent, inexact, symmetrized semi-smooth Newton method of the paper
-//! (DESIGN §3), with the feasible CG inner solver CGMfeas.
+//! (docs/method.md, "The solvers"), with the feasible CG inner solver CGMfeas.
 //!
 //! Each outer step k: the sets (12)–(13) at λᵏ; `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`;
 //! a projected-gradient step `λ^{k+1,0} = P_Λ(λᵏ − ρ r(λᵏ))` that puts the fixed components
@@ -8,14 +8,14 @@
 //! gradient is below the tolerance or — taking the step up to the boundary — when a CG step
 //! would leave Λ. Every iterate is in Λ and q(λᵏ) decreases monotonically for ρ ∈ (0, 2/σ_max).
 //! ρ = rho_factor/(1.1·σ_est) with σ_est from power iterations (the 1.1 covers their
-//! underestimate, DESIGN §3a). Stop: ‖r̃_ρ(λ)‖ ≤ ε‖b‖, confirmed with a fresh A-product.
+//! underestimate, docs/method.md, "The solvers"). Stop: ‖r̃_ρ(λ)‖ ≤ ε‖b‖, confirmed with a fresh A-product.
 //!
 //! The same loop gives the paper's two other symmetrized variants: **IMSSN** fixes
 //! the components of (11) but starts CG from λᵏ's free components, runs CG without the
 //! feasibility test, and projects: λ^{k+1} = P_Λ(CG result), with a fresh gradient (one more
 //! product per step); going on from the projected iterate, not the unprojected CG result that
-//! a literal reading of the paper allows, is what reproduces the paper's step counts (README,
-//! Table 1). **MSSN** is IMSSN with the free-set system solved to round-off.
+//! a literal reading of the paper allows, is what reproduces the paper's step counts (docs/validation.md,
+//! "The paper's benchmark"). **MSSN** is IMSSN with the free-set system solved to round-off.
 //!
 //! The variant is [`Variant`] (GIMSSN, IMSSN or MSSN).
 

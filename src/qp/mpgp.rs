@@ -1,6 +1,6 @@
 //! MPGP — modified proportioning with gradient projections (Dostál & Kozubek, Math. Program.
 //! 135 (2012); the disc step bound from Bouchala, Dostál & Vodstrčil, JOTA 157 (2013)): the
-//! peer method for separable convex constraints (DESIGN §3).
+//! peer method for separable convex constraints (docs/method.md, "The solvers").
 //!
 //! At λ ∈ Λ a block is *active* when λ lies on its boundary (λν,ᵢ = 0; ‖λ̄τ,ᵢ‖ = gᵢ or on the
 //! ellipse), *free* otherwise. The gradient g = Aλ − b splits into the free gradient φ (g on free

@@ -16,12 +16,12 @@ pub enum Method {
     /// Symmetrized SSN with exact inner solves.
     Mssn,
     /// Unsymmetrized SSN (full slant derivative), inner systems by BiCGSTAB. The default: the
-    /// fastest to ε = 1e-6 and to every error in u from 1e-4 to 1e-8 on the seed scene (README).
+    /// fastest to ε = 1e-6 and to every error in u from 1e-4 to 1e-8 on the seed scene (docs/performance.md, "Against peer methods: work–precision").
     #[default]
     SsnBicgstab,
     /// Modified proportioning with gradient projections (Dostál–Kozubek).
     Mpgp,
-    /// Tangent-symmetric SSN: the exact SSN step as an SPD system, solved by CG (DESIGN §3b).
+    /// Tangent-symmetric SSN: the exact SSN step as an SPD system, solved by CG (docs/method.md, "The solvers").
     Tssn,
 }
 
@@ -49,7 +49,7 @@ impl Method {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum CgStop {
-    /// ‖g_F‖ ≤ tol·‖b‖ (the faster choice, DESIGN §3a).
+    /// ‖g_F‖ ≤ tol·‖b‖ (the faster choice, docs/method.md, "The solvers").
     #[default]
     Rhs,
     /// ‖g_F‖ ≤ tol·‖g_F at the start of the inner solve‖ (the paper's).
@@ -63,7 +63,7 @@ pub enum SigmaEstimate {
     /// The power method from a fixed start vector.
     Power,
     /// Lanczos from the same vector: the largest Ritz value (the default, 10 steps: chosen on
-    /// the benchmark set, README).
+    /// the benchmark set, docs/performance.md).
     #[default]
     Lanczos,
 }
@@ -74,7 +74,7 @@ pub enum SigmaEstimate {
 pub enum CoulombSolve {
     /// Newton where the inner solves have no coarse projector (the monolithic dual); with one
     /// (TFETI), TSSN with lagged bounds when TSSN is the method, else the fixed point with the
-    /// method: what won on the Coulomb benchmark set (README, performance).
+    /// method: what won on the Coulomb benchmark set (docs/performance.md, "Coulomb friction: lagged bounds").
     #[default]
     Auto,
     /// The semi-smooth Newton method on the Coulomb law itself, the bound's dependence on λν in
@@ -194,7 +194,7 @@ pub struct Tssn {
     pub slide_cap: f64,
     /// The safeguard fires when q at the Newton start rose above the last accepted start's at
     /// this many starts in a row (1: at every rise, the monotone rule); 0, the default: never
-    /// (chosen on the benchmark set, README).
+    /// (chosen on the benchmark set, docs/performance.md).
     pub patience: usize,
     /// Krylov recycling: while a Newton step's system has the same structure as the last one's
     /// (the same components free, the same pairs sliding), its CG is deflated by up to this

@@ -1,4 +1,4 @@
-//! The convex blocks of the dual feasible set `Λ = R₊ᵐ × Π_i Λτ,ᵢ` (DESIGN §1, §3): one small
+//! The convex blocks of the dual feasible set `Λ = R₊ᵐ × Π_i Λτ,ᵢ` (docs/method.md, "The problem" and "The solvers"): one small
 //! closed convex set in R^d (d = 1 or 2) per contact pair and direction.
 //!
 //! * [`HalfLine`] (d = 1): `{x ≥ 0}` for the normal multiplier λν,ᵢ. `P(y) = max(0, y)`; slant
@@ -35,7 +35,7 @@
 //!   0: on the segment itself the projection is not the identity); a = b = 0 is the point {0}.
 //!
 //! [`TangentSet`] dispatches statically between the disc and the ellipse (one per contact pair)
-//! and adds the local boundary geometry a tangent-symmetric Newton step needs (DESIGN §3b):
+//! and adds the local boundary geometry a tangent-symmetric Newton step needs (docs/method.md, "The solvers"):
 //! [`TangentSet::boundary_tangent`], [`TangentSet::curvature`] and, for a sliding pair,
 //! [`TangentSet::frame`] (projection, normal, tangent, distance, curvature and slant factor μ at
 //! once; the term `cᵢ = (1/μ − 1)/ρ` of §3b is best computed as `κ·dist/ρ`).

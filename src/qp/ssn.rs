@@ -1,5 +1,5 @@
 //! SSN-BiCGSTAB — the paper's baseline: the semi-smooth Newton method on the unsymmetrized
-//! equation `F(λ) = λ − P_Λ(λ − ρ r(λ)) = 0`, r = Aλ − b (DESIGN §3).
+//! equation `F(λ) = λ − P_Λ(λ − ρ r(λ)) = 0`, r = Aλ − b (docs/method.md, "The solvers").
 //!
 //! Each outer step solves the Newton system `J δ = −F(λᵏ)` with the full slant derivative
 //! `J = I − D(I − ρA)`, D = ∂P_Λ(λᵏ − ρ rᵏ) block-diagonal (0/1 on the normal components; on a
@@ -17,7 +17,7 @@
 //! pairs' μρ on their tangents, so `M_J = (I − Π) + P_W Π M Π S`, Π the step's subspace W (D = I
 //! components; t tᵀ on sliding pairs whose cᵢ ≤ [`SLIDE_CAP`]·σ, as TSSN's), S = 1/ρ there and
 //! 1/(μρ) on a slide, P_W the orthogonal projection onto Ker G ∩ W when the QP has a coarse
-//! space: the FETI preconditioner in its projected form (DESIGN §3c).
+//! space: the FETI preconditioner in its projected form (docs/method.md, "TFETI and H-TFETI": the FETI preconditioner).
 //! The same iteration solves the Coulomb law directly ([`run`] with coefficients: Λ(λ) cut at
 //! the iterate's normals, the bound's dependence on λν in J; `qp::coulomb::newton`).
 

@@ -1,4 +1,4 @@
-//! TSSN — the tangent-symmetric semi-smooth Newton method (DESIGN §3b): the exact Newton step of
+//! TSSN — the tangent-symmetric semi-smooth Newton method (docs/method.md, "The solvers"): the exact Newton step of
 //! SSN-BiCGSTAB written as a symmetric positive definite system, so that CG (and a symmetric
 //! preconditioner) solve it.
 //!
@@ -276,7 +276,7 @@ pub(crate) fn run<A: Operator>(
 
 /// An error rise of this factor over the best so far ends the lagged bounds: they are frozen
 /// and re-cut only as the fixed point would ([`settle_bounds`]). With [`RECUT`], what won on the
-/// Coulomb scenes (README, performance).
+/// Coulomb scenes (docs/performance.md, "Coulomb friction: lagged bounds").
 const LAG_JUMP: f64 = 10.0;
 /// Frozen bounds are re-cut once the error over them is at most this fraction of the relative
 /// change of λν since their cut.

@@ -1,7 +1,7 @@
 //! `tresca-feti bench-coarse`: what one C⁻¹ solve costs as the pieces (subdomains, or H-TFETI
 //! clusters) grow in number — C factorized and solved whole on every rank, against the explicit
 //! inverse's rows of one rank's pieces (`decomposition.coarse_solve = "explicit"`) — on the
-//! scene's own decomposition, one process. The inputs of the README's cost model.
+//! scene's own decomposition, one process. The inputs of the plan's cost model (`pipeline::plan`).
 
 use std::time::Instant;
 

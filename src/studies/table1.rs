@@ -1,10 +1,10 @@
-//! `tresca-feti table1`: the paper's Table 1 (DESIGN §4) — iter/nA of the dual solvers on the
+//! `tresca-feti table1`: the paper's Table 1 (docs/validation.md, "The paper's benchmark") — iter/nA of the dual solvers on the
 //! seed scene for growing N — with our figures beside the paper's, the wall time of each solve,
 //! the KKT residual and the error in u against a tight reference, printed as a table (rank 0)
 //! and written as CSV.
 //!
 //! A column is a solver with a parameter preset: `default` (the scene's `[solver]` table) or
-//! `paper` (the settings that reproduce the paper's counts, DESIGN §3a: ρ = 1.9/σ_est, rtol 0.1,
+//! `paper` (the settings that reproduce the paper's counts, docs/method.md, "The solvers": ρ = 1.9/σ_est, rtol 0.1,
 //! cfact 0.6, inner tolerance relative to the gradient at the start of the inner solve and no
 //! floor under it; for SSN-BiCGSTAB ρ = 1/σ_est and near-exact inner solves, 1e-6). The reference u is SSN-BiCGSTAB
 //! at ε = 1e-11 (validated against Clarabel in tests/clarabel.rs).
