@@ -5,6 +5,21 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
+/// Every `.rs` file below `dir`.
+fn sources(dir: &Path) -> Vec<std::path::PathBuf> {
+    let (mut stack, mut files) = (vec![dir.to_path_buf()], Vec::new());
+    while let Some(d) = stack.pop() {
+        for p in std::fs::read_dir(&d).unwrap().flatten().map(|e| e.path()) {
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                files.push(p);
+            }
+        }
+    }
+    files
+}
+
 /// Top-level module → the top-level modules its code names.
 fn graph() -> BTreeMap<String, BTreeSet<String>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -19,34 +34,23 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
         .filter(|m| m != "lib" && m != "main")
         .collect();
     let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    let mut stack = vec![src.clone()];
-    while let Some(dir) = stack.pop() {
-        for e in std::fs::read_dir(&dir).unwrap().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            if p.extension().is_none_or(|x| x != "rs") {
-                continue;
-            }
-            let rel = p.strip_prefix(&src).unwrap();
-            let top = rel.components().next().unwrap().as_os_str().to_string_lossy().trim_end_matches(".rs").to_string();
-            if !modules.contains(&top) {
-                continue;
-            }
-            let text = std::fs::read_to_string(&p).unwrap();
-            let code = text.split("#[cfg(test)]").next().unwrap();
-            for line in code.lines().map(str::trim_start).filter(|l| !l.starts_with("//")) {
-                for (i, _) in line.match_indices("crate::") {
-                    let name: String = line[i + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
-                    if modules.contains(&name) && name != top {
-                        g.entry(top.clone()).or_default().insert(name);
-                    }
+    for p in sources(&src) {
+        let rel = p.strip_prefix(&src).unwrap();
+        let top = rel.components().next().unwrap().as_os_str().to_string_lossy().trim_end_matches(".rs").to_string();
+        if !modules.contains(&top) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&p).unwrap();
+        let code = text.split("#[cfg(test)]").next().unwrap();
+        for line in code.lines().map(str::trim_start).filter(|l| !l.starts_with("//")) {
+            for (i, _) in line.match_indices("crate::") {
+                let name: String = line[i + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
+                if modules.contains(&name) && name != top {
+                    g.entry(top.clone()).or_default().insert(name);
                 }
             }
-            g.entry(top).or_default();
         }
+        g.entry(top).or_default();
     }
     g
 }
@@ -133,24 +137,13 @@ fn no_source_file_grows_past_1200_lines() {
     const LIMIT: usize = 1200;
     let ceilings = [("contact/mortar.rs", 1617), ("scene.rs", 1616), ("qp/sets.rs", 1532), ("output/hdf5.rs", 1478)];
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut stack = vec![src.clone()];
     let mut over = Vec::new();
-    while let Some(dir) = stack.pop() {
-        for e in std::fs::read_dir(&dir).unwrap().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            if p.extension().is_none_or(|x| x != "rs") {
-                continue;
-            }
-            let name = p.strip_prefix(&src).unwrap().to_string_lossy().replace('\\', "/");
-            let lines = std::fs::read_to_string(&p).unwrap().lines().count();
-            let limit = ceilings.iter().find(|c| c.0 == name).map_or(LIMIT, |c| c.1);
-            if lines > limit {
-                over.push(format!("{name}: {lines} lines (at most {limit})"));
-            }
+    for p in sources(&src) {
+        let name = p.strip_prefix(&src).unwrap().to_string_lossy().replace('\\', "/");
+        let lines = std::fs::read_to_string(&p).unwrap().lines().count();
+        let limit = ceilings.iter().find(|c| c.0 == name).map_or(LIMIT, |c| c.1);
+        if lines > limit {
+            over.push(format!("{name}: {lines} lines (at most {limit})"));
         }
     }
     assert!(over.is_empty(), "split these files: {over:?}");

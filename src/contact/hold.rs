@@ -195,45 +195,48 @@ enum Limit {
 
 /// max t subject to G λ − t u = e, λ ∈ Λ (one second-order cone program).
 fn largest(g: &[Vec<(usize, f64)>], e: &[f64], u: &[f64], n: usize, cones: &Cones) -> Limit {
+    let mut rows = Vec::new();
+    for (r, row) in g.iter().enumerate() {
+        rows.extend(row.iter().map(|&(j, v)| (r, j, v)));
+        if u[r] != 0.0 {
+            rows.push((r, n, -u[r]));
+        }
+    }
+    let mut q = vec![0.0; n + 1];
+    q[n] = -1.0;
+    match program(cones, &rows, e.to_vec(), ZeroConeT(g.len()), &q) {
+        Some((SolverStatus::Solved | SolverStatus::AlmostSolved, x)) => Limit::At(x[n]),
+        Some((SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible, _)) => Limit::Nowhere,
+        _ => Limit::Unknown,
+    }
+}
+
+/// min c·x over x = (λ, t) with λ ∈ Λ (`cones`: s = h − A x, rows first) and `rows` (relative
+/// to the cones' rows, right-hand side `h`) in the cone `last`; P = 0. The status and x, or None
+/// where Clarabel does not take the problem.
+fn program(cones: &Cones, rows: &[(usize, usize, f64)], h: Vec<f64>, last: SupportedConeT<f64>, c: &[f64]) -> Option<(SolverStatus, Vec<f64>)> {
+    let r0 = cones.h.len();
     let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
-    for &(r, j, v) in &cones.a {
+    for (r, j, v) in cones.a.iter().copied().chain(rows.iter().map(|&(r, j, v)| (r0 + r, j, v))) {
         ai.push(r);
         aj.push(j);
         av.push(v);
     }
-    let r0 = cones.h.len();
-    for (r, row) in g.iter().enumerate() {
-        for &(j, v) in row {
-            ai.push(r0 + r);
-            aj.push(j);
-            av.push(v);
-        }
-        if u[r] != 0.0 {
-            ai.push(r0 + r);
-            aj.push(n);
-            av.push(-u[r]);
-        }
-    }
-    let a = CscMatrix::new_from_triplets(r0 + g.len(), n + 1, ai, aj, av);
-    let p = CscMatrix::new_from_triplets(n + 1, n + 1, vec![], vec![], vec![]);
-    let mut q = vec![0.0; n + 1];
-    q[n] = -1.0;
-    let h: Vec<f64> = cones.h.iter().copied().chain(e.iter().copied()).collect();
+    let nvar = c.len();
+    let a = CscMatrix::new_from_triplets(r0 + h.len(), nvar, ai, aj, av);
+    let p = CscMatrix::new_from_triplets(nvar, nvar, vec![], vec![], vec![]);
+    let h: Vec<f64> = cones.h.iter().copied().chain(h).collect();
     let mut kinds: Vec<SupportedConeT<f64>> = Vec::new();
     if cones.zero > 0 {
         kinds.push(ZeroConeT(cones.zero));
     }
     kinds.push(NonnegativeConeT(cones.nonneg));
     kinds.extend((0..cones.socs).map(|_| SecondOrderConeT(3)));
-    kinds.push(ZeroConeT(g.len()));
+    kinds.push(last);
     let settings = DefaultSettings { verbose: false, max_iter: 200, max_threads: 1, ..DefaultSettings::default() };
-    let Ok(mut solver) = DefaultSolver::new(&p, &q, &a, &h, &kinds, settings) else { return Limit::Unknown };
+    let mut solver = DefaultSolver::new(&p, c, &a, &h, &kinds, settings).ok()?;
     solver.solve();
-    match solver.solution.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => Limit::At(solver.solution.x[n]),
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => Limit::Nowhere,
-        _ => Limit::Unknown,
-    }
+    Some((solver.solution.status, solver.solution.x.clone()))
 }
 
 /// One body's (or group's) part of the unbalanced load: its bodies, Σ d², and its unbalanced,
@@ -313,39 +316,16 @@ impl Cones {
 /// λ* = argmin over Λ of ‖e − G λ‖ (with t ≥ ‖e − Gλ‖ minimized); None where Clarabel does not
 /// solve it.
 fn nearest(g: &[Vec<(usize, f64)>], e: &[f64], n: usize, cones: &Cones) -> Option<Vec<f64>> {
-    let (mut ai, mut aj, mut av) = (vec![], vec![], vec![]);
-    // the cones of Λ first (s = h − A x), then (t, e − Gλ) ∈ SOC
-    for &(r, j, v) in &cones.a {
-        ai.push(r);
-        aj.push(j);
-        av.push(v);
-    }
-    let r0 = cones.h.len();
-    ai.push(r0);
-    aj.push(n);
-    av.push(-1.0);
+    // (t, e − Gλ) ∈ SOC after the cones of Λ
+    let mut rows = vec![(0, n, -1.0)];
     for (r, row) in g.iter().enumerate() {
-        for &(j, v) in row {
-            ai.push(r0 + 1 + r);
-            aj.push(j);
-            av.push(v);
-        }
+        rows.extend(row.iter().map(|&(j, v)| (1 + r, j, v)));
     }
-    let rows = r0 + 1 + g.len();
-    let a = CscMatrix::new_from_triplets(rows, n + 1, ai, aj, av);
-    let p = CscMatrix::new_from_triplets(n + 1, n + 1, vec![], vec![], vec![]);
     let mut q = vec![0.0; n + 1];
     q[n] = 1.0;
-    let h: Vec<f64> = cones.h.iter().copied().chain(std::iter::once(0.0)).chain(e.iter().copied()).collect();
-    let mut kinds: Vec<SupportedConeT<f64>> = Vec::new();
-    if cones.zero > 0 {
-        kinds.push(ZeroConeT(cones.zero));
+    let h: Vec<f64> = std::iter::once(0.0).chain(e.iter().copied()).collect();
+    match program(cones, &rows, h, SecondOrderConeT(1 + g.len()), &q)? {
+        (SolverStatus::Solved | SolverStatus::AlmostSolved, x) => Some(x),
+        _ => None,
     }
-    kinds.push(NonnegativeConeT(cones.nonneg));
-    kinds.extend((0..cones.socs).map(|_| SecondOrderConeT(3)));
-    kinds.push(SecondOrderConeT(1 + g.len()));
-    let settings = DefaultSettings { verbose: false, max_iter: 200, max_threads: 1, ..DefaultSettings::default() };
-    let mut solver = DefaultSolver::new(&p, &q, &a, &h, &kinds, settings).ok()?;
-    solver.solve();
-    matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved).then(|| solver.solution.x.clone())
 }
