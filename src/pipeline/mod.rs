@@ -15,18 +15,20 @@ pub mod accuracy;
 pub mod finish;
 pub mod memory;
 pub mod monitor;
+mod monolithic;
 pub mod path;
 pub mod plan;
 pub mod report;
+mod steps;
 pub mod tfeti;
+
+pub use monolithic::solve_contact;
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::comm::Comm;
-use crate::contact::state::{contact_fields, contact_state, ContactState, CONTACT, OPEN, SLIP, STICK};
-use crate::dual::monolithic::MonolithicDual;
-use crate::dual::DualProblem;
+use crate::contact::state::{contact_fields, ContactState, CONTACT, OPEN, SLIP, STICK};
 use crate::error::{Error, Result};
 use crate::fem::assembly::{assemble_body, DofMap};
 use crate::linalg::cholesky::{Cholesky, Ordering};
@@ -34,7 +36,7 @@ use crate::linalg::ordering::{expand_to_dofs, order_last_if_cheap, NodeOrder};
 use crate::model::{self, Model};
 use crate::output::{self, Center, Field, MeshRows, OutputData, Values};
 use crate::qp::params::CoulombSolve;
-use crate::qp::{self, Method, Operator, Qp, Space};
+use crate::qp::{self, Method};
 use crate::scene::{LoadedScene, OrderingKind, Preconditioner};
 
 pub use crate::dual::monolithic::LocalBody;
@@ -304,158 +306,6 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
         })
         .collect();
     Ok(sol)
-}
-
-/// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), then for
-/// each load step (one without `[load]`) set the load (phase `load`), solve the QP warm-started
-/// from the last step (phase `iterate`), recover u (phase `recover`), stresses and gather as for
-/// elasticity. The outcome is the last step's, with every step's record.
-pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
-    let contact = model.pairs.as_ref().expect("contact is active");
-    if let Some(g) = model.floating.first() {
-        return Err(Error::scene(
-            "decomposition",
-            format!(
-                "{} is held by contact alone: it is solved by TFETI with the orthogonal projector (pipeline::held_by_contact)",
-                crate::contact::hold::group_name(&model.mesh, g)
-            ),
-        ));
-    }
-    let s = &solver_for(ls, model);
-    let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, true, t)?;
-    preconditioner(s.params.method(), s.preconditioner, DualKind::Monolithic)?;
-    let (mut dual, mut b) = t.phase(comm, "dual", || {
-        let (mut dual, b) = MonolithicDual::new(comm, contact, bodies);
-        if s.precision != crate::scene::Precision::Double {
-            dual.keep_single();
-        }
-        Ok((dual, b))
-    })?;
-    let set = contact.constraint_set();
-    let name = s.params.method().name();
-    let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
-    let mut walk = path::Walk::new(&model.path, dual.dim(), &s.params, report::UnitsReport::of(&ls.scene.units));
-    for k in 1..=walk.steps {
-        walk.begin();
-        if walk.on_path {
-            b = t.phase(comm, "load", || {
-                let (cons, loads) = model.state(k);
-                let by_body = model::constraints_by_body(&model.mesh, &cons);
-                Ok(dual.set_load(
-                    contact,
-                    |lb| {
-                        let body = &model.mesh.bodies[lb.body];
-                        let dofs = DofMap::new(body.nodes.clone(), &by_body[lb.body]);
-                        let f =
-                            crate::fem::assembly::body_rhs(&model.mesh, lb.body, model.lame[lb.body], &dofs, &loads[3 * body.nodes.start..3 * body.nodes.end]);
-                        (dofs, f)
-                    },
-                    &walk.jump,
-                ))
-            })?;
-        }
-        // the accuracy guard: a result that misses its checks is continued at a tighter ε
-        let (mut params, mut x0, mut guard, mut total) = (walk.params.clone(), walk.y.clone(), accuracy::Guard::default(), qp::Info::default());
-        let bnorm = dual.space().norm(&b);
-        let (mut sol, rec, coulomb_set, kkt) = loop {
-            let mut monitor = t.monitor();
-            let sol = t.phase(comm, "iterate", || {
-                qp::solve_friction(&Qp::new(&dual, &b, &set), coulomb, &x0, &params, &mut monitor).map_err(|e| Error::solver(walk.name(name, k), e))
-            })?;
-            total.absorb(&sol.info);
-            // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-            let coulomb_set = coulomb.map(|mu| qp::cone::bounds(&set, mu, &sol.lambda));
-            let set_k = coulomb_set.as_ref().unwrap_or(&set);
-            let rec = t.phase(comm, "recover", || Ok(dual.recover(&sol.lambda)))?;
-            let kkt = qp::kkt::residuals_scaled(set_k, &rec.lambda, &rec.gap, bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
-            let pieces: Vec<_> =
-                dual.blocks.iter().zip(&rec.u).zip(&rec.rhs).map(|((blk, u), f)| accuracy::Equilibrium::of(&blk.local.sys.k, u, f, &[])).collect();
-            let verdict = accuracy::Verdict::new(comm, &pieces, kkt.worst(), params.common.eps);
-            match guard.next(k, &verdict, &walk.name(name, k), &t.live)? {
-                None => break (sol, rec, coulomb_set, kkt),
-                Some(eps) => {
-                    params.common.eps = eps;
-                    params.common.sigma = Some(sol.info.sigma_est).filter(|s| s.is_finite() && *s > 0.0);
-                    x0 = sol.lambda;
-                }
-            }
-        };
-        sol.info = total;
-        let set_k = coulomb_set.as_ref().unwrap_or(&set);
-        if k == walk.steps {
-            if let Some(path) = &ls.scene.output.export_dual {
-                t.phase(comm, "export", || export_dual(comm, &dual, &b, contact, &sol.lambda, path))?;
-            }
-            if let Some(path) = &ls.scene.output.export_fclib {
-                t.phase(comm, "export", || crate::dual::fclib::write_global(comm, path, &dual, contact, &sol.lambda, &ls.scene.title))?;
-            }
-        }
-        let refs: Vec<&LocalBody> = dual.blocks.iter().map(|blk| &blk.local).collect();
-        let rhs_refs: Vec<&[f64]> = rec.rhs.iter().map(Vec::as_slice).collect();
-        let mut solution = finish_bodies(comm, model, &refs, &rec.u, &rhs_refs, t)?;
-        solution.single_precision_error = dual.single_error();
-        solution.explicit_products = dual.explicit_dofs();
-        // the status cannot be sharper than the solution: classify at the solver's tolerance
-        let state = contact_state(contact, set_k, &rec.lambda, &rec.gap, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
-        let sigma = sol.info.sigma_est;
-        let mut outcome = ContactOutcome { dim: dual.dim(), state, info: sol.info, bnorm, kkt, steps: vec![], tightenings: guard.tightenings };
-        if let Some(records) = walk.end(k, &solution, Some((contact, &outcome)), &t.live, sol.lambda, dual.jump(&rec.gap), Some(sigma)) {
-            outcome.steps = records;
-            outcome.tightenings = walk.take_tightenings();
-            return Ok((solution, outcome));
-        }
-    }
-    unreachable!("a load path has at least one step")
-}
-
-/// `output.export_dual`: the Coulomb problem on the monolithic dual in the local form of the
-/// frictional-contact literature, u = W r + q with per contact (normal, t₁, t₂): W = A (by
-/// 3m products), q = −b, μ, our r = λ and u = W r + q; rank 0 writes.
-fn export_dual<C: Comm>(
-    comm: &C,
-    dual: &MonolithicDual<'_, C>,
-    b: &[f64],
-    contact: &crate::contact::pairing::Contact,
-    lambda: &[f64],
-    path: &std::path::Path,
-) -> Result<()> {
-    use crate::qp::cone::Coefficient;
-    let m = contact.len();
-    let mu: Vec<f64> = contact
-        .coulomb
-        .iter()
-        .map(|c| match *c {
-            Coefficient::Isotropic(mu) => Ok(mu),
-            _ => Err(Error::scene("output.export_dual", "exports isotropic Coulomb friction on every pair (friction = { type = \"coulomb\", mu })")),
-        })
-        .collect::<Result<_>>()?;
-    let layout = qp::Layout::contact(m, true);
-    let idx = |k: usize| -> usize {
-        let (a, i) = (k / 3, k % 3);
-        if i == 0 {
-            layout.normal(a)
-        } else {
-            layout.tangent(a, i - 1)
-        }
-    };
-    let n = 3 * m;
-    let mut w = vec![0.0; n * n];
-    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
-    for j in 0..n {
-        e[idx(j)] = 1.0;
-        dual.apply(&e, &mut col);
-        e[idx(j)] = 0.0;
-        for i in 0..n {
-            w[i * n + j] = col[idx(i)];
-        }
-    }
-    let q: Vec<f64> = (0..n).map(|k| -b[idx(k)]).collect();
-    let r: Vec<f64> = (0..n).map(|k| lambda[idx(k)]).collect();
-    let u: Vec<f64> = (0..n).map(|i| q[i] + (0..n).map(|j| w[i * n + j] * r[j]).sum::<f64>()).collect();
-    if comm.is_root() {
-        crate::output::hdf5::write_arrays(path, &[("W", vec![n, n], &w), ("q", vec![n], &q), ("mu", vec![m], &mu), ("r", vec![n], &r), ("u", vec![n], &u)])?;
-    }
-    Ok(())
 }
 
 /// Which dual problem a scene is solved on.

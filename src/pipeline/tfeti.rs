@@ -5,10 +5,15 @@
 //! (`feti::distribution`), each rank holding the multipliers its subdomains own. The mesh and
 //! the decomposition are whole on every rank only until each has taken its [`Share`].
 
+use super::accuracy::{self, Verdict};
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
-use super::{accuracy, BodyStats, ContactOutcome, Solution, Timings};
+use super::monitor::Live;
+use super::steps::{self, Solved, StepDual};
+use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
+use crate::contact::pairing::Contact;
 use crate::contact::state::contact_state;
+use crate::dual::Recovered;
 use crate::error::{Error, Result};
 use crate::feti::cluster::{ClusterSystem, Clustering};
 use crate::feti::coarse::{self, Coarse};
@@ -20,7 +25,7 @@ use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::{SubdomainMesh, SubdomainSystem};
 use crate::feti::{assign_ranks, eliminated, subdomain_loads};
 use crate::model::Model;
-use crate::qp::{self, Lambda, Operator, Qp, Space};
+use crate::qp::{self, cone::Coefficient, Lambda, Operator, Params, Qp, QpError, QpSolution, Space};
 use crate::scene::{CoarseSolve, LoadedScene, Precision, Projector};
 
 /// Figures of one subdomain: those of every piece, and its interface.
@@ -397,151 +402,203 @@ pub fn piece_weights(model: &Model, d: &Decomposition, clusters: &Clustering) ->
     clusters.members.iter().map(|m| min / mu(&d.subdomains[m[0]])).collect()
 }
 
-/// Decomposes, factorizes, then for each load step (one without `[load]`) sets the load
-/// (phase `load`), solves (contact or not) warm-started from the last step and recovers on the
-/// TFETI dual. The outcome is the last step's, with every step's record.
+/// Decomposes, factorizes, then walks the load path (one step without `[load]`) on the TFETI
+/// dual ([`steps::walk`]): contact or not, warm-started from the last step. The outcome is the
+/// last step's, with every step's record.
 pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
-    let dec = &ls.scene.decomposition;
-    let orthogonal = dec.projector == Projector::Orthogonal;
     let s = &super::solver_for(ls, model);
-    let TfetiProblem { clusters, constraints: cons, owner, mut dual, mut b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } =
-        setup(comm, ls, model, t)?;
+    let TfetiProblem { clusters, constraints: cons, owner, mut dual, b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } = setup(comm, ls, model, t)?;
     let model = &*model;
     // B's rows are each rank's pieces' entries in `dual` now: only their counts are kept
     let rows = [cons.e_start(), cons.gluing_rows, cons.dirichlet_rows, cons.tie_rows];
     drop((cons, owner));
     let contact = model.pairs.as_ref();
-    let params = &s.params;
-    let name = if contact.is_some() { params.method().name() } else { "cg" };
-    let coulomb = contact.filter(|c| c.is_coulomb());
-    let mu = coulomb.map(|c| c.coefficients(&dual.dist.pairs));
-    let mut walk = super::path::Walk::new(&model.path, dual.dim(), params, super::report::UnitsReport::of(&ls.scene.units));
-    for k in 1..=walk.steps {
-        walk.begin();
-        if walk.on_path {
-            b = t.phase(comm, "load", || {
-                let (mine, e, c) = share.step(model, k, &dual, &clusters);
-                Ok(dual.set_load(mine, e, c, &walk.jump))
-            })?;
-        }
-        // the accuracy guard: a result that misses its checks is continued at a tighter ε
-        let (mut params, mut x0, mut guard, mut total) = (walk.params.clone(), walk.y.clone(), accuracy::Guard::default(), qp::Info::default());
-        let bnorm = dual.space().norm(&b);
-        let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
-        let (mut sol, smalse, rec, judged) = loop {
-            let mut monitor = t.monitor();
-            let (sol, smalse) = t.phase(comm, "iterate", || {
-                let m = dual.preconditioner();
-                let projected = super::projected(params.method(), super::DualKind::of(ls, model));
-                let qp = Qp::new(&dual, &b, &set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner)).with_coarse(if projected {
-                    Some(&dual as &dyn qp::Coarse)
+    let orthogonal = ls.scene.decomposition.projector == Projector::Orthogonal;
+    let mu = contact.filter(|c| c.is_coulomb()).map(|c| c.coefficients(&dual.dist.pairs));
+    let name = if contact.is_some() { s.params.method().name() } else { "cg" };
+    let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
+    let projected = super::projected(s.params.method(), super::DualKind::of(ls, model));
+    let dim = dual.dim();
+    let figures = Figures { rows, clusters: clusters.len(), corner_rows: clusters.corner_rows(), coarse_dim, nnz_c, coarse_explicit_bytes };
+    let mut steps = Steps {
+        comm,
+        model,
+        contact,
+        dual: &mut dual,
+        set,
+        mu,
+        share: &share,
+        clusters: &clusters,
+        figures,
+        orthogonal,
+        projected,
+        penalty: ls.scene.decomposition.penalty,
+        what,
+    };
+    steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, t)
+}
+
+/// The global figures of the decomposition the report carries.
+struct Figures {
+    /// The rows of B: equality start, gluing, Dirichlet, ties.
+    rows: [usize; 4],
+    clusters: usize,
+    corner_rows: usize,
+    coarse_dim: usize,
+    nnz_c: usize,
+    coarse_explicit_bytes: usize,
+}
+
+/// The TFETI dual along a load path ([`StepDual`]).
+struct Steps<'a, 'c, C: Comm> {
+    comm: &'c C,
+    model: &'a Model,
+    contact: Option<&'a Contact>,
+    dual: &'a mut TfetiDual<'c, C>,
+    /// This rank's part of Λ.
+    set: Lambda,
+    /// The Coulomb coefficients of this rank's pairs.
+    mu: Option<Vec<Coefficient>>,
+    share: &'a Share,
+    clusters: &'a Clustering,
+    figures: Figures,
+    /// SMALSE-M with the orthogonal projector (else the oblique P̃).
+    orthogonal: bool,
+    /// The solver runs on the projected system (the dual is its coarse space).
+    projected: bool,
+    penalty: f64,
+    what: String,
+}
+
+/// The contact judgement of one solve: Λ with Coulomb's bounds cut at the solution, λ and the
+/// gap c − Bu on the contact rows (whole on every rank), their KKT residuals.
+type Judged = Option<(Lambda, Vec<f64>, Vec<f64>, qp::kkt::Kkt)>;
+
+impl<C: Comm> StepDual for Steps<'_, '_, C> {
+    type Extra = Option<SmalseInfo>;
+    type Judged = Judged;
+
+    fn what(&self) -> String {
+        self.what.clone()
+    }
+
+    fn norm(&self, b: &[f64]) -> f64 {
+        self.dual.space().norm(b)
+    }
+
+    fn set_load(&mut self, k: usize, jump: &[f64]) -> Result<Vec<f64>> {
+        let (mine, e, c) = self.share.step(self.model, k, self.dual, self.clusters);
+        Ok(self.dual.set_load(mine, e, c, jump))
+    }
+
+    fn iterate(&self, b: &[f64], x0: &[f64], first: bool, params: &Params, monitor: &mut Live) -> std::result::Result<(QpSolution, Self::Extra), QpError> {
+        let dual = &*self.dual;
+        let m = dual.preconditioner();
+        let qp = Qp::new(dual, b, &self.set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner)).with_coarse(if self.projected {
+            Some(dual as &dyn qp::Coarse)
+        } else {
+            None
+        });
+        match (self.orthogonal, self.contact.is_some()) {
+            (true, _) => {
+                // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
+                // where a body is held by contact alone: its normal components give Coulomb's
+                // first bounds something to carry the load with); Coulomb is solved inside
+                // each augmented-Lagrangian step (`qp::solve_friction`)
+                let owned;
+                let x0 = if first {
+                    owned = dual.dist.owned_part(&dual.lambda_hat);
+                    &owned
                 } else {
-                    None
-                });
-                let r = match (orthogonal, contact.is_some()) {
-                    (true, _) => {
-                        // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
-                        // where a body is held by contact alone: its normal components give Coulomb's
-                        // first bounds something to carry the load with); Coulomb is solved inside
-                        // each augmented-Lagrangian step (`qp::solve_friction`)
-                        let x0 = if k == 1 && guard.tightenings.is_empty() { dual.dist.owned_part(&dual.lambda_hat) } else { x0.clone() };
-                        smalse::solve(&dual, qp.preconditioner, &set, mu.as_deref(), &x0, &params, dec.penalty, &mut monitor).map(|(s, i)| (s, Some(i)))
-                    }
-                    (false, true) => qp::solve_friction(&qp, mu.as_deref(), &x0, &params, &mut monitor).map(|s| (s, None)),
-                    (false, false) => qp::cg::solve(&qp, &x0, &params.common, &mut monitor).map(|s| (s, None)),
+                    x0
                 };
-                r.map_err(|e| Error::solver(walk.name(&what, k), e))
-            })?;
-            let rec = t.phase(comm, "recover", || {
-                // a body held by contact alone: α closes the E rows and the contact rows the pairs'
-                // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
-                let pi = (!dual.coarse.held()).then(|| {
-                    let set_k = match &mu {
-                        Some(mu) => qp::cone::bounds(&set, mu, &sol.lambda),
-                        None => set.clone(),
-                    };
-                    held_rows(&set_k, &sol.lambda)
-                });
-                dual.recover_with(&sol.lambda, pi.as_ref().map(|(f, s)| (f.as_slice(), s.as_slice()))).ok_or_else(|| {
-                    Error::numerical(
-                        "TFETI recovery",
-                        "a body held by contact alone keeps a rigid motion at this solution that no sticking or pressed pair holds (frictionless sliding freedom, or a body that lifts off)",
-                    )
-                })
-            })?;
-            total.absorb(&sol.info);
-            // with contact: the contact multipliers and the gap c − Bu from the recovered u (= the
-            // solvers' gradient on the I rows), whole on every rank, and their KKT residuals
-            let judged = contact.map(|c| {
-                let set_i = c.constraint_set();
-                let ni = set_i.layout.dim();
-                let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
-                // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
-                let set_i = if c.is_coulomb() { qp::cone::bounds(&set_i, &c.coulomb, &li) } else { set_i };
-                // gaps relative to the displacements as well as to ‖b‖: where the equality Gλ = e
-                // alone carries the load (a body held by contact alone, pressed uniformly) b is
-                // round-off and would make round-off gaps look like penetration
-                let mut umax = [rec.u.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()))];
-                comm.max_f64(&mut umax);
-                let gap_scale = bnorm.max(umax[0]);
-                let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, gap_scale, accuracy::force_scale(gap_scale, sol.info.sigma_est));
-                (set_i, li, ri, kkt)
-            });
-            let kkt = judged.as_ref().map_or(0.0, |j| j.3.worst());
-            let verdict = accuracy::Verdict::new(comm, &equilibria(&dual, &rec.u, &rec.rhs), kkt, params.common.eps);
-            match guard.next(k, &verdict, &walk.name(&what, k), &t.live)? {
-                None => break (sol, smalse, rec, judged),
-                Some(eps) => {
-                    params.common.eps = eps;
-                    // σ_max of SMALSE-M's penalized operator is its own business
-                    params.common.sigma = Some(sol.info.sigma_est).filter(|s| !orthogonal && s.is_finite() && *s > 0.0);
-                    x0 = sol.lambda;
-                }
+                smalse::solve(dual, qp.preconditioner, &self.set, self.mu.as_deref(), x0, params, self.penalty, monitor).map(|(s, i)| (s, Some(i)))
             }
-        };
-        sol.info = total;
-        let feasibility = rec.feasibility;
-        let distribution = DistributionStats::new(&dual);
-        let mut solution = finish_subdomains(comm, model, &share, &dual, &rec.u, &rec.rhs, t)?;
+            (false, true) => qp::solve_friction(&qp, self.mu.as_deref(), x0, params, monitor).map(|s| (s, None)),
+            (false, false) => qp::cg::solve(&qp, x0, &params.common, monitor).map(|s| (s, None)),
+        }
+    }
+
+    fn recover(&self, sol: &QpSolution) -> Result<Recovered> {
+        // a body held by contact alone: α closes the E rows and the contact rows the pairs'
+        // states fix (in contact: the normal; sticking: both tangents; sliding: across the slip)
+        let pi = (!self.dual.coarse.held()).then(|| {
+            let set_k = match &self.mu {
+                Some(mu) => qp::cone::bounds(&self.set, mu, &sol.lambda),
+                None => self.set.clone(),
+            };
+            held_rows(&set_k, &sol.lambda)
+        });
+        self.dual.recover_with(&sol.lambda, pi.as_ref().map(|(f, s)| (f.as_slice(), s.as_slice()))).ok_or_else(|| {
+            Error::numerical(
+                "TFETI recovery",
+                "a body held by contact alone keeps a rigid motion at this solution that no sticking or pressed pair holds (frictionless sliding freedom, or a body that lifts off)",
+            )
+        })
+    }
+
+    fn judge(&self, rec: &Recovered, sol: &QpSolution, bnorm: f64, eps: f64) -> (Verdict, Judged) {
+        let dual = &*self.dual;
+        // with contact: the contact multipliers and the gap c − Bu from the recovered u (= the
+        // solvers' gradient on the I rows), whole on every rank, and their KKT residuals
+        let judged = self.contact.map(|c| {
+            let set_i = c.constraint_set();
+            let ni = set_i.layout.dim();
+            let (li, ri) = (dual.dist.all_rows(&rec.lambda, ni), dual.dist.all_rows(&rec.gap, ni));
+            // Coulomb: the cones cut at the solution's λν (the bounds it was solved with, to ε)
+            let set_i = if c.is_coulomb() { qp::cone::bounds(&set_i, &c.coulomb, &li) } else { set_i };
+            // gaps relative to the displacements as well as to ‖b‖: where the equality Gλ = e
+            // alone carries the load (a body held by contact alone, pressed uniformly) b is
+            // round-off and would make round-off gaps look like penetration
+            let mut umax = [rec.u.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()))];
+            self.comm.max_f64(&mut umax);
+            let gap_scale = bnorm.max(umax[0]);
+            let kkt = qp::kkt::residuals_scaled(&set_i, &li, &ri, gap_scale, accuracy::force_scale(gap_scale, sol.info.sigma_est));
+            (set_i, li, ri, kkt)
+        });
+        let kkt = judged.as_ref().map_or(0.0, |j| j.3.worst());
+        (Verdict::new(self.comm, &equilibria(dual, &rec.u, &rec.rhs), kkt, eps), judged)
+    }
+
+    fn kept_sigma(&self, sigma: f64) -> Option<f64> {
+        // σ_max of SMALSE-M's penalized operator is its own business: measured every solve
+        (!self.orthogonal).then_some(sigma)
+    }
+
+    fn finish(&mut self, _last: bool, _b: &[f64], step: &Solved<Self>, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>, Vec<f64>)> {
+        let (dual, sol, rec, fig) = (&*self.dual, &step.sol, &step.rec, &self.figures);
+        let mut solution = finish_subdomains(self.comm, self.model, self.share, dual, &rec.u, &rec.rhs, t)?;
         solution.single_precision_error = dual.single_error();
         // finish filled the gathered figures (subdomains, gluing jump); add the global ones
         let f = solution.tfeti.get_or_insert_with(TfetiInfo::default);
-        [f.contact_rows, f.gluing_rows, f.dirichlet_rows, f.tie_rows] = rows;
-        f.eliminated_dofs = share.eliminated_dofs;
-        f.clusters = clusters.len();
-        f.corner_rows = clusters.corner_rows();
-        f.coarse_dim = coarse_dim;
-        f.nnz_c = nnz_c;
-        f.coarse_explicit_bytes = coarse_explicit_bytes;
-        f.feasibility = feasibility;
-        f.smalse = smalse;
-        f.distribution = distribution;
-        if contact.is_none() {
-            f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), bnorm, guard.tightenings.clone()));
+        [f.contact_rows, f.gluing_rows, f.dirichlet_rows, f.tie_rows] = fig.rows;
+        f.eliminated_dofs = self.share.eliminated_dofs;
+        f.clusters = fig.clusters;
+        f.corner_rows = fig.corner_rows;
+        f.coarse_dim = fig.coarse_dim;
+        f.nnz_c = fig.nnz_c;
+        f.coarse_explicit_bytes = fig.coarse_explicit_bytes;
+        f.feasibility = rec.feasibility;
+        f.smalse = step.extra.clone();
+        f.distribution = DistributionStats::new(dual);
+        let bnorm = step.bnorm;
+        if self.contact.is_none() {
+            f.cg = Some((sol.info.clone(), dual.space().count(dual.dim()), bnorm, step.tightenings.clone()));
         }
-        let mut outcome = contact.zip(judged).map(|(c, (set_i, li, ri, kkt))| {
-            let state = contact_state(c, &set_i, &li, &ri, params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
+        let outcome = self.contact.zip(step.judged.as_ref()).map(|(c, (set_i, li, ri, kkt))| {
+            let state = contact_state(c, set_i, li, ri, step.params.common.eps.max(1e-9), bnorm, accuracy::force_scale(bnorm, sol.info.sigma_est));
             ContactOutcome {
                 dim: dual.space().count(dual.dim()),
                 state,
                 info: sol.info.clone(),
                 bnorm,
-                kkt,
+                kkt: *kkt,
                 steps: vec![],
-                tightenings: guard.tightenings.clone(),
+                tightenings: step.tightenings.clone(),
             }
         });
-        // σ_max of SMALSE-M's penalized operator is its own business: measured every step
-        let sigma = (!orthogonal).then_some(sol.info.sigma_est);
-        if let Some(records) = walk.end(k, &solution, contact.zip(outcome.as_ref()), &t.live, sol.lambda, dual.jump(&rec.gap), sigma) {
-            if let Some(o) = &mut outcome {
-                o.steps = records;
-                o.tightenings = walk.take_tightenings();
-            }
-            return Ok((solution, outcome));
-        }
+        Ok((solution, outcome, dual.jump(&rec.gap)))
     }
-    unreachable!("a load path has at least one step")
 }
 
 /// The contact components that fix a rigid motion at the solution λ (this rank's pairs, owned
