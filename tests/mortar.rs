@@ -531,7 +531,7 @@ fn the_mortar_patch_test_holds_at_any_stiffness() {
 /// to its neighbours: none of them is closed, no nodal pressure exceeds 20× the mean under the
 /// punch, and the force is within 3 % of the punch as slave (measured 2026-12-05: −2.5 % on
 /// this coarse block, −1.2 % at h = 0.5 on a finer tet4 punch model, halving with h:
-/// `run/results/issue55_contact_edge.txt`). Before: 19 of 41 closed nodes beyond the edge, up
+/// `run/results/contact_zone_edge_flat_punch.txt`). Before: 19 of 41 closed nodes beyond the edge, up
 /// to 2.2e4 MPa (1 000× the mean), the force +0.1 %.
 #[test]
 fn slave_nodes_beyond_the_master_edge_are_not_held() {
