@@ -109,6 +109,34 @@ fn a_result_path_naming_an_input_or_another_result_is_refused() {
     assert_eq!(names(&dir.join("mesh")), ["two_blocks.msh"]);
 }
 
+/// `check` refuses what `solve` refuses before solving (one validation path): a result path
+/// naming an input or another result, an export of a dual the scene is not solved on, a load
+/// path without contact — the same one line, and nothing written.
+#[test]
+fn check_refuses_what_solve_refuses() {
+    let dir = inputs("check_refusals");
+    let cases: &[(&str, &[&str], &str)] = &[
+        ("scene.toml", &["--set", "output.path=\"scene.toml\""], "the scene file"),
+        ("gmsh.toml", &["--set", "output.path=\"mesh/two_blocks.msh\""], "the mesh of body[0]"),
+        ("scene.toml", &["--set", "output.path=\"r.h5\"", "--set", "output.export_dual=\"scene.toml\""], "output.export_dual"),
+        ("scene.toml", &["--set", "output.path=\"r.h5\"", "--set", "output.export_fclib=\"f.h5\""], "output.export_fclib"),
+        ("scene.toml", &["--set", "output.path=\"r.h5\"", "--set", "contact.enabled=false", "--set", "load.steps=3"], "load.steps"),
+    ];
+    for (scene, sets, expect) in cases {
+        let mut args = vec![*scene];
+        args.extend_from_slice(sets);
+        args.extend_from_slice(&["--set", "mesh.n=3"]);
+        let solve = solve_in(&dir, &[args.as_slice(), &["-q"]].concat());
+        let mut c = Command::new(BIN);
+        c.arg("check").args(&args);
+        let check = run_within(c, &dir, Duration::from_secs(60)).expect("check ran past 60 s");
+        assert_refused(&solve, &[expect]);
+        assert_refused(&check, &[expect]);
+        assert_eq!(errors(&check), errors(&solve), "{args:?}");
+    }
+    assert_eq!(names(&dir), ["gmsh.toml", "mesh", "scene.toml"]);
+}
+
 /// Defect 3 (paths): a result path that exists and is not a regular file (a FIFO, a
 /// directory, also as a sidecar's path) is refused before any work, naming it; it stays as
 /// it was and no result file appears.

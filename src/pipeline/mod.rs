@@ -12,6 +12,7 @@
 //! is decided here, once ([`preconditioner`]). Rank 0 shows progress live ([`monitor`]).
 
 pub mod accuracy;
+mod check;
 pub mod finish;
 pub mod memory;
 pub mod monitor;
@@ -22,6 +23,7 @@ pub mod report;
 mod steps;
 pub mod tfeti;
 
+pub use check::{prepare, run_check, Prepared};
 pub use monolithic::solve_contact;
 
 use std::path::PathBuf;
@@ -419,28 +421,8 @@ pub struct ContactOutcome {
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
-    let out_key = if out.is_some() { "--out" } else { "output.path" };
-    let ls = t.phase(comm, "scene", || {
-        let mut ls = crate::scene::load(scene_path, overrides)?;
-        if let Some(o) = out {
-            ls.scene.output.path = Some(o);
-        }
-        // no result may overwrite an input or another result: refused before any work
-        output::guard::check(&ls, out_key)?;
-        Ok(ls)
-    })?;
-    let mut model =
-        t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|mut m| m.check_held().map(|()| m)))?;
-    let mut ls = ls;
-    held_by_contact(&mut ls.scene.decomposition, &model);
-    let common = ls.scene.solver.params.common.clone();
-    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common)).map_err(|e| memory::name_the_mesh(&ls, e))?;
+    let Prepared { ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
     memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
-    let kind = DualKind::of(&ls, &model);
-    resolve_method(&mut ls.scene.solver, kind);
-    let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
-    preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
-    refusals_after_plan(&ls, &model, tfeti)?;
     let (sol, outcome) = match &model.pairs {
         _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),
         Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o))),
@@ -499,41 +481,6 @@ pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[S
         ));
     }
     Ok(Summary { report, files, solution: sol })
-}
-
-/// What `solve` refuses once the plan has chosen the dual (`tfeti`), and `check` with it: an
-/// export of the monolithic dual on a TFETI scene, an FCLIB export without a Coulomb pair, a
-/// load path without contact.
-fn refusals_after_plan(ls: &LoadedScene, model: &Model, tfeti: bool) -> Result<()> {
-    for (key, set) in [("output.export_dual", ls.scene.output.export_dual.is_some()), ("output.export_fclib", ls.scene.output.export_fclib.is_some())] {
-        if !set {
-            continue;
-        }
-        let why = if tfeti {
-            Some("exports the monolithic dual; this scene is solved by TFETI (set decomposition.subdomains = 1)")
-        } else if !model.pairs.as_ref().is_some_and(|c| c.is_coulomb()) {
-            Some("exports a Coulomb problem; the scene has no Coulomb pair")
-        } else {
-            None
-        };
-        if let Some(why) = why {
-            return Err(Error::scene(key, why));
-        }
-    }
-    if model.pairs.is_none() && model.path.is_path() {
-        return Err(Error::scene("load.steps", "a load path needs contact (without it the response is linear in the load: solve the last state)"));
-    }
-    Ok(())
-}
-
-/// A scene with a body held by contact alone ([`Model::floating`]) is solved by TFETI with the
-/// orthogonal projector (SMALSE-M: Gλ = e over every row; C = G_E G_Eᵀ is singular there),
-/// whatever `[decomposition]` says about the dual and the projector.
-pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Model) {
-    if !model.floating.is_empty() {
-        dec.tfeti = true;
-        dec.projector = crate::scene::Projector::Orthogonal;
-    }
 }
 
 /// What `check` and the report say of contact entry `i` beyond its faces: its slave nodes
@@ -800,168 +747,4 @@ fn distributed_fields(local: &LocalFields, want: &impl Fn(&str) -> bool) -> (Vec
         rows.insert("von_mises".to_string(), local.cells.clone());
     }
     (fields, rows)
-}
-
-/// `tresca-feti check`: validates the scene and builds the mesh; returns the text to print
-/// (the resolved scene, mesh sizes, DOF counts).
-pub fn run_check<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], ranks: usize) -> Result<String> {
-    use std::fmt::Write;
-    let mut ls = crate::scene::load(scene_path, overrides)?;
-    memory::check_before_mesh(comm, &ls)?;
-    let mut model = model::build(&ls)?;
-    model.check_held()?;
-    held_by_contact(&mut ls.scene.decomposition, &model);
-    let mut chosen = None;
-    let priced = if plan::automatic(&ls.scene.decomposition) {
-        let cands = plan::price(comm, &model, &ls.scene.decomposition, &ls.scene.solver.params.common, ranks).map_err(|e| memory::name_the_mesh(&ls, e))?;
-        match plan::cheapest(&cands) {
-            Some(c) if c.tfeti => ls.scene.decomposition.target_dofs = c.target_dofs,
-            _ => ls.scene.decomposition.subdomains = Some(1),
-        }
-        chosen = plan::cheapest(&cands).cloned();
-        Some(plan::table(&cands, ranks))
-    } else {
-        None
-    };
-    let needs =
-        memory::after_plan(&memory::MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen.as_ref(), ranks, ls.scene.solver.precision);
-    let kind = DualKind::of(&ls, &model);
-    resolve_method(&mut ls.scene.solver, kind);
-    let mesh = &model.mesh;
-    let units = report::UnitsReport::of(&ls.scene.units);
-    let unit = |which| report::UnitsReport::suffix(units.as_ref(), which);
-    let (length, force, stress, area) = (unit(0), unit(1), unit(2), unit(3));
-    let mut s = String::new();
-    let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
-    let _ = writeln!(s, "mesh: {} bodies, {} nodes, {}", mesh.bodies.len(), mesh.nodes.len(), crate::mesh::describe_cells(&mesh.cells));
-    let mut free_total = 0;
-    let by_body = model::constraints_by_body(mesh, &model.constraints);
-    for (body, cons) in mesh.bodies.iter().zip(&by_body) {
-        let dofs = DofMap::new(body.nodes.clone(), cons);
-        free_total += dofs.nfree;
-        let _ = writeln!(
-            s,
-            "  body {}: {} nodes, {} elements, {} DOFs ({} free, {} Dirichlet)",
-            body.name,
-            body.nodes.len(),
-            body.elems.len(),
-            3 * body.nodes.len(),
-            dofs.nfree,
-            3 * body.nodes.len() - dofs.nfree
-        );
-    }
-    let _ = writeln!(s, "faces:");
-    for (k, f) in mesh.faces.iter().enumerate() {
-        let a = crate::fem::cell::face_area(f, &mesh.nodes);
-        let cut = model.cut_faces.iter().find(|c| c.face == k).map_or(String::new(), |c| {
-            format!(
-                " (cut from {} by {}: the facets whose centres lie in it; the region covers {:.6e}{area} of {}, {:+.1} %)",
-                mesh.faces[c.from].name,
-                c.region,
-                c.region_area,
-                mesh.faces[c.from].name,
-                100.0 * (a / c.region_area - 1.0)
-            )
-        });
-        let _ = writeln!(s, "  {}: {}, {} nodes, area {a:.6e}{area}{cut}", f.name, crate::mesh::describe_facets(&f.facets), f.nodes().len());
-    }
-    for (i, t) in ls.scene.traction.iter().enumerate() {
-        let r = model.path.traction_resultant(i);
-        let a = mesh.face(&t.face).map_or(f64::NAN, |f| crate::fem::cell::face_area(f, &mesh.nodes));
-        let load = match (t.p, t.pressure) {
-            (_, Some(p)) => format!("pressure {p}{stress}"),
-            (p, None) => {
-                let p = p.unwrap_or_default();
-                format!("p = ({}, {}, {}){stress}", p[0], p[1], p[2])
-            }
-        };
-        let _ =
-            writeln!(s, "traction[{i}] on {}: {load} over area {a:.6e}{area}, resultant ({:.6e}, {:.6e}, {:.6e}){force} at factor 1", t.face, r[0], r[1], r[2]);
-        if let Some(c) = mesh.faces.iter().position(|f| f.name == t.face).and_then(|k| model.cut_faces.iter().find(|c| c.face == k)) {
-            if (a / c.region_area - 1.0).abs() > crate::model::CUT_AREA_TOLERANCE {
-                let _ = writeln!(
-                    s,
-                    "warning: traction[{i}] on {}: the face's facets cover {a:.6e}{area}, its region {:.6e}{area} of {} ({:+.1} %); the load is the traction over the facets: refine the mesh where the region's edge cuts the face, or make the face a surface of the mesh",
-                    t.face,
-                    c.region_area,
-                    mesh.faces[c.from].name,
-                    100.0 * (a / c.region_area - 1.0)
-                );
-            }
-        }
-    }
-    let load: [f64; 3] = std::array::from_fn(|c| model.loads.iter().skip(c).step_by(3).sum());
-    if let Some(stop) = &model.path.stopped {
-        let _ = writeln!(s, "warning: load path {}; solve writes steps 1–{} and exits with this reason", stop.describe(), stop.at - 1);
-    }
-    let _ = writeln!(s, "total applied load: ({:.6e}, {:.6e}, {:.6e}){force}", load[0], load[1], load[2]);
-    let _ = writeln!(s, "DOFs: n = {} ({} free after Dirichlet elimination)", model.ndof(), free_total);
-    for (i, &(sl, ma)) in model.contact.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "contact pair {i}: slave {} ({} nodes) against master {} ({} nodes){}",
-            mesh.faces[sl].name,
-            mesh.faces[sl].nodes().len(),
-            mesh.faces[ma].name,
-            mesh.faces[ma].nodes().len(),
-            if ls.scene.contact.enabled { "" } else { " — disabled" }
-        );
-        if let Some((_, why)) = model.slave_choice.iter().find(|c| c.0 == i) {
-            let _ = writeln!(s, "{}{why}", if why.starts_with("warning") { "" } else { "  " });
-        }
-        for line in model.pairs.as_ref().map_or_else(Vec::new, |c| pair_notes(c, i, &length)) {
-            let _ = writeln!(s, "{line}");
-        }
-    }
-    if let Some(c) = &model.pairs {
-        let (gmin, gmax) = c.gap.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &g| (a.min(g), b.max(g)));
-        let tangential = if c.has_friction() { 2 * c.len() } else { 0 };
-        let _ = writeln!(
-            s,
-            "contact: m = {} pairs ({}), Σw = {:.6e}{area}, gaps in [{gmin:.3e}, {gmax:.3e}]{length}, multipliers: {} normal + {} tangential ({} void: held by Dirichlet conditions)",
-            c.len(),
-            c.discretization.iter().map(|d| format!("{d:?}").to_lowercase().replace("nodetonode", "node-to-node")).collect::<Vec<_>>().join(", "),
-            c.area.iter().sum::<f64>(),
-            c.len(),
-            tangential,
-            c.void.iter().flatten().filter(|&&v| v).count()
-        );
-    }
-    if !model.ties.is_empty() {
-        let _ = writeln!(s, "ties: {} mortar rows × 3 directions (equality multipliers of the TFETI dual)", model.ties.len());
-    }
-    for line in model.holding() {
-        let _ = writeln!(s, "{line}");
-    }
-    let dec = &ls.scene.decomposition;
-    preconditioner(ls.scene.solver.params.method(), ls.scene.solver.preconditioner, DualKind::of(&ls, &model))?;
-    refusals_after_plan(&ls, &model, dec.is_tfeti(&body_dofs(&model)))?;
-    if dec.is_tfeti(&body_dofs(&model)) {
-        let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
-        let d = crate::feti::decomposition::decompose_each(mesh, &parts)?;
-        let _ = writeln!(
-            s,
-            "TFETI: {} subdomains ({} per body), {} interface nodes",
-            d.subdomains.len(),
-            parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "),
-            d.interface_nodes()
-        );
-        for (i, sd) in d.subdomains.iter().enumerate() {
-            let iface = sd.nodes.iter().filter(|&&v| d.copies[v].len() > 1).count();
-            let _ = writeln!(
-                s,
-                "  subdomain {i} (body {}): {} elements, {} nodes, {} DOFs, {iface} interface nodes",
-                mesh.bodies[sd.body].name,
-                sd.elems.len(),
-                sd.nodes.len(),
-                3 * sd.nodes.len()
-            );
-        }
-    }
-    if let Some(p) = priced {
-        let _ = write!(s, "{p}");
-    }
-    let _ = write!(s, "{}", memory::summary(&needs, ranks)?);
-    let _ = write!(s, "dual: {}", if dec.is_tfeti(&body_dofs(&model)) { "TFETI" } else { "monolithic" });
-    Ok(s)
 }

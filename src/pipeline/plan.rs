@@ -351,11 +351,11 @@ pub fn cheapest(cands: &[Candidate]) -> Option<&Candidate> {
 /// Fixes an automatic decomposition to the cheapest candidate (`subdomains = 1` for the
 /// monolithic dual, `target_dofs` for TFETI) and returns the priced table; `None` when the
 /// scene set the decomposition itself.
-pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, solver: &Common) -> Result<Option<Vec<Candidate>>> {
+pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, solver: &Common, ranks: usize) -> Result<Option<Vec<Candidate>>> {
     if !automatic(dec) {
         return Ok(None);
     }
-    let cands = price(comm, model, dec, solver, comm.size())?;
+    let cands = price(comm, model, dec, solver, ranks)?;
     match cheapest(&cands) {
         Some(c) if c.tfeti => dec.target_dofs = c.target_dofs,
         _ => dec.subdomains = Some(1),
@@ -441,13 +441,13 @@ mod tests {
     fn an_automatic_decomposition_is_fixed_to_the_cheapest() {
         let (model, _, _) = crate::feti::seed_fixture(8, 1);
         let mut dec = DecompositionSettings::default();
-        let cands = resolve(&SerialComm, &model, &mut dec, &Common::default()).unwrap().expect("automatic");
+        let cands = resolve(&SerialComm, &model, &mut dec, &Common::default(), 1).unwrap().expect("automatic");
         let best = cheapest(&cands).unwrap();
         assert!(cands.iter().all(|c| c.time >= best.time));
         assert_eq!((dec.subdomains, dec.target_dofs), if best.tfeti { (None, best.target_dofs) } else { (Some(1), None) });
         // a scene that sets the decomposition is left alone
         let mut set = DecompositionSettings { subdomains: Some(4), ..Default::default() };
-        assert!(resolve(&SerialComm, &model, &mut set, &Common::default()).unwrap().is_none());
+        assert!(resolve(&SerialComm, &model, &mut set, &Common::default(), 1).unwrap().is_none());
         assert_eq!(set.subdomains, Some(4));
     }
 }
