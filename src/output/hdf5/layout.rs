@@ -72,12 +72,12 @@ impl CellLayout {
     }
 }
 
-/// The cell datasets [`read`] knows, one of which a file holds.
+/// The cell datasets [`read`](fn@super::read) knows, one of which a file holds.
 pub(super) const CELL_DATASETS: [&str; 5] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, MIXED];
 
 /// The layout of the cells of `data` over all ranks: that of `data.cells` where they are the
 /// whole mesh; where the mesh is distributed, that of the rows the ranks hold (their cell types
-/// sent to the ranks whose [`block`]s hold the rows, one all-to-all exchange, then one sum).
+/// sent to the ranks whose [`block`](super::dataspace::block)s hold the rows, one all-to-all exchange, then one sum).
 /// Collective; the same result on every rank. A distributed mesh with a cell row that no rank
 /// holds is an error.
 pub fn cell_layout<C: Comm>(comm: &C, data: &OutputData) -> Result<CellLayout> {

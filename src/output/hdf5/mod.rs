@@ -1,7 +1,7 @@
 //! The HDF5 result file, written by all ranks together: MPI-IO file access and collective
 //! writes ([`write_collective`]), each rank writing one contiguous block of every dataset's rows
 //! (a hyperslab; the rows of a distributed field first sent to the rank whose block holds them,
-//! one all-to-all exchange); one process without MPI writes it alone ([`write`]).
+//! one all-to-all exchange); one process without MPI writes it alone ([`write`](fn@write)).
 //!
 //! Layout:
 //!
@@ -21,7 +21,7 @@
 //! node numbers in XDMF's (= VTK's) node order, which is ours but for a 10-node tetrahedron: its
 //! edge nodes (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — Gmsh's last two swapped. `/mesh/mixed` is
 //! XDMF's `Mixed` topology: per cell, in the global cell order, its XDMF type id
-//! ([`CellKind::xdmf_id`]: Hexahedron 9, Tetrahedron 6, Tetrahedron_10 38, Wedge 8) and its
+//! ([`CellKind::xdmf_id`](crate::mesh::CellKind::xdmf_id): Hexahedron 9, Tetrahedron 6, Tetrahedron_10 38, Wedge 8) and its
 //! nodes. Cell-centred fields are indexed by the global cell order whatever the layout. Under
 //! MPI with a distributed mesh, the layout is agreed over the ranks ([`cell_layout`]), and each
 //! rank writes the mixed values of its block of cell rows at their offset in the global list.
@@ -32,11 +32,11 @@
 //! [`super::Step`], named by its index from 1 in 4 digits (`0001`, `0002`, …), with a scalar
 //! f64 attribute `time` and the step's fields written like those of `/fields`; `/fields` holds
 //! the final state either way. Datasets are contiguous and uncompressed. The file and every
-//! group it creates track creation order, so [`read`] gives steps, fields and attributes back
+//! group it creates track creation order, so [`read`](fn@read) gives steps, fields and attributes back
 //! in the order they were written (files from elsewhere that do not track it come back sorted
 //! by name).
 //!
-//! [`write`] writes the file in place; [`super::write_all`] gives it a temporary name and
+//! [`write`](fn@write) writes the file in place; [`super::write_all`] gives it a temporary name and
 //! renames it only when every output file succeeded.
 //!
 //! The files here: this one the public calls and the error text every part shares;
@@ -126,10 +126,10 @@ pub fn write_arrays(path: &Path, arrays: &[(&str, Vec<usize>, &[f64])]) -> Resul
     result
 }
 
-/// Reads a file written by [`write`] back.
+/// Reads a file written by [`write`](fn@write) back.
 ///
 /// Fields and attributes come back in creation order when the file tracks it (files written
-/// by [`write`] do), otherwise sorted by name. Float fields of any width are read as f64,
+/// by [`write`](fn@write) do), otherwise sorted by name. Float fields of any width are read as f64,
 /// signed integer fields up to 32 bits (and unsigned up to 16) as i32; the `center` attribute
 /// is required on every field. Root attributes must be variable-length strings.
 pub fn read(path: &Path) -> Result<OutputData> {

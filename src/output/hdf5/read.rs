@@ -1,4 +1,4 @@
-//! Reading a file back ([`super::read`]) and checking that it holds what was written
+//! Reading a file back ([`super::read`](fn@super::read)) and checking that it holds what was written
 //! ([`verify`]).
 
 use std::path::Path;

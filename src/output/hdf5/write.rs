@@ -109,7 +109,7 @@ fn write_contents<C: Comm>(w: &Writer<'_, C>, file: &File, data: &OutputData) ->
 }
 
 /// Writes `/mesh/mixed` (`len` values): whole from every rank where the cells are the whole
-/// mesh; where they are distributed, each rank's cells first sent to the rank whose [`block`]
+/// mesh; where they are distributed, each rank's cells first sent to the rank whose [`block`](super::dataspace::block)
 /// of cell rows holds them, and each rank writes its block's values at their offset in the
 /// global order (the sum of the lower ranks' lengths, one sum over the ranks).
 fn write_mixed<C: Comm>(w: &Writer<'_, C>, group: &Group, data: &OutputData, len: usize) -> Result<()> {
@@ -142,7 +142,7 @@ fn write_mixed<C: Comm>(w: &Writer<'_, C>, group: &Group, data: &OutputData, len
 }
 
 /// Creates the group `name` in `parent`, tracking the creation order of its links and
-/// attributes (so [`read`] gives them back in that order).
+/// attributes (so [`read`](fn@super::read) gives them back in that order).
 /// Collective: agreed over the ranks.
 fn create_group<C: Comm>(w: &Writer<'_, C>, parent: &Group, name: &str) -> Result<Group> {
     w.all(
