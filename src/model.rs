@@ -9,7 +9,7 @@ use crate::contact::hold::{self, FreeBody};
 use crate::contact::pairing::{self, Contact, SlipBound, Tied};
 use crate::error::{Error, Result};
 use crate::fem::assembly::{add_pressure, add_traction};
-use crate::fem::cell::{facet_area_inside, facet_centre, facet_nodal_areas};
+use crate::fem::facet::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};

@@ -26,7 +26,7 @@
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
-use crate::fem::cell::{facet_nodal_areas, facet_normal_area};
+use crate::fem::facet::{cross, dot, facet_nodal_areas, facet_normal_area, sub};
 use crate::mesh::FacetKind;
 use crate::mesh::{Face, Mesh};
 use crate::qp::cone::Coefficient;
@@ -208,15 +208,6 @@ impl Contact {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
 fn unit(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
     a.map(|v| v / n)

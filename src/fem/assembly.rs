@@ -5,7 +5,8 @@
 
 use std::ops::Range;
 
-use super::cell::{cell_min_jacobian, cell_stiffness, facet_area_vector, facet_nodal_areas, facet_rule, facet_shape};
+use super::cell::{cell_min_jacobian, cell_stiffness};
+use super::facet::{facet_area_vector, facet_nodal_areas, facet_rule, facet_shape};
 use super::material::Lame;
 use crate::error::{Error, Result};
 use crate::linalg::sparse::SymCsc;

@@ -1,5 +1,7 @@
-//! Element kernels: trilinear hex8 (2×2×2 Gauss) and bilinear quad4 face integrals (2×2 Gauss).
-//! Pure functions of the corner coordinates; node order VTK (see [`crate::mesh`]).
+//! Element kernels: trilinear hex8 (2×2×2 Gauss) and the shared isoparametric helpers (physical
+//! gradients, stiffness and strain at a point). Pure functions of the corner coordinates; node
+//! order VTK (see [`crate::mesh`]). The bilinear quad4 face integral ([`quad4_nodal_areas`])
+//! lives with the other reference facets in [`super::facet`] and is re-exported here.
 
 use super::material::Lame;
 
@@ -7,11 +9,9 @@ use super::material::Lame;
 pub const HEX_REF: [[f64; 3]; 8] =
     [[-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, 1.0]];
 
-/// Reference coordinates of the quad4 corners.
-pub const QUAD_REF: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-
-/// Gauss points of the two-point rule on [−1, 1] (weights 1).
-pub const GAUSS2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
+/// Reference coordinates of the quad4 corners and the two-point Gauss rule (weights 1): see
+/// [`super::facet`].
+pub use super::facet::{quad4_nodal_areas, GAUSS2, QUAD_REF};
 
 pub type HexCoords = [[f64; 3]; 8];
 pub type HexMatrix = [[f64; 24]; 24];
@@ -147,33 +147,6 @@ pub fn hex8_strain(x: &HexCoords, u: &[[f64; 3]; 8], xi: [f64; 3]) -> [f64; 6] {
 /// Stress at the element centre.
 pub fn hex8_center_stress(x: &HexCoords, u: &[[f64; 3]; 8], m: Lame) -> [f64; 6] {
     m.stress(&hex8_strain(x, u, [0.0; 3]))
-}
-
-/// ∫ N_a dA over a (possibly warped) bilinear quad, 2×2 Gauss: the consistent nodal weights of
-/// a uniform surface density. A constant traction p gives nodal forces p·w_a; for a flat
-/// rectangle w_a is a quarter of the area (the lumped nodal contact area).
-pub fn quad4_nodal_areas(x: &[[f64; 3]; 4]) -> [f64; 4] {
-    let mut w = [0.0; 4];
-    for &eta in &GAUSS2 {
-        for &xi in &GAUSS2 {
-            let mut dxi = [0.0; 3];
-            let mut deta = [0.0; 3];
-            let mut n = [0.0; 4];
-            for (a, r) in QUAD_REF.iter().enumerate() {
-                n[a] = 0.25 * (1.0 + r[0] * xi) * (1.0 + r[1] * eta);
-                for k in 0..3 {
-                    dxi[k] += 0.25 * r[0] * (1.0 + r[1] * eta) * x[a][k];
-                    deta[k] += 0.25 * (1.0 + r[0] * xi) * r[1] * x[a][k];
-                }
-            }
-            let c = [dxi[1] * deta[2] - dxi[2] * deta[1], dxi[2] * deta[0] - dxi[0] * deta[2], dxi[0] * deta[1] - dxi[1] * deta[0]];
-            let da = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-            for a in 0..4 {
-                w[a] += n[a] * da;
-            }
-        }
-    }
-    w
 }
 
 #[cfg(test)]

@@ -1,10 +1,12 @@
 //! Finite elements: the hex8, tet4/tet10 and wedge6 kernels (pure functions) and their
-//! dispatch by cell and facet type ([`cell`]), the isotropic material, and the sparse assembly
+//! dispatch by cell type ([`cell`]), the reference facets (shape functions, quadrature,
+//! facet integrals; [`facet`]), the isotropic material, and the sparse assembly
 //! of one body's stiffness with Dirichlet elimination.
 
 pub mod assembly;
 pub mod cell;
 pub mod element;
+pub mod facet;
 pub mod material;
 pub mod tet;
 pub mod wedge;

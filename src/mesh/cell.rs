@@ -274,16 +274,7 @@ pub fn corner_key(corners: &[usize]) -> [usize; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    }
-    fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-    }
+    use crate::fem::facet::{cross, dot, sub};
 
     /// Each face's normal (right-hand rule on its first three corners) points away from the
     /// cell's centroid, and every edge node lies midway between the corners it names.
