@@ -14,9 +14,9 @@
 pub mod comm;
 pub mod contact;
 pub mod dual;
-pub mod error;
+pub(crate) mod error;
 pub mod fem;
-pub mod feti;
+pub(crate) mod feti;
 pub mod linalg;
 pub mod mesh;
 pub mod model;

@@ -6,7 +6,7 @@
 //! stick / slip, tractions, gaps, slip); the dual mortar coupling of non-matching slave and
 //! master faces, with its R*-tree contact search ([`mortar`]).
 
-pub mod hold;
-pub mod mortar;
-pub mod pairing;
+pub(crate) mod hold;
+pub(crate) mod mortar;
+pub(crate) mod pairing;
 pub mod state;

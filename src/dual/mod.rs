@@ -6,7 +6,7 @@
 //! (`feti::dual`) implements the same traits on distributed dual vectors. Also the B-row
 //! helpers both use.
 
-pub mod fclib;
+pub(crate) mod fclib;
 pub mod monolithic;
 
 use crate::qp::{Layout, Operator};

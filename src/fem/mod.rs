@@ -6,7 +6,7 @@
 pub mod assembly;
 pub mod cell;
 pub mod element;
-pub mod facet;
+pub(crate) mod facet;
 pub mod material;
 pub mod tet;
 pub mod wedge;

@@ -403,13 +403,6 @@ impl Coarse {
         self.sub_gt(dist, &a, z, Self::owned_rows(dist), true);
     }
 
-    /// zl ← P_E zl on the local rows (zl ghosted; no exchange).
-    pub fn project_e_local<C: Comm>(&self, dist: &Distribution<'_, C>, zl: &mut [f64]) {
-        let mut a = self.g_mul(dist, zl, true);
-        self.c_solve(dist, &mut a);
-        self.sub_gt(dist, &a, zl, Self::local_rows(dist), true);
-    }
-
     /// yl ← P̃ᵀ yl = yl − [G_E 0]ᵀ C⁻¹ G yl on the local rows (yl ghosted).
     pub fn project_t_local<C: Comm>(&self, dist: &Distribution<'_, C>, yl: &mut [f64]) {
         let mut a = self.g_mul(dist, yl, false);

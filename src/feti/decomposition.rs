@@ -42,6 +42,7 @@ impl Decomposition {
 }
 
 /// Splits every body into `parts` subdomains.
+#[cfg(test)]
 pub fn decompose(mesh: &Mesh, parts: usize) -> Result<Decomposition> {
     decompose_each(mesh, &vec![parts; mesh.bodies.len()])
 }

@@ -8,15 +8,15 @@
 //! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
 //! feasible multipliers, and `DualProblem::recover` of [`dual::TfetiDual`] maps the solution back to λ, α and u.
 
-pub mod cluster;
-pub mod coarse;
-pub mod constraints;
-pub mod decomposition;
-pub mod distribution;
-pub mod dual;
-pub mod precond;
-pub mod smalse;
-pub mod subdomain;
+pub(crate) mod cluster;
+pub(crate) mod coarse;
+pub(crate) mod constraints;
+pub(crate) mod decomposition;
+pub(crate) mod distribution;
+pub(crate) mod dual;
+pub(crate) mod precond;
+pub(crate) mod smalse;
+pub(crate) mod subdomain;
 
 use crate::feti::decomposition::Decomposition;
 use crate::mesh::Mesh;

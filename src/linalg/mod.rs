@@ -4,7 +4,7 @@
 
 pub mod cholesky;
 pub mod ordering;
-pub mod schur;
+pub(crate) mod schur;
 pub mod sparse;
 
 /// A fixed probe vector's component at global index i (pseudo-random in [−1, 1]).

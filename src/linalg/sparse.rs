@@ -12,12 +12,6 @@ pub struct SymCsc {
 }
 
 impl SymCsc {
-    /// The pattern with zero values.
-    pub fn from_pattern(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
-        let nnz = row_idx.len();
-        SymCsc { n, col_ptr, row_idx, values: vec![0.0; nnz] }
-    }
-
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }

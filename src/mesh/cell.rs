@@ -116,10 +116,6 @@ impl CellKind {
     pub fn code(self) -> usize {
         self as usize
     }
-
-    pub fn from_code(c: usize) -> Option<CellKind> {
-        CellKind::ALL.get(c).copied()
-    }
 }
 
 impl FacetKind {

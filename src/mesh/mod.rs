@@ -6,10 +6,10 @@
 //! ([`topology`]) and a body's rigid motions ([`rigid`]).
 
 pub mod boxgen;
-pub mod cell;
+pub(crate) mod cell;
 pub mod gmsh;
-pub mod rigid;
-pub mod topology;
+pub(crate) mod rigid;
+pub(crate) mod topology;
 
 use std::ops::Range;
 

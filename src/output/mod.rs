@@ -9,10 +9,10 @@
 //! rename that fails takes back the ones before it, so a failed run leaves neither a result
 //! file nor a temporary one behind.
 
-pub mod guard;
+pub(crate) mod guard;
 pub mod hdf5;
 pub mod tmpfiles;
-pub mod xdmf;
+pub(crate) mod xdmf;
 
 /// Where a field lives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -79,6 +79,7 @@ impl Equilibrium {
     }
 
     /// Whether it passes on its own (its own scale the problem's).
+    #[cfg(test)]
     pub fn passes(&self) -> bool {
         self.excess(self.scale) <= 1.0
     }

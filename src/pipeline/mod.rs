@@ -11,13 +11,13 @@
 //! post-solve path ([`finish`]) and the typed [`report`]. Where the FETI preconditioner applies
 //! is decided here, once ([`preconditioner`]). Rank 0 shows progress live ([`monitor`]).
 
-pub mod accuracy;
+pub(crate) mod accuracy;
 mod check;
-pub mod finish;
+pub(crate) mod finish;
 pub mod memory;
-pub mod monitor;
+pub(crate) mod monitor;
 mod monolithic;
-pub mod path;
+pub(crate) mod path;
 pub mod plan;
 pub mod report;
 mod steps;

@@ -12,20 +12,20 @@
 //! [`Monitor`]) and the Krylov kernels ([`krylov`]), fail with [`QpError`] and never print.
 //! [`kkt`] measures how well a result satisfies the optimality conditions.
 
-pub mod cg;
+pub(crate) mod cg;
 pub mod cone;
-pub mod coulomb;
-pub mod driver;
-pub mod gimssn;
+pub(crate) mod coulomb;
+pub(crate) mod driver;
+pub(crate) mod gimssn;
 pub mod kkt;
-pub mod krylov;
-pub mod lambda;
-pub mod mpgp;
-pub mod operator;
+pub(crate) mod krylov;
+pub(crate) mod lambda;
+pub(crate) mod mpgp;
+pub(crate) mod operator;
 pub mod params;
 pub mod sets;
-pub mod ssn;
-pub mod tssn;
+pub(crate) mod ssn;
+pub(crate) mod tssn;
 
 pub use driver::{estimate_sigma, lanczos_sigma, power_sigma, Monitor, Silent, SIGMA_SAFETY};
 pub use lambda::{Lambda, Layout};

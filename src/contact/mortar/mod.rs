@@ -200,6 +200,7 @@ impl MortarRows {
     }
 
     /// Σ_k c_ik² per row: the diagonal of B Bᵀ for the normal rows (2 for node-to-node).
+    #[cfg(test)]
     pub fn row_norms_squared(&self) -> Vec<f64> {
         self.coupling.iter().map(|row| row.iter().map(|(_, c)| c * c).sum()).collect()
     }
