@@ -135,6 +135,28 @@ fn gather_chunk(p: usize) -> usize {
     std::env::var("TRESCA_FETI_GATHER_CHUNK").ok().and_then(|v| v.parse::<usize>().ok()).filter(|&c| c > 0).map_or(most, |c| c.min(most))
 }
 
+/// The rounds that move messages of `lens` values in pieces of at most `chunk`.
+fn rounds(lens: impl Iterator<Item = usize>, chunk: usize) -> usize {
+    lens.map(|n| n.div_ceil(chunk)).max().unwrap_or(0)
+}
+
+/// The values of a message of `n` that round `k` moves (at most `chunk` ≤ i32::MAX).
+fn round_part(n: usize, k: usize, chunk: usize) -> Count {
+    n.saturating_sub(k * chunk).min(chunk) as Count
+}
+
+/// The displacements of `counts` laid end to end (their total is at most p · chunk ≤ i32::MAX).
+fn displacements(counts: &[Count]) -> Vec<Count> {
+    counts
+        .iter()
+        .scan(0 as Count, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect()
+}
+
 impl Comm for MpiComm {
     fn rank(&self) -> usize {
         self.world.rank() as usize
@@ -173,21 +195,13 @@ impl Comm for MpiComm {
         let mut lens = vec![0u64; p];
         self.world.all_gather_into(&(local.len() as u64), &mut lens[..]);
         let chunk = gather_chunk(p);
-        let rounds = lens.iter().map(|&n| (n as usize).div_ceil(chunk)).max().unwrap_or(0);
         let mut out: Vec<Vec<f64>> = if self.rank() == root { lens.iter().map(|&n| Vec::with_capacity(n as usize)).collect() } else { Vec::new() };
-        for k in 0..rounds {
-            let part = |n: usize| n.saturating_sub(k * chunk).min(chunk);
-            let mine = &local[(k * chunk).min(local.len())..(k * chunk + part(local.len())).min(local.len())];
+        for k in 0..rounds(lens.iter().map(|&n| n as usize), chunk) {
+            let start = (k * chunk).min(local.len());
+            let mine = &local[start..start + round_part(local.len(), k, chunk) as usize];
             if self.rank() == root {
-                let counts: Vec<i32> = lens.iter().map(|&n| part(n as usize) as i32).collect();
-                let displs: Vec<i32> = counts
-                    .iter()
-                    .scan(0, |acc, &c| {
-                        let d = *acc;
-                        *acc += c;
-                        Some(d)
-                    })
-                    .collect();
+                let counts: Vec<Count> = lens.iter().map(|&n| round_part(n as usize, k, chunk)).collect();
+                let displs = displacements(&counts);
                 let total: usize = counts.iter().map(|&c| c as usize).sum();
                 // never an empty buffer (a null pointer to some MPI libraries): one unused value
                 let mut all = vec![0.0; total.max(1)];
@@ -205,27 +219,29 @@ impl Comm for MpiComm {
         (self.rank() == root).then_some(out)
     }
     fn all_gather_f64(&self, local: &[f64]) -> Vec<Vec<f64>> {
-        let count = |n: usize| Count::try_from(n).expect("all_gather_f64: more than 2^31 values");
-        let mut counts = vec![0 as Count; self.size()];
-        self.world.all_gather_into(&count(local.len()), &mut counts[..]);
-        let displs: Vec<Count> = counts
-            .iter()
-            .scan(0usize, |acc, &n| {
-                let d = *acc;
-                *acc += n as usize;
-                Some(count(d))
-            })
-            .collect();
-        let total: usize = counts.iter().map(|&n| n as usize).sum();
-        if total == 0 {
-            return vec![Vec::new(); self.size()];
+        // in rounds of at most `gather_chunk()` values per rank, as `gather_f64`
+        let p = self.size();
+        let mut lens = vec![0u64; p];
+        self.world.all_gather_into(&(local.len() as u64), &mut lens[..]);
+        let chunk = gather_chunk(p);
+        let mut out: Vec<Vec<f64>> = lens.iter().map(|&n| Vec::with_capacity(n as usize)).collect();
+        for k in 0..rounds(lens.iter().map(|&n| n as usize), chunk) {
+            let counts: Vec<Count> = lens.iter().map(|&n| round_part(n as usize, k, chunk)).collect();
+            let displs = displacements(&counts);
+            let total: usize = counts.iter().map(|&c| c as usize).sum();
+            let start = (k * chunk).min(local.len());
+            let mine = &local[start..start + round_part(local.len(), k, chunk) as usize];
+            // never an empty buffer (a null pointer to some MPI libraries): one unused value
+            let mut all = vec![0.0; total.max(1)];
+            {
+                let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+                self.world.all_gather_varcount_into(mine, &mut part);
+            }
+            for (q, (&c, &d)) in counts.iter().zip(&displs).enumerate() {
+                out[q].extend_from_slice(&all[d as usize..(d + c) as usize]);
+            }
         }
-        let mut all = vec![0.0; total];
-        {
-            let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
-            self.world.all_gather_varcount_into(local, &mut part);
-        }
-        counts.iter().zip(&displs).map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec()).collect()
+        out
     }
     fn exchange(&self, send: &[(usize, Vec<f64>)], recv: &mut [(usize, Vec<f64>)]) {
         mpi::request::scope(|scope| {
@@ -245,33 +261,36 @@ impl Comm for MpiComm {
     fn all_to_all_u64(&self, send: &[Vec<u64>]) -> Vec<Vec<u64>> {
         let p = self.size();
         assert_eq!(send.len(), p, "all_to_all_u64: one message per rank");
-        let count = |n: usize| Count::try_from(n).expect("all_to_all_u64: more than 2^31 values on one rank");
-        let scounts: Vec<Count> = send.iter().map(|v| count(v.len())).collect();
-        let mut rcounts = vec![0 as Count; p];
-        self.world.all_to_all_into(&scounts[..], &mut rcounts[..]);
-        let displs = |c: &[Count]| -> Vec<Count> {
-            c.iter()
-                .scan(0usize, |acc, &n| {
-                    let d = *acc;
-                    *acc += n as usize;
-                    Some(count(d))
-                })
-                .collect()
-        };
-        let (sdispls, rdispls) = (displs(&scounts), displs(&rcounts));
-        let rtotal: usize = rcounts.iter().map(|&n| n as usize).sum();
-        count(send.iter().map(Vec::len).sum());
-        count(rtotal);
-        // never an empty buffer (a null pointer to some MPI libraries): one unused value then
-        let mut sbuf: Vec<u64> = send.concat();
-        sbuf.push(0);
-        let mut rbuf = vec![0u64; rtotal + 1];
-        {
-            let sp = Partition::new(&sbuf[..], &scounts[..], &sdispls[..]);
-            let mut rp = PartitionMut::new(&mut rbuf[..], &rcounts[..], &rdispls[..]);
-            self.world.all_to_all_varcount_into(&sp, &mut rp);
+        // in rounds of at most `gather_chunk()` values per message: no count, displacement or
+        // total of a round passes MPI's i32
+        let lens: Vec<u64> = send.iter().map(|v| v.len() as u64).collect();
+        let mut rlens = vec![0u64; p];
+        self.world.all_to_all_into(&lens[..], &mut rlens[..]);
+        let chunk = gather_chunk(p);
+        let mine = rounds(lens.iter().chain(&rlens).map(|&n| n as usize), chunk) as u64;
+        let mut most = [0u64];
+        self.world.all_reduce_into(&[mine][..], &mut most[..], mpi::collective::SystemOperation::max());
+        let mut out: Vec<Vec<u64>> = rlens.iter().map(|&n| Vec::with_capacity(n as usize)).collect();
+        for k in 0..most[0] as usize {
+            let scounts: Vec<Count> = send.iter().map(|v| round_part(v.len(), k, chunk)).collect();
+            let rcounts: Vec<Count> = rlens.iter().map(|&n| round_part(n as usize, k, chunk)).collect();
+            let (sdispls, rdispls) = (displacements(&scounts), displacements(&rcounts));
+            let rtotal: usize = rcounts.iter().map(|&n| n as usize).sum();
+            // never an empty buffer (a null pointer to some MPI libraries): one unused value then
+            let mut sbuf: Vec<u64> =
+                send.iter().zip(&scounts).flat_map(|(v, &c)| &v[(k * chunk).min(v.len())..(k * chunk).min(v.len()) + c as usize]).copied().collect();
+            sbuf.push(0);
+            let mut rbuf = vec![0u64; rtotal + 1];
+            {
+                let sp = Partition::new(&sbuf[..], &scounts[..], &sdispls[..]);
+                let mut rp = PartitionMut::new(&mut rbuf[..], &rcounts[..], &rdispls[..]);
+                self.world.all_to_all_varcount_into(&sp, &mut rp);
+            }
+            for (q, (&c, &d)) in rcounts.iter().zip(&rdispls).enumerate() {
+                out[q].extend_from_slice(&rbuf[d as usize..(d + c) as usize]);
+            }
         }
-        rcounts.iter().zip(&rdispls).map(|(&c, &d)| rbuf[d as usize..(d + c) as usize].to_vec()).collect()
+        out
     }
     fn barrier(&self) {
         self.world.barrier();

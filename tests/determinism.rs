@@ -111,9 +111,10 @@ fn a_plain_run_equals_mpirun_with_one_rank_bitwise() {
     }
 }
 
-/// The gather of the solution to rank 0 goes in rounds of at most (2³¹ − 1)/p values per rank
-/// (MPI's counts are i32; before, a length above 2³¹ wrapped): forced to rounds of 7 values
-/// (`TRESCA_FETI_GATHER_CHUNK=7`), TFETI on 2 ranks reports the same results to the last bit.
+/// The gather of the solution to rank 0, the all-gather and the all-to-all go in rounds of at
+/// most (2³¹ − 1)/p values per rank and message (MPI's counts are i32; before, a length above
+/// 2³¹ wrapped or stopped the run): forced to rounds of 7 values (`TRESCA_FETI_GATHER_CHUNK=7`),
+/// TFETI on 2 ranks reports and writes the same results to the last bit.
 #[test]
 fn the_solution_gather_in_rounds_gives_the_same_report() {
     let dir = tmpdir("gather-rounds");
@@ -128,9 +129,14 @@ fn the_solution_gather_in_rounds_gives_the_same_report() {
         let o = cmd.output().unwrap();
         assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
-        (json["results"].clone(), json["tfeti"]["subdomains"].clone())
+        // the file's rows travel by all-to-all (also in rounds), the coarse problem's blocks by
+        // all-gather: the fields must come back the same
+        let data = common::fields(&out);
+        let fields: Vec<(String, Vec<f64>)> = ["displacement", "von_mises"].iter().map(|&f| (f.to_string(), common::f64_field(&data, f).to_vec())).collect();
+        (json["results"].clone(), json["tfeti"]["subdomains"].clone(), fields)
     };
     let (whole, rounds) = (report("whole", None), report("rounds", Some("7")));
     assert!(whole.0["max_displacement"].as_f64().unwrap() > 0.0, "{:?}", whole.0);
+    assert!(whole.2.iter().all(|(_, v)| v.len() > 7), "more than one round");
     assert_eq!(whole, rounds);
 }

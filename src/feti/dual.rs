@@ -1,8 +1,8 @@
-//! The TFETI dual operator (a [`crate::qp::Operator`] and [`DualProblem`]): A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
+//! The TFETI dual operator (a [`crate::qp::Operator`]): A = P̃FP̃ᵀ with F = B K⁺ Bᵀ applied
 //! matrix-free (one K_s⁺ solve per subdomain of this rank, the neighbour exchanges of
 //! [`Distribution`]) on distributed dual vectors, and the
 //! right-hand side b̃ = P̃(d̃ − Fλ̂), d̃ = B K⁺ f − c (docs/method.md, "TFETI and H-TFETI"). The solvers minimize
-//! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`DualProblem::recover`] maps y back to λ = λ̂ + P̃ᵀy, the
+//! ½yᵀAy − yᵀb̃ over Y = R^{n_E} × Λ; [`TfetiDual::recover_with`] maps y back to λ = λ̂ + P̃ᵀy, the
 //! rigid-body amplitudes α = C⁻¹G_E(c_E − B_E ũ) and u_s = ũ_s + R_sα_s (+ g_s on the DOFs held
 //! inside the subdomain), ũ = K⁺(f̂ − Bᵀλ).
 //! The gradient the solvers see is P̃(Fλ − d̃); its contact part is −(Bu − c)_I, as in the
@@ -15,7 +15,7 @@ use super::constraints::Constraints;
 use super::distribution::{Clock, Distribution};
 use super::precond::Scaling;
 use crate::comm::Comm;
-use crate::dual::{DualProblem, Recovered};
+use crate::dual::Recovered;
 use crate::error::{Error, Result};
 use crate::linalg::schur::{Form, Schur};
 use crate::qp::{self, Layout, Operator, Preconditioner, ProductCounter};
@@ -408,14 +408,6 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// The preconditioner, when one was built.
     pub fn preconditioner(&self) -> Option<DualPreconditioner<'_, 'c, C>> {
         self.precond.as_ref().map(|(scaling, schur)| DualPreconditioner { dual: self, scaling, schur })
-    }
-}
-
-impl<C: Comm> DualProblem for TfetiDual<'_, C> {
-    /// [`TfetiDual::recover_with`] with the default Π (a body held by contact alone: every
-    /// component of the pairs in contact); panics where GΠGᵀ is singular.
-    fn recover(&self, y: &[f64]) -> Recovered {
-        self.recover_with(y, None).expect("the rigid motions are held at this solution")
     }
 }
 

@@ -6,7 +6,7 @@
 //! operator on which the QP solvers run unchanged ([`dual`]) and the FETI preconditioner of the
 //! whole dual ([`precond`]). It is a
 //! transform of the QP: λ = λ̂ + P̃ᵀy maps the solvers' variable y ∈ Ker G_E × Λ onto the
-//! feasible multipliers, and `DualProblem::recover` of [`dual::TfetiDual`] maps the solution back to λ, α and u.
+//! feasible multipliers, and [`dual::TfetiDual::recover_with`] maps the solution back to λ, α and u.
 
 pub(crate) mod cluster;
 pub(crate) mod coarse;
