@@ -87,19 +87,26 @@ pub struct BoxDef {
     pub cells: Option<BoxCells>,
 }
 
+/// The side of a box a cylinder or sphere bends (`body.box.cylinder.side`,
+/// `body.box.sphere.side`).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Zmin,
+    Zmax,
+}
+
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cylinder {
-    /// `zmin` or `zmax`.
-    pub side: String,
+    pub side: Side,
     pub radius: f64,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
-    /// `zmin` or `zmax`.
-    pub side: String,
+    pub side: Side,
     pub radius: f64,
     /// The pole's (x, y); defaults to the side's centre. A quarter model puts it at a corner.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -139,9 +146,9 @@ impl BoxDef {
         0.0
     }
 
-    /// The curved side (`zmin` or `zmax`) of a cylinder or sphere, if any.
-    pub fn curved_side(&self) -> Option<&str> {
-        self.cylinder.as_ref().map(|c| c.side.as_str()).or(self.sphere.as_ref().map(|s| s.side.as_str()))
+    /// The curved side of a cylinder or sphere, if any.
+    pub fn curved_side(&self) -> Option<Side> {
+        self.cylinder.as_ref().map(|c| c.side).or(self.sphere.as_ref().map(|s| s.side))
     }
 }
 

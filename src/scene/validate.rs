@@ -192,12 +192,9 @@ fn box_body(k: &impl Fn(&str) -> String, name: &str, bx: &BoxDef, mesh_n: usize)
     }
 }
 
-/// `body.box.cylinder`: a side and a radius of at least the box's half-width, bulging less
+/// `body.box.cylinder`: a radius of at least the box's half-width, bulging less
 /// than the box is high.
 fn cylinder(k: &impl Fn(&str) -> String, bx: &BoxDef, c: &Cylinder) -> Result<()> {
-    if c.side != "zmin" && c.side != "zmax" {
-        return Err(Error::scene(k("box.cylinder.side"), format!("must be \"zmin\" or \"zmax\", got \"{}\"", c.side)));
-    }
     let (h, t) = (0.5 * (bx.max[0] - bx.min[0]), bx.max[2] - bx.min[2]);
     if !(c.radius.is_finite() && c.radius >= h) {
         return Err(Error::scene(k("box.cylinder.radius"), format!("must be finite and at least the half-width {h} of the box in x, got {}", c.radius)));
@@ -211,12 +208,9 @@ fn cylinder(k: &impl Fn(&str) -> String, bx: &BoxDef, c: &Cylinder) -> Result<()
     Ok(())
 }
 
-/// `body.box.sphere`: a side, a pole within range and a radius beyond the side's farthest
+/// `body.box.sphere`: a pole within range and a radius beyond the side's farthest
 /// corner, bulging less than the box is high.
 fn sphere(k: &impl Fn(&str) -> String, bx: &BoxDef, s: &Sphere) -> Result<()> {
-    if s.side != "zmin" && s.side != "zmax" {
-        return Err(Error::scene(k("box.sphere.side"), format!("must be \"zmin\" or \"zmax\", got \"{}\"", s.side)));
-    }
     if let Some(c) = s.centre {
         finite(k("box.sphere.centre"), &c)?;
         if c.iter().any(|v| v.abs() > range::MAX) {
