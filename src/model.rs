@@ -14,7 +14,7 @@ use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
 use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
 use crate::qp::cone::Coefficient;
-use crate::scene::{Component, LoadedScene, Scene};
+use crate::scene::{Component, LoadedScene, Scene, Side};
 
 /// Mesh + boundary conditions, ready for assembly.
 #[derive(Clone, Debug)]
@@ -253,7 +253,7 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
                     let (lo, hi) = (bx.min[2], bx.max[2]);
                     for p in &mut geom.nodes {
                         let b = bx.bulge(p[0], p[1]);
-                        p[2] += if side == "zmin" { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
+                        p[2] += if side == Side::Zmin { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
                     }
                 }
                 geom

@@ -188,7 +188,7 @@ fn bad_input_gives_one_line_and_no_file() {
         "cylinder-side",
         SEED,
         &["--set", "mesh.n=3", "--set", "body.0.box.cylinder={side=\"ymin\", radius=4.0}"],
-        &["body[0].box.cylinder.side"],
+        &["body[0].box.cylinder.side", "zmin", "zmax"],
     );
     assert_clean_failure(
         "cylinder-radius",
