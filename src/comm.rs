@@ -12,7 +12,9 @@ use crate::error::{Error, Result};
 
 /// Collective operations the solver needs. Every rank must call them in the same order.
 pub trait Comm {
+    /// This rank's number, 0 ≤ rank < size.
     fn rank(&self) -> usize;
+    /// Number of ranks.
     fn size(&self) -> usize;
     /// Element-wise sum over all ranks, in place.
     fn sum_f64(&self, v: &mut [f64]);
@@ -33,6 +35,7 @@ pub trait Comm {
     /// Personalized all-to-all: sends `send[q]` (any length, one per rank) to rank q and
     /// returns what every rank sent this one, in rank order. Collective.
     fn all_to_all_u64(&self, send: &[Vec<u64>]) -> Vec<Vec<u64>>;
+    /// Waits until every rank has reached it.
     fn barrier(&self);
     /// The MPI communicator handle, for libraries that take one (MPI-IO); None without MPI.
     fn mpi_comm(&self) -> Option<mpi::ffi::MPI_Comm> {
@@ -41,6 +44,7 @@ pub trait Comm {
     /// Name and version of the MPI library ("serial" without MPI).
     fn library(&self) -> String;
 
+    /// Whether this is rank 0.
     fn is_root(&self) -> bool {
         self.rank() == 0
     }
@@ -119,10 +123,12 @@ pub struct MpiComm {
 }
 
 impl MpiComm {
+    /// The communicator of `world`.
     pub fn new(world: SimpleCommunicator) -> Self {
         MpiComm { world }
     }
 
+    /// The rsmpi communicator.
     pub fn raw(&self) -> &SimpleCommunicator {
         &self.world
     }

@@ -6,59 +6,102 @@
 pub enum Error {
     /// A scene or mesh file that does not parse (`file: line:col: message`).
     #[error("{file}: {msg}")]
-    Parse { file: String, msg: String },
+    Parse {
+        /// The scene or mesh file.
+        file: String,
+        /// What does not parse, with the line and column where known.
+        msg: String,
+    },
     /// A scene value that parses but is not allowed; `key` is the dotted path.
     #[error("{key}: {msg}")]
-    Scene { key: String, msg: String },
+    Scene {
+        /// The dotted path of the key.
+        key: String,
+        /// What is wrong with its value.
+        msg: String,
+    },
     /// A mesh file that is readable but unusable.
     #[error("{file}: {msg}")]
-    Mesh { file: String, msg: String },
+    Mesh {
+        /// The mesh file.
+        file: String,
+        /// What makes it unusable.
+        msg: String,
+    },
+    /// A file that could not be read or written.
     #[error("{path}: {source}")]
     Io {
+        /// The file.
         path: String,
+        /// The I/O error.
         #[source]
         source: std::io::Error,
     },
     /// Numerical failure (factorization breakdown, NaN, no convergence), with the reason.
     #[error("{what}: {reason}")]
-    Numerical { what: String, reason: String },
+    Numerical {
+        /// What failed.
+        what: String,
+        /// Why.
+        reason: String,
+    },
     /// A dual solver that failed; its typed error (`qp::QpError`, with the counters of an
     /// unconverged run) is the source.
     #[error("{what}: {source}")]
     Solver {
+        /// The solve that failed, as messages name it.
         what: String,
+        /// The solver's typed error.
         #[source]
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// A result file that could not be written or verified.
     #[error("output {path}: {msg}")]
-    Output { path: String, msg: String },
+    Output {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        msg: String,
+    },
     /// A run refused before it allocates because it would not fit in memory (`what`: the scene
     /// key that sets its size), or an allocation that failed (`what`: the array).
     #[error("{what}: {msg}")]
-    Memory { what: String, msg: String },
+    Memory {
+        /// The scene key or the array.
+        what: String,
+        /// What does not fit.
+        msg: String,
+    },
     /// An error raised on another MPI rank, forwarded so that every rank stops with it.
     #[error("{0}")]
     Remote(String),
 }
 
+/// The crate's result, with [`Error`] by default.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
+    /// An [`Error::Scene`] on `key`.
     pub fn scene(key: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Scene { key: key.into(), msg: msg.into() }
     }
+    /// An [`Error::Mesh`] in `file`.
     pub fn mesh(file: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Mesh { file: file.into(), msg: msg.into() }
     }
+    /// An [`Error::Io`] on `path`.
     pub fn io(path: impl Into<String>, source: std::io::Error) -> Self {
         Error::Io { path: path.into(), source }
     }
+    /// An [`Error::Numerical`] of `what`.
     pub fn numerical(what: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::Numerical { what: what.into(), reason: reason.into() }
     }
+    /// An [`Error::Solver`] of `what`, `source` its cause.
     pub fn solver(what: impl Into<String>, source: impl std::error::Error + Send + Sync + 'static) -> Self {
         Error::Solver { what: what.into(), source: Box::new(source) }
     }
+    /// An [`Error::Memory`] for `what`.
     pub fn memory(what: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Memory { what: what.into(), msg: msg.into() }
     }
@@ -66,6 +109,7 @@ impl Error {
     pub fn alloc(what: impl Into<String>, bytes: usize) -> Self {
         Error::Memory { what: what.into(), msg: format!("could not allocate {} (out of memory)", human_bytes(bytes as f64)) }
     }
+    /// An [`Error::Output`] on `path`.
     pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Output { path: path.into(), msg: msg.into() }
     }

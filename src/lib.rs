@@ -11,6 +11,8 @@
 //! reference) live apart, in [`studies`]; `tests/layout.rs` checks that the module graph has no
 //! cycle.
 
+#![warn(missing_docs)]
+
 pub mod comm;
 pub mod contact;
 pub mod dual;

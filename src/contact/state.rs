@@ -13,7 +13,9 @@ use crate::qp::sets::ConvexSet;
 
 /// Status codes written to the `contact_status` field (0 on nodes without a contact pair).
 pub const OPEN: i32 = 1;
+/// Closed pair with friction that sticks.
 pub const STICK: i32 = 2;
+/// Closed pair with friction that slips (λ̄τ on the slip bound, or sliding: [`contact_state`]).
 pub const SLIP: i32 = 3;
 /// Closed, on a pair without friction (neither stick nor slip).
 pub const CONTACT: i32 = 4;
@@ -21,6 +23,7 @@ pub const CONTACT: i32 = 4;
 /// The contact state of every pair.
 #[derive(Clone, Debug, Default)]
 pub struct ContactState {
+    /// Status of each pair: [`OPEN`], [`STICK`], [`SLIP`] or [`CONTACT`].
     pub status: Vec<i32>,
     /// Normal multiplier λν,ᵢ (force, ≥ 0).
     pub normal_force: Vec<f64>,
@@ -36,6 +39,7 @@ pub struct ContactState {
 }
 
 impl ContactState {
+    /// Number of pairs with status `status`.
     pub fn count(&self, status: i32) -> usize {
         self.status.iter().filter(|&&s| s == status).count()
     }

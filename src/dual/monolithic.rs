@@ -13,9 +13,13 @@ use crate::qp::{Layout, Operator, ProductCounter, Replicated};
 
 /// One body owned by this rank: assembled and factorized.
 pub struct LocalBody {
+    /// Index of the body.
     pub body: usize,
+    /// Its DOFs: free, and prescribed with their values.
     pub dofs: DofMap,
+    /// Its assembled system K_ff u_f = f_f.
     pub sys: BodySystem,
+    /// The Cholesky factor of its K_ff.
     pub chol: Cholesky,
     /// The free DOFs the factor orders last, in its order (empty: none): the contact DOFs,
     /// whose block of K⁻¹ is then the inverse of the factor's trailing block's LLᵀ.
@@ -24,7 +28,9 @@ pub struct LocalBody {
 
 /// One body on this rank with the entries (row of B, free DOF, coefficient) of B acting on it.
 pub struct BodyBlock {
+    /// The body, assembled and factorized.
     pub local: LocalBody,
+    /// The entries of B on the body: (row of B, free DOF, coefficient).
     pub b: Vec<(usize, usize, f64)>,
     /// The explicit product, when the factor orders B's DOFs last.
     pub dense: Option<Trailing>,
@@ -72,7 +78,9 @@ impl Trailing {
 /// A = B K⁻¹ Bᵀ over the bodies of all ranks.
 pub struct MonolithicDual<'c, C: Comm> {
     comm: &'c C,
+    /// Layout of the multipliers.
     pub layout: Layout,
+    /// The bodies on this rank with their blocks of B.
     pub blocks: Vec<BodyBlock>,
     /// c = [d; 0] − B_c u_c (the prescribed values moved to the right) + the last load step's
     /// tangential jump ([`MonolithicDual::set_load`]).

@@ -25,6 +25,7 @@ pub struct DofMap {
     pub free: Vec<usize>,
     /// Prescribed value of every local DOF (0 where free).
     pub prescribed: Vec<f64>,
+    /// Number of free DOFs.
     pub nfree: usize,
 }
 
@@ -128,7 +129,9 @@ pub enum AssemblyError {
 
 /// One body's (or subdomain's) assembled system K_ff u_f = f_f.
 pub struct BodySystem {
+    /// The stiffness matrix K_ff of the free DOFs (lower triangle).
     pub k: SymCsc,
+    /// The load vector f_f of the free DOFs.
     pub f: Vec<f64>,
     /// Node adjacency (local numbering), for the fill-reducing ordering.
     pub graph: (Vec<usize>, Vec<usize>),

@@ -14,9 +14,13 @@ use crate::mesh::CellKind;
 /// per element in the assembly loop: no allocation).
 #[allow(clippy::large_enum_variant)]
 pub enum CellMatrix {
+    /// Of a hex8 cell.
     Hex8([[f64; 24]; 24]),
+    /// Of a tet4 cell.
     Tet4([[f64; 12]; 12]),
+    /// Of a tet10 cell.
     Tet10([[f64; 30]; 30]),
+    /// Of a wedge6 cell.
     Wedge6([[f64; 18]; 18]),
 }
 

@@ -13,7 +13,9 @@ pub const HEX_REF: [[f64; 3]; 8] =
 /// [`super::facet`].
 pub use super::facet::{quad4_nodal_areas, GAUSS2, QUAD_REF};
 
+/// The node coordinates of a hex8 element.
 pub type HexCoords = [[f64; 3]; 8];
+/// A hex8 element matrix, 24 × 24 (DOF order 3a + i).
 pub type HexMatrix = [[f64; 24]; 24];
 
 /// Shape function values at reference point `xi`.

@@ -4,7 +4,9 @@
 /// Lamé constants λ, μ of an isotropic material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lame {
+    /// First Lamé constant λ (stress units).
     pub lambda: f64,
+    /// Shear modulus μ, the second Lamé constant (stress units).
     pub mu: f64,
 }
 

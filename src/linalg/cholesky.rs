@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 pub enum Ordering {
     /// `perm[new] = old`, e.g. from METIS nested dissection.
     Custom(Vec<usize>),
+    /// Approximate minimum degree (faer's).
     Amd,
 }
 
@@ -90,6 +91,7 @@ impl Cholesky {
         Ok(Cholesky { symbolic, values, single: None })
     }
 
+    /// Order of the factorized matrix.
     pub fn n(&self) -> usize {
         self.symbolic.0.nrows()
     }

@@ -5,13 +5,18 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 /// A symmetric matrix held by its lower triangle (row ≥ column), CSC, rows sorted per column.
 #[derive(Clone, Debug, Default)]
 pub struct SymCsc {
+    /// Order of the matrix.
     pub n: usize,
+    /// Start of each column in `row_idx` and `values` (n + 1 entries).
     pub col_ptr: Vec<usize>,
+    /// Row index of each stored entry.
     pub row_idx: Vec<usize>,
+    /// Value of each stored entry.
     pub values: Vec<f64>,
 }
 
 impl SymCsc {
+    /// Stored entries (the lower triangle's nonzeros).
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }

@@ -21,18 +21,26 @@ pub const MAX_FACET_NODES: usize = 8;
 /// The type of a volume cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum CellKind {
+    /// 8-node hexahedron (trilinear brick).
     Hex8,
+    /// 4-node tetrahedron (linear).
     Tet4,
+    /// 10-node tetrahedron (quadratic).
     Tet10,
+    /// 6-node wedge (triangular prism).
     Wedge6,
 }
 
 /// The type of a surface facet.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum FacetKind {
+    /// 3-node triangle.
     Tri3,
+    /// 4-node quadrilateral.
     Quad4,
+    /// 6-node triangle (quadratic).
     Tri6,
+    /// 8-node quadrilateral (serendipity).
     Quad8,
 }
 
@@ -42,6 +50,7 @@ const TET10_FACES: [&[usize]; 4] = [&[0, 2, 1, 6, 5, 4], &[0, 1, 3, 4, 9, 7], &[
 const WEDGE6_FACES: [&[usize]; 5] = [&[0, 2, 1], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]];
 
 impl CellKind {
+    /// Every cell type.
     pub const ALL: [CellKind; 4] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6];
 
     /// Number of nodes.
@@ -130,6 +139,7 @@ impl FacetKind {
         }
     }
 
+    /// Number of corner nodes (3 or 4).
     pub const fn corners(self) -> usize {
         match self {
             FacetKind::Tri3 | FacetKind::Tri6 => 3,
@@ -151,6 +161,7 @@ impl FacetKind {
 /// One volume cell: its type and global (or local) node indices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cell {
+    /// The cell's type.
     pub kind: CellKind,
     n: [usize; MAX_CELL_NODES],
 }
@@ -164,15 +175,18 @@ impl Cell {
         Cell { kind, n }
     }
 
+    /// A hex8 cell on `nodes`.
     pub fn hex8(nodes: [usize; 8]) -> Self {
         Cell::new(CellKind::Hex8, &nodes)
     }
 
+    /// Its nodes, `kind.len()` of them.
     #[inline]
     pub fn nodes(&self) -> &[usize] {
         &self.n[..self.kind.len()]
     }
 
+    /// Its nodes, mutable.
     #[inline]
     pub fn nodes_mut(&mut self) -> &mut [usize] {
         let k = self.kind.len();
@@ -214,12 +228,15 @@ impl Cell {
 /// that the right-hand rule gives the outward normal of that cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Facet {
+    /// Index of the cell it bounds.
     pub elem: usize,
+    /// The facet's type.
     pub kind: FacetKind,
     n: [usize; MAX_FACET_NODES],
 }
 
 impl Facet {
+    /// A facet of type `kind` of cell `elem` on `nodes` (`nodes.len() == kind.len()`).
     pub fn new(elem: usize, kind: FacetKind, nodes: &[usize]) -> Self {
         assert_eq!(nodes.len(), kind.len(), "{kind:?} has {} nodes", kind.len());
         let mut n = [0; MAX_FACET_NODES];
@@ -227,10 +244,12 @@ impl Facet {
         Facet { elem, kind, n }
     }
 
+    /// A quad4 facet of cell `elem` on `nodes`.
     pub fn quad4(elem: usize, nodes: [usize; 4]) -> Self {
         Facet::new(elem, FacetKind::Quad4, &nodes)
     }
 
+    /// Its nodes, `kind.len()` of them.
     #[inline]
     pub fn nodes(&self) -> &[usize] {
         &self.n[..self.kind.len()]

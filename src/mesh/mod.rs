@@ -35,7 +35,9 @@ pub fn try_grow<T>(v: &mut Vec<T>, what: &str, extra: usize) -> Result<()> {
 pub struct Face {
     /// Full name, `<body>.<face>`.
     pub name: String,
+    /// Index of the body it bounds.
     pub body: usize,
+    /// Its facets, in global numbering.
     pub facets: Vec<Facet>,
 }
 
@@ -52,15 +54,20 @@ impl Face {
 /// The part of the global numbering that belongs to one body.
 #[derive(Clone, Debug)]
 pub struct BodyMesh {
+    /// Name of the body.
     pub name: String,
+    /// Its nodes in the global numbering.
     pub nodes: Range<usize>,
+    /// Its elements in the global numbering.
     pub elems: Range<usize>,
 }
 
 /// A body's mesh in local numbering, as a generator or importer produces it.
 #[derive(Clone, Debug, Default)]
 pub struct BodyGeometry {
+    /// Coordinates of the nodes.
     pub nodes: Vec<[f64; 3]>,
+    /// The cells, on local node indices.
     pub cells: Vec<Cell>,
     /// (short face name, facets in local numbering)
     pub faces: Vec<(String, Vec<Facet>)>,
@@ -69,9 +76,13 @@ pub struct BodyGeometry {
 /// All bodies of a scene in one global numbering.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
+    /// Coordinates of every node (global numbering).
     pub nodes: Vec<[f64; 3]>,
+    /// Every cell, on global node indices.
     pub cells: Vec<Cell>,
+    /// The bodies' ranges of nodes and elements, in order.
     pub bodies: Vec<BodyMesh>,
+    /// The named faces of all bodies.
     pub faces: Vec<Face>,
 }
 
@@ -99,10 +110,12 @@ impl Mesh {
         Ok(())
     }
 
+    /// The face of full name `name` (`<body>.<face>`).
     pub fn face(&self, name: &str) -> Option<&Face> {
         self.faces.iter().find(|f| f.name == name)
     }
 
+    /// The full names of all faces.
     pub fn face_names(&self) -> Vec<&str> {
         self.faces.iter().map(|f| f.name.as_str()).collect()
     }
@@ -121,6 +134,7 @@ impl Mesh {
         self.cells[e].coords(&self.nodes)
     }
 
+    /// Node coordinates of facet `q`.
     pub fn facet_coords(&self, q: &Facet) -> Vec<[f64; 3]> {
         q.nodes().iter().map(|&v| self.nodes[v]).collect()
     }

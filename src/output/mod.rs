@@ -17,24 +17,31 @@ pub(crate) mod xdmf;
 /// Where a field lives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Center {
+    /// One row per node.
     Node,
+    /// One row per cell.
     Cell,
 }
 
 /// Values of a field, row-major `len × ncomp`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Values {
+    /// Floating-point values.
     F64(Vec<f64>),
+    /// Integer values (e.g. the contact status).
     I32(Vec<i32>),
 }
 
 /// A named field on the mesh: `/fields/<name>` in the HDF5 file.
 #[derive(Clone, Debug)]
 pub struct Field {
+    /// Name of the field: `/fields/<name>` in the HDF5 file.
     pub name: String,
+    /// Where it lives: on nodes or cells.
     pub center: Center,
     /// Components per node/cell (1 = scalar, 3 = vector).
     pub ncomp: usize,
+    /// The values, row-major `len × ncomp`.
     pub values: Values,
 }
 
@@ -50,6 +57,7 @@ pub struct OutputData {
     /// A distributed mesh: the sizes of the whole mesh and the rows this rank holds of it.
     /// None: `coordinates` and `cells` are the whole mesh (on every rank).
     pub mesh_rows: Option<MeshRows>,
+    /// The fields of the final state.
     pub fields: Vec<Field>,
     /// String attributes on the root group (resolved scene, versions, timings, report).
     pub attributes: Vec<(String, String)>,
@@ -67,7 +75,9 @@ pub struct OutputData {
 /// by some rank, as for a distributed field.
 #[derive(Clone, Debug, Default)]
 pub struct MeshRows {
+    /// Nodes of the whole mesh.
     pub nodes: usize,
+    /// Cells of the whole mesh.
     pub cells: usize,
     /// The nodes whose coordinates this rank holds, in the order of `coordinates`.
     pub node_rows: Vec<usize>,
@@ -94,6 +104,7 @@ pub struct Step {
     /// Pseudo-time of this state (the same on every rank); finite, and strictly increasing
     /// along [`OutputData::steps`].
     pub time: f64,
+    /// The fields of this state.
     pub fields: Vec<Field>,
     /// Same meaning as OutputData::rows, for this step's fields.
     pub rows: std::collections::BTreeMap<String, Vec<usize>>,

@@ -19,6 +19,7 @@ use crate::scene::LoadedScene;
 pub struct Prepared {
     /// The scene with the plan's decomposition and the resolved method.
     pub ls: LoadedScene,
+    /// The model built from the scene.
     pub model: Model,
     /// The plan's priced candidates (`None`: the scene set the decomposition).
     pub plan: Option<Vec<plan::Candidate>>,

@@ -75,7 +75,9 @@ pub const GATHER_PER_NODE: f64 = 64.0;
 /// The sizes of a scene's mesh, known before it is generated or read.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshCount {
+    /// Nodes of the mesh.
     pub nodes: f64,
+    /// Elements (volume cells) of the mesh.
     pub elements: f64,
     /// Boundary facets (quadrilaterals, triangles).
     pub facets: f64,
@@ -141,6 +143,7 @@ impl MeshCount {
         }
     }
 
+    /// DOFs of the mesh: 3 per node.
     pub fn dofs(&self) -> f64 {
         3.0 * self.nodes
     }
@@ -225,16 +228,19 @@ pub fn with_interfaces(dofs: f64, parts: f64) -> f64 {
 /// One rank's estimate in named parts (bytes).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Estimate {
+    /// The parts: (name, bytes).
     pub parts: Vec<(&'static str, f64)>,
     /// The decomposition the factors were estimated for, in words.
     pub basis: String,
 }
 
 impl Estimate {
+    /// The whole estimate, in bytes.
     pub fn total(&self) -> f64 {
         self.parts.iter().map(|p| p.1).sum()
     }
 
+    /// Bytes of part `name` (0 where there is none).
     pub fn part(&self, name: &str) -> f64 {
         self.parts.iter().find(|p| p.0 == name).map_or(0.0, |p| p.1)
     }

@@ -46,9 +46,11 @@ pub use crate::dual::monolithic::LocalBody;
 /// Wall time of each phase, the maximum over the ranks, and the live monitor.
 #[derive(Clone, Debug, Default)]
 pub struct Timings {
+    /// Wall time of each phase (max over the ranks, summed over repeated runs), in seconds, in the order they first ran.
     pub phases: Vec<(String, f64)>,
     /// Peak resident memory (VmHWM) at the end of each phase, the maximum over the ranks.
     pub peaks: Vec<(String, f64)>,
+    /// The live monitor.
     pub live: monitor::Live,
 }
 
@@ -85,6 +87,7 @@ impl Timings {
         r
     }
 
+    /// Sum of the phase times, in seconds.
     pub fn total(&self) -> f64 {
         self.phases.iter().map(|p| p.1).sum()
     }
@@ -116,12 +119,18 @@ fn pause_for_tests(phase: &str) {
 /// Figures of one body's linear solve (TFETI: summed over its subdomains).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BodyStats {
+    /// Name of the body.
     pub name: String,
+    /// Nodes of the body.
     pub nodes: usize,
+    /// Elements of the body.
     pub elements: usize,
+    /// DOFs its K acts on (the free DOFs).
     pub free_dofs: usize,
+    /// Nonzeros of the lower triangle of K.
     #[serde(rename = "nnz_K_lower")]
     pub nnz_k: usize,
+    /// Nonzeros of the Cholesky factor L.
     #[serde(rename = "nnz_L")]
     pub nnz_l: usize,
     /// ‖K u − f‖ / ‖f‖ of the free DOFs (TFETI: the largest over the subdomains).
@@ -134,8 +143,11 @@ pub struct BodyStats {
 /// The fields on rank 0 (empty on other ranks).
 #[derive(Clone, Debug, Default)]
 pub struct Solution {
+    /// Displacement u of every node.
     pub displacement: Vec<[f64; 3]>,
+    /// Von Mises stress of every element (at its center).
     pub von_mises: Vec<f64>,
+    /// Figures of each body's linear solve.
     pub bodies: Vec<BodyStats>,
     /// Subdomains, interface and coarse figures when solved by TFETI.
     pub tfeti: Option<tfeti::TfetiInfo>,
@@ -154,9 +166,13 @@ pub struct Solution {
 /// (TFETI: subdomains).
 #[derive(Clone, Debug, Default)]
 pub struct LocalMesh {
+    /// Coordinates of the nodes it writes.
     pub coordinates: Vec<[f64; 3]>,
+    /// Its elements, by the nodes' global numbers.
     pub cells: Vec<crate::mesh::Cell>,
+    /// Body of each of its elements.
     pub cell_body: Vec<usize>,
+    /// Piece (TFETI: subdomain) of each of its elements.
     pub cell_piece: Vec<usize>,
 }
 
@@ -164,16 +180,22 @@ pub struct LocalMesh {
 /// all ranks) with their displacements, its elements with their von Mises stress.
 #[derive(Clone, Debug, Default)]
 pub struct LocalFields {
+    /// The nodes it writes (global numbers).
     pub nodes: Vec<usize>,
+    /// Displacement u of each of those nodes.
     pub displacement: Vec<[f64; 3]>,
+    /// Its elements (global numbers).
     pub cells: Vec<usize>,
+    /// Von Mises stress of each of those elements.
     pub von_mises: Vec<f64>,
 }
 
 /// What `solve` reports back to the command line.
 #[derive(Clone, Debug)]
 pub struct Summary {
+    /// The typed report (what the JSON file holds).
     pub report: report::Report,
+    /// The files written.
     pub files: Vec<PathBuf>,
     /// The computed fields (on rank 0).
     pub solution: Solution,
@@ -313,13 +335,17 @@ fn finish_bodies<C: Comm>(comm: &C, model: &Model, bodies: &[&LocalBody], u: &[V
 /// Which dual problem a scene is solved on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DualKind {
+    /// The monolithic dual (one block per body).
     Monolithic,
     /// TFETI with the oblique projector P̃ (`orthogonal`: SMALSE-M's penalized operator);
     /// `contact`: with contact rows (else plain CG on the gluing and Dirichlet rows);
     /// `projected`: `decomposition.projected_cg`.
     Tfeti {
+        /// SMALSE-M's orthogonal projector P (else the oblique P̃).
         orthogonal: bool,
+        /// With contact rows.
         contact: bool,
+        /// `decomposition.projected_cg`.
         projected: bool,
     },
 }
@@ -407,9 +433,13 @@ pub fn solver_for(ls: &LoadedScene, model: &Model) -> crate::scene::SolverSettin
 pub struct ContactOutcome {
     /// Length of the solvers' dual vector.
     pub dim: usize,
+    /// The contact state of every pair.
     pub state: ContactState,
+    /// The solver's counters and history.
     pub info: qp::Info,
+    /// ‖b‖ of the dual right-hand side.
     pub bnorm: f64,
+    /// The KKT residuals at the solution.
     pub kkt: qp::kkt::Kkt,
     /// Every step of a load path (empty with one load state).
     pub steps: Vec<path::StepOutput>,

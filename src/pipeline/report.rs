@@ -14,7 +14,9 @@ use crate::scene::{CoarseSolve, DirichletMode, Gluing, Projector};
 pub struct Report {
     /// The scene file.
     pub scene: String,
+    /// The scene's `title`.
     pub title: String,
+    /// MPI ranks the solve ran on.
     pub ranks: usize,
     /// Name and version of the MPI library.
     pub mpi: String,
@@ -23,17 +25,25 @@ pub struct Report {
     /// The scene's units (length, force, stress), where it names them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub units: Option<UnitsReport>,
+    /// What the TFETI path adds (none on the monolithic dual).
     pub tfeti: Option<TfetiReport>,
     /// The fill-reducing ordering of the factorizations.
     pub ordering: String,
+    /// Size of the whole mesh.
     pub mesh: MeshReport,
+    /// Figures of each body's linear solve.
     pub bodies: Vec<BodyStats>,
+    /// Maxima of the displacement and the von Mises stress.
     pub results: Results,
+    /// The contact state at the solution (none without contact).
     pub contact: Option<ContactReport>,
+    /// The dual solve (none without contact on the monolithic dual).
     pub solver: Option<SolverReport>,
     /// Wall time of each phase (max over the ranks), in the order they ran, and the total.
     pub timings: PhaseTimes,
+    /// Version of this crate and of its main dependencies ([`crate::versions`]).
     pub versions: serde_json::Value,
+    /// Peak resident memory (VmHWM) of the ranks.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub memory: Option<Memory>,
     /// The priced decompositions when the scene left `[decomposition]` to the cost model.
@@ -59,13 +69,17 @@ pub struct Report {
     pub explicit_products: Option<usize>,
 }
 
+/// Size of the whole mesh.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct MeshReport {
+    /// Nodes of the mesh.
     pub nodes: usize,
+    /// Elements of the mesh.
     pub elements: usize,
     /// The cells by type, in words ("1000 hexahedra").
     #[serde(default)]
     pub cells: String,
+    /// DOFs of the mesh: 3 per node.
     pub dofs: usize,
     /// DOFs not held by Dirichlet conditions (of `dofs`, each node once).
     pub free_dofs: usize,
@@ -75,18 +89,25 @@ pub struct MeshReport {
     pub subdomain_dofs: Option<usize>,
 }
 
+/// Maxima of the computed fields over the whole mesh.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Results {
+    /// Largest displacement magnitude ‖u‖ over the nodes.
     pub max_displacement: f64,
+    /// Node (global index) where ‖u‖ is largest.
     pub max_displacement_node: usize,
+    /// Body holding that node.
     pub max_displacement_body: Option<String>,
+    /// Largest von Mises stress over the elements.
     pub max_von_mises: f64,
 }
 
 /// The contact state at the solution.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ContactReport {
+    /// Contact pairs (slave nodes with a master facet).
     pub pairs: usize,
+    /// Open pairs.
     pub open: usize,
     /// Closed pairs without friction (neither stick nor slip).
     #[serde(default)]
@@ -97,25 +118,34 @@ pub struct ContactReport {
     /// The lines that name them, and the warnings about them ([`super::outside_lines`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+    /// Sticking pairs.
     pub stick: usize,
+    /// Slipping pairs.
     pub slip: usize,
     /// Of the `slip` pairs, those with ‖λ̄τ‖ on the slip bound; the others slide an ε-hair
     /// inside it (their slip explains them better than sticking would).
     pub on_slip_bound: usize,
+    /// Total force the contact exerts on the slave bodies (global x, y, z).
     pub total_force_on_slave: [f64; 3],
 }
 
 /// The dual solve: the method, its counters and history ([`qp::Info`]), the KKT residuals.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct SolverReport {
+    /// The dual method that ran (`coulomb-newton`, `coulomb-lagged` for Coulomb solves, `cg` for TFETI without contact).
     pub method: String,
     /// Length of the solvers' dual vector (over all ranks).
     pub dual_dim: usize,
+    /// The stopping tolerance ε (`solver.eps`).
     pub eps: f64,
+    /// The solver's counters and history.
     #[serde(flatten)]
     pub info: qp::Info,
+    /// ‖b‖ of the dual right-hand side.
     pub norm_b: f64,
+    /// The KKT residuals at the solution.
     pub kkt: qp::kkt::Kkt,
+    /// The largest of the KKT residuals ([`qp::kkt::Kkt::worst`]; 0 without contact).
     pub kkt_worst: f64,
     /// Where the accuracy guard tightened ε (`pipeline::accuracy`): the result at the scene's ε
     /// missed its checks and the solve went on from there.
@@ -126,11 +156,14 @@ pub struct SolverReport {
 /// What the TFETI path adds.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct TfetiReport {
+    /// Subdomains of each body, in body order.
     pub subdomains_per_body: Vec<usize>,
+    /// How the subdomains' interface copies are glued (`decomposition.gluing`).
     pub gluing: Gluing,
     /// How the Dirichlet conditions are held (`decomposition.dirichlet`).
     #[serde(default)]
     pub dirichlet: DirichletMode,
+    /// Rows of B by kind.
     pub multipliers: Multipliers,
     /// Prescribed DOFs held inside their subdomains (over all copies): no multiplier rows.
     #[serde(default)]
@@ -139,15 +172,19 @@ pub struct TfetiReport {
     /// (face moments, held inside the clusters; as many clusters as subdomains and none without).
     #[serde(default)]
     pub clusters: usize,
+    /// H-TFETI: gluing rows of the clusters' corner nodes (held inside the clusters).
     #[serde(default)]
     pub corner_rows: usize,
+    /// Size of the coarse problem: the rows of G (k_s per subdomain).
     pub coarse_dim: usize,
+    /// Nonzeros of the lower triangle of the coarse matrix C.
     #[serde(rename = "nnz_C_lower")]
     pub nnz_c: usize,
     /// `decomposition.coarse_solve`, and the bytes of C⁻¹'s (and (GGᵀ)⁻¹'s) rows the rank
     /// holding most holds when explicit.
     #[serde(default)]
     pub coarse_solve: CoarseSolve,
+    /// Bytes of explicit coarse-inverse rows on the rank holding most (0 with the factor).
     #[serde(default)]
     pub coarse_explicit_bytes_max_rank: usize,
     /// max over nodes and copies of |u_copy − u_first| / max |u|.
@@ -156,26 +193,36 @@ pub struct TfetiReport {
     /// ‖Gλ − e‖/‖e‖ at the solution.
     #[serde(rename = "coarse_feasibility")]
     pub feasibility: f64,
+    /// The projector onto Ker G (`decomposition.projector`).
     pub projector: Projector,
+    /// SMALSE-M's outer loop (orthogonal projector only).
     pub smalse: Option<SmalseInfo>,
+    /// How the dual vectors and the A-products' work are spread over the ranks.
     pub distribution: DistributionStats,
+    /// Figures of each subdomain.
     pub subdomains: Vec<SubdomainStats>,
 }
 
 /// Multipliers by kind.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Multipliers {
+    /// Contact rows of B.
     pub contact: usize,
+    /// Gluing rows between subdomains.
     pub gluing: usize,
+    /// Dirichlet rows (prescribed DOFs held by multipliers).
     pub dirichlet: usize,
     /// Rows of tied interfaces (`[[tie]]`).
     #[serde(default)]
     pub tie: usize,
 }
 
+/// Peak resident memory (VmHWM), in bytes.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Memory {
+    /// Sum over the ranks of each rank's peak.
     pub peak_rss_bytes_sum_over_ranks: f64,
+    /// The largest peak of a rank.
     pub peak_rss_bytes_max_rank: f64,
     /// The peak so far at the end of each phase (max over the ranks): where the memory grows.
     #[serde(default)]
@@ -185,7 +232,9 @@ pub struct Memory {
 /// [`Memory::peak_rss_bytes_max_rank_after_phase`]'s entries, in the order the phases ran.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PhasePeak {
+    /// Name of the phase.
     pub phase: String,
+    /// Peak resident memory at its end (max over the ranks), in bytes.
     pub bytes: f64,
 }
 
@@ -194,6 +243,7 @@ pub struct PhasePeak {
 pub struct PhaseTimes(pub Vec<(String, f64)>);
 
 impl PhaseTimes {
+    /// Sum of the phase times, in seconds.
     pub fn total(&self) -> f64 {
         self.0.iter().map(|p| p.1).sum()
     }
@@ -239,8 +289,11 @@ pub fn counts(open: usize, contact: usize, stick: usize, slip: usize) -> String 
 /// The units results are printed in: the scene's `units`, and the stress unit they make.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct UnitsReport {
+    /// Unit of length.
     pub length: Option<String>,
+    /// Unit of force.
     pub force: Option<String>,
+    /// Unit of stress the length and force units make.
     pub stress: Option<String>,
 }
 

@@ -31,27 +31,36 @@ use crate::scene::{CoarseSolve, LoadedScene, Precision, Projector};
 /// Figures of one subdomain: those of every piece, and its interface.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SubdomainStats {
+    /// The figures every piece has (nodes, elements, DOFs, factor).
     #[serde(flatten)]
     pub piece: PieceStats,
+    /// Nodes shared with other subdomains.
     pub interface_nodes: usize,
 }
 
 /// What the TFETI path adds to a [`Solution`].
 #[derive(Clone, Debug, Default)]
 pub struct TfetiInfo {
+    /// Figures of each subdomain.
     pub subdomains: Vec<SubdomainStats>,
     /// Multipliers: contact, gluing, Dirichlet.
     pub contact_rows: usize,
+    /// Gluing rows of B.
     pub gluing_rows: usize,
+    /// Dirichlet rows of B.
     pub dirichlet_rows: usize,
+    /// Rows of tied interfaces (`[[tie]]`).
     pub tie_rows: usize,
     /// DOFs held inside their subdomains (hybrid Dirichlet), over all copies.
     pub eliminated_dofs: usize,
     /// H-TFETI: clusters and the gluing rows of their corner nodes (held inside the clusters,
     /// not in `gluing_rows`); as many clusters as subdomains and no corner rows without.
     pub clusters: usize,
+    /// Gluing rows of the clusters' corner nodes.
     pub corner_rows: usize,
+    /// Size of the coarse problem: the rows of G (k_s per piece).
     pub coarse_dim: usize,
+    /// Nonzeros of the lower triangle of the coarse matrix C.
     pub nnz_c: usize,
     /// Bytes of explicit coarse-inverse rows (`decomposition.coarse_solve = "explicit"`; max
     /// over the ranks; 0 with the factor).
@@ -73,15 +82,23 @@ pub struct TfetiInfo {
 /// the ranks; times summed over the solve, power iterations included).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct DistributionStats {
+    /// Fewest multipliers a rank owns.
     pub owned_rows_min: usize,
+    /// Most multipliers a rank owns.
     pub owned_rows_max: usize,
+    /// Most ghost rows of a rank (rows its subdomains read that neighbours own).
     pub ghost_rows_max: usize,
+    /// Most neighbours a rank exchanges with.
     pub neighbours_max: usize,
     /// Values sent per A-product (all ranks): two ghost exchanges and one of contributions.
     pub values_sent_per_product: usize,
+    /// Whole A-products, in seconds.
     pub apply_s: f64,
+    /// K_s⁺ solves, in seconds.
     pub pinv_s: f64,
+    /// Neighbour exchanges (waiting included), in seconds.
     pub exchange_s: f64,
+    /// Reductions (coarse vectors and dot products), in seconds.
     pub reduce_s: f64,
     /// C⁻¹ solves (the A-products' P̃; SMALSE-M's P).
     pub coarse_solve_s: f64,
@@ -154,16 +171,22 @@ pub struct TfetiProblem<'c, C: Comm> {
     pub constraints: constraints::Constraints,
     /// Rank of every cluster.
     pub owner: Vec<usize>,
+    /// The dual operator F.
     pub dual: TfetiDual<'c, C>,
+    /// The dual right-hand side b̃ on this rank's rows.
     pub b: Vec<f64>,
+    /// This rank's part of Λ: its pairs' sets, its free λ_E.
     pub set: Lambda,
     /// This rank's share of the mesh and the decomposition: what the solve reads of them after
     /// the setup.
     pub share: Share,
     /// Δ per piece ([`piece_weights`]), what a preconditioner set later takes.
     pub weights: Vec<f64>,
+    /// Size of the coarse problem: the rows of G.
     pub coarse_dim: usize,
+    /// Nonzeros of the lower triangle of the coarse matrix C.
     pub nnz_c: usize,
+    /// Bytes of explicit coarse-inverse rows (0 with the factor).
     pub coarse_explicit_bytes: usize,
 }
 
@@ -296,6 +319,7 @@ pub struct Share {
     rhs: LocalRhs,
     /// Subdomains over all ranks, and their held DOFs.
     pub subdomains: usize,
+    /// DOFs held inside the subdomains (hybrid Dirichlet), over all ranks and copies.
     pub eliminated_dofs: usize,
 }
 

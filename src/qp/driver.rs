@@ -17,6 +17,7 @@ pub const SIGMA_SAFETY: f64 = 1.1;
 /// Sees every outer step as the solver records it (PETSc's `-ksp_monitor`). Called on every rank
 /// with the same values; solvers never print.
 pub trait Monitor {
+    /// Sees outer step `k` (its index in [`Info::history`], from 0) as it is recorded.
     fn step(&mut self, k: usize, step: &Step);
 }
 

@@ -17,10 +17,15 @@ use super::sets::ConvexSet;
 /// Relative KKT residuals (all ≥ 0; 0 at an exact solution).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Kkt {
+    /// No penetration: max of −rν,ᵢ, relative to ‖b‖.
     pub penetration: f64,
+    /// λν ≥ 0: max of −λν,ᵢ, relative to the force scale.
     pub normal_sign: f64,
+    /// Complementarity: max of |λν,ᵢ rν,ᵢ|, relative to the force scale and ‖b‖.
     pub complementarity: f64,
+    /// Friction bound: max distance of λ̄τ,ᵢ from Λτ,ᵢ, relative to the force scale.
     pub friction_bound: f64,
+    /// Friction law: max over the pairs of the smaller of the stick and slip residuals.
     pub friction_law: f64,
 }
 

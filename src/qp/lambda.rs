@@ -10,8 +10,11 @@ use super::sets::{ConvexSet, HalfLine, TangentSet};
 /// multipliers (TFETI's gluing and Dirichlet rows; none in the monolithic dual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {
+    /// Number of contact pairs m.
     pub m: usize,
+    /// Whether the pairs carry tangential multipliers λτ.
     pub friction: bool,
+    /// Number of unconstrained multipliers λ_E.
     pub free: usize,
 }
 
@@ -30,6 +33,7 @@ impl Layout {
         }
     }
 
+    /// Length of λ: contact multipliers and λ_E.
     pub fn dim(&self) -> usize {
         self.contact_dim() + self.free
     }
@@ -47,6 +51,7 @@ impl Layout {
 /// The constraint set of the dual contact problem.
 #[derive(Clone, Debug)]
 pub struct Lambda {
+    /// Layout of the multipliers.
     pub layout: Layout,
     /// One tangential set per pair (empty when frictionless).
     pub tangent: Vec<TangentSet>,

@@ -34,8 +34,11 @@ pub use params::{CgStop, Common, Method, MethodParams, Params, SigmaEstimate};
 
 /// The QP: A, b, Λ and, for the solvers that take one, a preconditioner of A.
 pub struct Qp<'a, A: Operator> {
+    /// The operator A.
     pub a: &'a A,
+    /// The right-hand side b.
     pub b: &'a [f64],
+    /// The feasible set Λ.
     pub set: &'a Lambda,
     /// M ≈ A⁻¹ on a block of the components (the methods of
     /// [`Method::takes_preconditioner`] use it).
@@ -46,14 +49,17 @@ pub struct Qp<'a, A: Operator> {
 }
 
 impl<'a, A: Operator> Qp<'a, A> {
+    /// The QP of A, b and Λ, without preconditioner or coarse space.
     pub fn new(a: &'a A, b: &'a [f64], set: &'a Lambda) -> Self {
         Qp { a, b, set, preconditioner: None, coarse: None }
     }
 
+    /// The same QP with the coarse space G (none: without).
     pub fn with_coarse(self, g: Option<&'a dyn Coarse>) -> Self {
         Qp { coarse: g, ..self }
     }
 
+    /// The same QP with the preconditioner M (none: without).
     pub fn with_preconditioner(self, m: Option<&'a dyn Preconditioner>) -> Self {
         Qp { preconditioner: m, ..self }
     }
@@ -143,6 +149,7 @@ pub struct Step {
     pub err: f64,
     /// Inner tolerance used (0 where there is none).
     pub tol: f64,
+    /// The objective q(λ) = ½λᵀAλ − λᵀb after the step.
     pub q: f64,
     /// Active normals (pairs in contact) at the start of the step (MPGP: free normals).
     pub normal_active: usize,
@@ -155,6 +162,7 @@ pub struct Step {
     /// A-products so far (without the power iterations).
     #[serde(rename = "nA")]
     pub n_a: usize,
+    /// Which kind of step it was.
     pub kind: StepKind,
     /// Seconds since the solve started (power iterations included).
     pub time: f64,
@@ -172,6 +180,7 @@ pub struct Info {
     /// A-products of the power iterations for σ_max.
     #[serde(rename = "nA_power")]
     pub n_a_power: usize,
+    /// Inner (CG / BiCGSTAB) iterations, summed.
     pub inner_iterations: usize,
     /// Applications of the preconditioner M (0 without one).
     pub preconditioner_applications: usize,
@@ -179,11 +188,14 @@ pub struct Info {
     /// factors).
     #[serde(default)]
     pub inexact_products: usize,
+    /// The estimate σ_est of A's largest eigenvalue σ_max.
     pub sigma_est: f64,
+    /// The step parameter ρ.
     pub rho: f64,
     /// Final ‖r̃_ρ(λ)‖/‖b‖ from a fresh product.
     #[serde(rename = "final_relative_reduced_gradient")]
     pub err: f64,
+    /// The final objective q(λ) = ½λᵀAλ − λᵀb.
     pub q: f64,
     /// Steps of the Coulomb fixed point (each a Tresca solve; 0: not Coulomb).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -223,18 +235,54 @@ impl Info {
 /// Why a solve failed.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum QpError {
+    /// No convergence to ε within the budgets.
     #[error("no convergence in {} outer iterations, {} A-products (‖r̃‖/‖b‖ = {:.3e}, ε = {eps:.1e})", info.iterations, info.n_a, info.err)]
-    NoConvergence { info: Box<Info>, eps: f64 },
+    NoConvergence {
+        /// The counters and history of the solve so far.
+        info: Box<Info>,
+        /// The tolerance ε it missed.
+        eps: f64,
+    },
+    /// Nonpositive curvature dᵀAd ≤ 0: A not positive definite on the free set.
     #[error("breakdown: dᵀAd = {p_ap:.3e} ≤ 0 at outer iteration {outer} (A not positive definite on the free set)")]
-    Breakdown { outer: usize, p_ap: f64 },
+    Breakdown {
+        /// Outer iteration of the breakdown.
+        outer: usize,
+        /// The curvature dᵀAd found ≤ 0.
+        p_ap: f64,
+    },
+    /// BiCGSTAB broke down before any progress.
     #[error("BiCGSTAB breakdown ({what}) at outer iteration {outer} before any progress")]
-    BicgstabBreakdown { outer: usize, what: &'static str },
+    BicgstabBreakdown {
+        /// Outer iteration of the breakdown.
+        outer: usize,
+        /// Which quantity of BiCGSTAB vanished.
+        what: &'static str,
+    },
+    /// The restricted coarse problem GΠGᵀ of the inner corrections is singular.
     #[error("the coarse problem GΠGᵀ is singular at outer iteration {outer}")]
-    SingularCoarse { outer: usize },
+    SingularCoarse {
+        /// Outer iteration where GΠGᵀ was factorized.
+        outer: usize,
+    },
+    /// A NaN or infinity appeared.
     #[error("non-finite value (NaN or infinity) in {what} at outer iteration {outer}")]
-    NotFinite { what: &'static str, outer: usize },
+    NotFinite {
+        /// The quantity that was not finite.
+        what: &'static str,
+        /// Outer iteration where it appeared.
+        outer: usize,
+    },
+    /// The Coulomb fixed point did not converge.
     #[error("the Coulomb fixed point did not converge in {iterations} steps (λν changed by {change:.3e} relative in the last, ε = {eps:.1e}); large μ can make the solution non-unique")]
-    FixedPoint { iterations: usize, change: f64, eps: f64 },
+    FixedPoint {
+        /// Steps of the fixed point made.
+        iterations: usize,
+        /// Relative change of λν in the last step.
+        change: f64,
+        /// The tolerance ε it missed.
+        eps: f64,
+    },
 }
 
 /// The result of a QP solve.
@@ -244,6 +292,7 @@ pub struct QpSolution {
     pub lambda: Vec<f64>,
     /// r(λ) = Aλ − b from a fresh product (= −(Bu − c)).
     pub gradient: Vec<f64>,
+    /// The solver's counters and history.
     pub info: Info,
 }
 

@@ -23,6 +23,7 @@ pub trait Space {
     /// The global index of component `i` of this rank's vectors.
     fn global_index(&self, i: usize) -> usize;
 
+    /// The global Euclidean norm ‖x‖.
     fn norm(&self, x: &[f64]) -> f64 {
         self.dot(x, x).sqrt()
     }
@@ -60,6 +61,7 @@ impl Space for Replicated {
 /// "Apply A": a symmetric positive (semi)definite operator on the dual vectors. Every call
 /// counts as one A-product (nA).
 pub trait Operator {
+    /// The space of the dual vectors.
     type Space: Space;
     /// The space of the dual vectors (the reductions).
     fn space(&self) -> &Self::Space;
@@ -92,7 +94,9 @@ pub trait Operator {
 /// (this rank's indices); the other components of y are left to the solver (a scaled identity
 /// there). Not an A-product. With a [`Coarse`] space the solver projects M's result (P M P).
 pub trait Preconditioner {
+    /// The components M acts on (this rank's indices).
     fn block(&self) -> Range<usize>;
+    /// y = M x on [`Preconditioner::block`].
     fn apply(&self, x: &[f64], y: &mut [f64]);
 }
 
@@ -120,9 +124,11 @@ pub trait CoarseProjector {
 pub struct ProductCounter(Cell<usize>);
 
 impl ProductCounter {
+    /// Counts one A-product.
     pub fn tick(&self) {
         self.0.set(self.0.get() + 1);
     }
+    /// A-products counted so far.
     pub fn get(&self) -> usize {
         self.0.get()
     }

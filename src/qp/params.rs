@@ -26,6 +26,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the order they are listed.
     pub const ALL: [Method; 6] = [Method::Gimssn, Method::Imssn, Method::Mssn, Method::SsnBicgstab, Method::Mpgp, Method::Tssn];
 
     /// The scene's (and the command line's) name.
@@ -40,6 +41,7 @@ impl Method {
         }
     }
 
+    /// The method of a scene's (or the command line's) name; none for an unknown name.
     pub fn from_name(s: &str) -> Option<Method> {
         Method::ALL.into_iter().find(|m| m.name() == s)
     }
@@ -138,7 +140,9 @@ impl Default for Common {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct Inexact {
+    /// rtol in `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`.
     pub rtol: f64,
+    /// cfact in `tol_{k+1} = min(rtol·err_k/err_0, cfact·tol_k)`: each inner tolerance at most cfact times the last.
     pub cfact: f64,
     /// What inner tolerances are relative to: "rhs" (‖b‖) or "initial-gradient" (the paper's).
     pub cg_stop: CgStop,
@@ -162,9 +166,13 @@ pub struct Exact {}
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct Ssn {
+    /// rtol of the adaptive tolerance ([`Inexact::rtol`]).
     pub rtol: f64,
+    /// cfact of the adaptive tolerance ([`Inexact::cfact`]).
     pub cfact: f64,
+    /// What inner tolerances are relative to ([`Inexact::cg_stop`]).
     pub cg_stop: CgStop,
+    /// Floor of the inner tolerances (as [`Inexact::inner_floor`]).
     pub inner_floor: f64,
     /// A fixed relative inner tolerance instead of the adaptive one (the paper's baseline needs
     /// about 1e-6).
@@ -183,9 +191,11 @@ impl Default for Ssn {
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct Tssn {
+    /// rtol in the forcing tolerance `rtol·(err_k/err_0)^θ`.
     pub rtol: f64,
     /// The forcing exponent θ (θ > 1: superlinear).
     pub forcing: f64,
+    /// Floor of the inner tolerances, relative to ε·‖b‖ ([`Inexact::inner_floor`]).
     pub inner_floor: f64,
     /// A sliding pair whose cᵢ exceeds this multiple of σ_max(A) is held at its tangent point
     /// for the step (σᵢ = 0, the paper's symmetrized MSSN for that pair): a large cᵢ is a stiff
@@ -227,11 +237,17 @@ impl Default for Mpgp {
 #[derive(Clone, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum MethodParams {
+    /// GIMSSN's settings.
     Gimssn(Inexact),
+    /// IMSSN's settings.
     Imssn(Inexact),
+    /// MSSN's (none).
     Mssn(Exact),
+    /// SSN-BiCGSTAB's settings.
     SsnBicgstab(Ssn),
+    /// MPGP's settings.
     Mpgp(Mpgp),
+    /// TSSN's settings.
     Tssn(Tssn),
 }
 
@@ -260,6 +276,7 @@ impl MethodParams {
         })
     }
 
+    /// The method these settings are for.
     pub fn method(&self) -> Method {
         match self {
             MethodParams::Gimssn(_) => Method::Gimssn,
@@ -275,7 +292,9 @@ impl MethodParams {
 /// Everything a solve reads: the common settings and the method's own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
+    /// The settings every method reads.
     pub common: Common,
+    /// The method and its own settings.
     pub method: MethodParams,
 }
 
@@ -302,6 +321,7 @@ impl Params {
         Params { common: self.common.clone(), method: MethodParams::new(method) }
     }
 
+    /// The method of the solve.
     pub fn method(&self) -> Method {
         self.method.method()
     }
@@ -310,7 +330,9 @@ impl Params {
 /// A setting out of its range: the key and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Invalid {
+    /// The setting's key.
     pub key: &'static str,
+    /// Why its value is refused.
     pub msg: String,
 }
 

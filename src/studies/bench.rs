@@ -18,12 +18,17 @@ use crate::scene::Projector;
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct Args {
+    /// The `tresca-feti` executable each case runs.
     pub exe: PathBuf,
+    /// The scene file.
     pub scene: PathBuf,
+    /// `--set KEY=VALUE` overrides passed to every case.
     pub sets: Vec<String>,
+    /// Mesh sizes N (`mesh.n`).
     pub sizes: Vec<usize>,
     /// Subdomains per body; 0 = monolithic.
     pub subdomains: Vec<usize>,
+    /// Projectors of the TFETI cases (`decomposition.projector`).
     pub projectors: Vec<Projector>,
     /// Rank counts; every case runs on each.
     pub ranks: Vec<usize>,
@@ -35,9 +40,11 @@ pub struct Args {
     pub mpirun_args: Vec<String>,
     /// Runs of each case; the fastest (least total) is kept, against other load on the machine.
     pub repeat: usize,
+    /// The solver tolerance ε (`solver.eps`).
     pub eps: f64,
     /// Memory bandwidth in GB/s for the floor.
     pub bandwidth: f64,
+    /// The CSV file the rows are written to (rewritten after each case).
     pub csv: Option<PathBuf>,
 }
 
@@ -53,33 +60,53 @@ pub struct Row {
     /// The case a scaling curve follows: `n16_s32_oblique`, `n16_mono`; for weak scaling N and S
     /// are those of 1 rank.
     pub case: String,
+    /// MPI ranks P.
     pub ranks: usize,
     /// Runs this row is the fastest of.
     pub runs: usize,
+    /// Mesh size N (`mesh.n`).
     pub n: usize,
+    /// Subdomains per body S (0: the monolithic dual).
     pub s: usize,
+    /// The projector (`oblique`, `orthogonal`; `-` on the monolithic dual).
     pub projector: String,
+    /// DOFs of the mesh.
     pub dofs: u64,
+    /// Length of the dual vector.
     pub multipliers: u64,
+    /// Size of the coarse problem (0 on the monolithic dual).
     pub coarse_dim: u64,
+    /// Outer iterations.
     pub outer: u64,
+    /// Inner iterations, summed.
     pub inner: u64,
+    /// A-products, the power iterations excluded.
     pub n_a: u64,
+    /// A-products of the power iterations.
     pub n_a_power: u64,
     /// Seconds, in the order of [`PHASES`].
     pub phases: [f64; 9],
+    /// Peak resident memory summed over the ranks, in GB.
     pub peak_gb_sum: f64,
+    /// The largest peak resident memory of a rank, in GB.
     pub peak_gb_max: f64,
+    /// Σ nnz(L) over the bodies or subdomains.
     pub nnz_l: f64,
+    /// Time of one A-product t_A = iterate / (nA + power iterations), in seconds.
     pub t_a: f64,
+    /// The memory-bound floor of t_A: 2·8·Σ nnz(L) / bandwidth, in seconds.
     pub floor: f64,
+    /// The largest KKT residual.
     pub kkt: f64,
+    /// Largest displacement magnitude ‖u‖.
     pub max_u: f64,
 }
 
+/// The CSV header, the columns of [`Row::csv`].
 pub const HEADER: &str = "mode,case,ranks,runs,N,S,projector,dofs,multipliers,coarse_dim,outer,inner,nA,nA_power,decompose_s,factorize_s,coarse_s,dual_s,iterate_s,recover_s,stress_s,gather_s,total_s,peak_GB_sum,peak_GB_max,nnz_L,tA_ms,floor_ms,tA_over_floor,kkt,max_u";
 
 impl Row {
+    /// The row as a CSV line (columns of [`HEADER`]; t_A and floor in ms).
     pub fn csv(&self) -> String {
         let phases: Vec<String> = self.phases.iter().map(|t| format!("{t:.4}")).collect();
         format!(
@@ -110,6 +137,7 @@ impl Row {
         )
     }
 
+    /// The row as a line of the Markdown table of [`table_header`] (times in s, t_A and floor in ms).
     pub fn table(&self) -> String {
         let p = &self.phases;
         let s = if self.s == 0 { "mono".to_string() } else { self.s.to_string() };
@@ -121,6 +149,7 @@ impl Row {
     }
 }
 
+/// Header of the Markdown table of [`Row::table`].
 pub fn table_header() -> String {
     "| ranks |   N |    S | projector  | dual dim | iter |    nA | decomp | factor | coarse |   dual | iterate | recover | stress | gather |   total | mem GB Σ | mem GB max | tA ms | floor ms | tA/floor |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|".into()
 }

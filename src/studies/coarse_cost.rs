@@ -15,7 +15,9 @@ use crate::feti::{constraints, eliminated, subdomain_loads};
 /// What `bench-coarse` is asked to do.
 #[derive(Clone, Debug)]
 pub struct Args {
+    /// The scene file.
     pub scene: std::path::PathBuf,
+    /// `--set KEY=VALUE` overrides.
     pub sets: Vec<String>,
     /// Subdomains per body, one row each.
     pub subdomains: Vec<usize>,
@@ -28,13 +30,19 @@ pub struct Args {
 /// One row: a decomposition's coarse problem and what a solve costs.
 #[derive(Clone, Debug)]
 pub struct Row {
+    /// Subdomains of the decomposition.
     pub subdomains: usize,
+    /// Pieces (clusters) of the decomposition.
     pub pieces: usize,
+    /// Size of the coarse problem: the rows of G.
     pub dim: usize,
+    /// Nonzeros of the lower triangle of C.
     pub nnz_c: usize,
+    /// Nonzeros of C's Cholesky factor.
     pub nnz_l: usize,
     /// G, C and its factorization.
     pub build_s: f64,
+    /// One solve with C's factor (the fastest of `repeat`), in seconds.
     pub factor_solve_s: f64,
     /// Per entry of `Args::pieces`: (setup s, one product s, bytes).
     pub rows: Vec<(f64, f64, usize)>,

@@ -51,11 +51,15 @@ pub struct PrimalSocp {
 pub struct SocpSolution {
     /// Free DOFs per body (as `DualProblem::recover` of the monolithic dual returns them).
     pub u: Vec<Vec<f64>>,
+    /// The multipliers λ on the dual problem's layout.
     pub lambda: Vec<f64>,
     /// r = c − Bu (= −(Aλ − b) at the dual solution's sign convention: the dual gradient).
     pub gradient: Vec<f64>,
+    /// Clarabel's iterations.
     pub iterations: u32,
+    /// Clarabel's final status.
     pub status: String,
+    /// Wall time of Clarabel's solve, in seconds.
     pub solve_s: f64,
 }
 

@@ -35,15 +35,20 @@ pub struct Args {
 /// How a scene ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Outcome {
+    /// The result passed every check.
     Converged,
+    /// The run stopped with this error.
     Stopped(String),
+    /// The run returned a result that failed a check: which, and by how much.
     Wrong(String),
 }
 
 /// One scene's line of the table.
 #[derive(Clone, Debug)]
 pub struct Row {
+    /// The scene's file stem.
     pub scene: String,
+    /// How it ended.
     pub outcome: Outcome,
     /// The report of a run that returned a result.
     pub report: Option<Report>,

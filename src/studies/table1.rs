@@ -34,7 +34,9 @@ pub const PAPER: [(usize, [usize; 2], [usize; 2]); 6] = [
 /// Parameter presets of a column.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
+    /// The method's own defaults, with the scene's common settings.
     Default,
+    /// The paper's settings (ρ, σ_est by 30 power iterations, the inner tolerances).
     Paper,
     /// TSSN with the FETI lumped preconditioner (TFETI only).
     Lumped,
@@ -45,7 +47,9 @@ pub enum Preset {
 /// One column of the table: a solver and its preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Column {
+    /// The solver.
     pub method: Method,
+    /// Its parameter preset.
     pub preset: Preset,
 }
 
@@ -75,6 +79,7 @@ impl Column {
         Ok(column)
     }
 
+    /// The column's name: `name`, or `name:preset` for a preset other than the default.
     pub fn label(&self) -> String {
         let name = self.method.name();
         match self.preset {
@@ -126,11 +131,17 @@ impl Column {
 /// What `table1` is asked to do.
 #[derive(Clone, Debug)]
 pub struct Args {
+    /// The scene file (with contact).
     pub scene: PathBuf,
+    /// `--set KEY=VALUE` overrides applied at every N.
     pub sets: Vec<String>,
+    /// Mesh sizes N (`mesh.n`), one row each.
     pub sizes: Vec<usize>,
+    /// The solvers' tolerance ε.
     pub eps: f64,
+    /// The columns, in order.
     pub columns: Vec<Column>,
+    /// The CSV file to write the table to.
     pub csv: Option<PathBuf>,
     /// Compute the reference u and report the error of each column against it.
     pub error: bool,
@@ -139,21 +150,32 @@ pub struct Args {
 /// One cell: a solve of one column at one N.
 #[derive(Clone, Debug)]
 pub struct Cell {
+    /// Mesh size N.
     pub n: usize,
+    /// The column solved.
     pub column: Column,
+    /// The solver's counters, or its error message.
     pub outcome: std::result::Result<qp::Info, String>,
+    /// Wall time of the solve (max over the ranks), in seconds.
     pub seconds: f64,
+    /// The largest KKT residual (NaN when the solve failed).
     pub kkt: f64,
+    /// max|u − u_ref| / max|u_ref| against the reference solve (with `error` only).
     pub u_error: Option<f64>,
 }
 
 /// One row: the problem at one N.
 #[derive(Clone, Debug)]
 pub struct Row {
+    /// Mesh size N.
     pub n: usize,
+    /// DOFs of the mesh.
     pub dofs: usize,
+    /// Contact pairs.
     pub pairs: usize,
+    /// Assembly and factorization time, in seconds.
     pub factorize_s: f64,
+    /// One cell per column.
     pub cells: Vec<Cell>,
 }
 

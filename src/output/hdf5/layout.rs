@@ -37,7 +37,10 @@ pub enum CellLayout {
     Uniform(CellKind),
     /// Cells of several types: `/mesh/mixed`, `len` values, per cell its XDMF type id
     /// ([`CellKind::xdmf_id`]) and its nodes.
-    Mixed { len: usize },
+    Mixed {
+        /// Length of `/mesh/mixed`: per cell, its type id and its nodes.
+        len: usize,
+    },
 }
 
 impl CellLayout {

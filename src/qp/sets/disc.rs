@@ -7,10 +7,12 @@ use super::{nonneg, ConvexSet};
 /// read as its absolute value, 0 gives the point set {0}).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disc {
+    /// The radius, the slip bound gᵢ.
     pub radius: f64,
 }
 
 impl Disc {
+    /// The disc of radius `radius`.
     pub const fn new(radius: f64) -> Self {
         Disc { radius }
     }

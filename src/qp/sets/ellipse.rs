@@ -40,7 +40,9 @@ const FAR: f64 = 1e300;
 /// segment, `a = b = 0` the point {0}.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ellipse {
+    /// Semi-axis along the first tangential direction, g₁ᵢ.
     pub a: f64,
+    /// Semi-axis along the second tangential direction, g₂ᵢ.
     pub b: f64,
 }
 
@@ -85,6 +87,7 @@ struct Outside {
 }
 
 impl Ellipse {
+    /// The ellipse of semi-axes `a` and `b`.
     pub const fn new(a: f64, b: f64) -> Self {
         Ellipse { a, b }
     }

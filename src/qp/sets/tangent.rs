@@ -6,7 +6,9 @@ use super::{BoundaryFrame, ConvexSet, Disc, Ellipse};
 /// (orthotropic). Static dispatch for the product set `Λ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TangentSet {
+    /// Isotropic Tresca: a disc.
     Disc(Disc),
+    /// Orthotropic Tresca: an ellipse.
     Ellipse(Ellipse),
 }
 
