@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use tresca_feti::comm::{Comm, MpiComm, SerialComm};
 use tresca_feti::pipeline;
 
@@ -23,6 +23,75 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// The scene of a study (`--scene`, the seed by default) and its overrides.
+#[derive(Args)]
+struct StudyScene {
+    /// The scene (TOML; a study sets its `mesh.n` per row where it sweeps N).
+    #[arg(long, default_value = "run/seed.toml")]
+    scene: PathBuf,
+    /// Override a scene value, e.g. `--set mesh.n=16` or `--set solver.eps=1e-8`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// A scene file given as the argument, and its overrides.
+#[derive(Args)]
+struct SceneFile {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Override a scene value, e.g. `--set mesh.n=16` or `--set solver.eps=1e-8`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// The memory a run may use on this host.
+#[derive(Args)]
+struct MaxMemory {
+    /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
+    /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
+    max_memory: Option<u64>,
+}
+
+impl MaxMemory {
+    /// Sets the limit the memory checks read.
+    fn apply(&self) {
+        if let Some(b) = self.max_memory {
+            pipeline::memory::set_limit(b);
+        }
+    }
+}
+
+/// A finite value above 0 (tolerances, factors, times, bandwidths).
+fn positive(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be finite and > 0, got {v}"))
+    }
+}
+
+/// A mesh size N: at least 2 nodes per edge.
+fn mesh_size(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if n >= 2 {
+        Ok(n)
+    } else {
+        Err(format!("every N must be at least 2, got {n}"))
+    }
+}
+
+/// A count of at least 1 (ranks, repeats).
+fn at_least_one(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if n >= 1 {
+        Ok(n)
+    } else {
+        Err("must be at least 1".into())
+    }
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Solve a scene and write its results: HDF5 + XDMF (ParaView) + JSON report.
@@ -32,11 +101,8 @@ enum Cmd {
     /// `out/<scene name>.h5`, beside it `.xdmf` and `.json`), or `--out`; a load path writes
     /// every step, which ParaView plays as an animation. Scene keys: docs/scene-reference.md.
     Solve {
-        /// Scene file (TOML).
-        scene: PathBuf,
-        /// Override a scene value, e.g. `--set mesh.n=16` or `--set solver.eps=1e-8`.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        scene: SceneFile,
         /// HDF5 output path (the .xdmf and .json go beside it).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -47,26 +113,21 @@ enum Cmd {
         /// (the scene key `output.export_fclib`; monolithic dual, isotropic Coulomb).
         #[arg(long = "export-fclib", value_name = "PATH")]
         export_fclib: Option<PathBuf>,
-        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
-        /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
-        #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
-        max_memory: Option<u64>,
+        #[command(flatten)]
+        memory: MaxMemory,
     },
     /// The paper's Table 1, reproduced on the seed scene.
     ///
     /// iter/nA of the dual solvers for growing N, with
     /// the paper's figures beside ours, wall times, KKT residuals and the error in u; CSV too.
     Table1 {
-        /// The scene (its `mesh.n` is set per row).
-        #[arg(long, default_value = "run/seed.toml")]
-        scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        scene: StudyScene,
         /// Mesh sizes N (nodes per edge of each block).
-        #[arg(long, value_delimiter = ',', default_value = "16,21,26,31,36,41")]
+        #[arg(long, value_parser = mesh_size, value_delimiter = ',', default_value = "16,21,26,31,36,41")]
         sizes: Vec<usize>,
         /// Stopping tolerance ε (relative: ‖r̃_ρ‖ ≤ ε‖b‖); the paper's counts hold at about 2e-4.
-        #[arg(long, default_value_t = 2e-4)]
+        #[arg(long, value_parser = positive, default_value_t = 2e-4)]
         eps: f64,
         /// Columns: solver[:paper], solvers gimssn, imssn, mssn, ssn-bicgstab, mpgp, tssn;
         /// `:paper` takes the paper's settings.
@@ -87,11 +148,9 @@ enum Cmd {
     /// phase, peak memory and the time of one A-product against its memory-bound floor. Run it
     /// without mpirun.
     BenchTfeti {
-        #[arg(long, default_value = "run/seed.toml")]
-        scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        #[arg(long, value_delimiter = ',', default_value = "16,26,41")]
+        #[command(flatten)]
+        scene: StudyScene,
+        #[arg(long, value_parser = mesh_size, value_delimiter = ',', default_value = "16,26,41")]
         sizes: Vec<usize>,
         /// Subdomains per body (0: the monolithic dual).
         #[arg(long, value_delimiter = ',', default_value = "0,1,4,8,16,32")]
@@ -100,7 +159,7 @@ enum Cmd {
         #[arg(long, value_delimiter = ',', default_value = "oblique")]
         projectors: Vec<String>,
         /// Rank counts: every case runs on each (e.g. 1,2,4,8,16).
-        #[arg(long, value_delimiter = ',', default_value = "2")]
+        #[arg(long, value_parser = at_least_one, value_delimiter = ',', default_value = "2")]
         ranks: Vec<usize>,
         /// Weak scaling: SIZES and SUBDOMAINS are those of 1 rank; P ranks solve
         /// N = round(N·P^{1/3}) with S·P subdomains per body (constant work per rank).
@@ -113,12 +172,12 @@ enum Cmd {
         #[arg(long, allow_hyphen_values = true, default_value = "")]
         mpirun_args: String,
         /// Runs of each case; the row is the fastest (least total time), against other load.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_parser = at_least_one, default_value_t = 1)]
         repeat: usize,
-        #[arg(long, default_value_t = 1e-6)]
+        #[arg(long, value_parser = positive, default_value_t = 1e-6)]
         eps: f64,
         /// Memory bandwidth (GB/s) for the A-product floor (about 15 on the 2-core development machine).
-        #[arg(long, default_value_t = 15.0)]
+        #[arg(long, value_parser = positive, default_value_t = 15.0)]
         bandwidth: f64,
         #[arg(long, default_value = "out/bench_tfeti.csv")]
         csv: PathBuf,
@@ -130,21 +189,19 @@ enum Cmd {
     /// tight reference, KKT residuals; a summary of the time to each target error; CSV. One rank,
     /// one thread (run it without mpirun); plots: `run/work-precision-plot CSV DIR`.
     WorkPrecision {
-        #[arg(long, default_value = "run/seed.toml")]
-        scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        #[arg(long, value_delimiter = ',', default_value = "8,16,24")]
+        #[command(flatten)]
+        scene: StudyScene,
+        #[arg(long, value_parser = mesh_size, value_delimiter = ',', default_value = "8,16,24")]
         sizes: Vec<usize>,
         /// Duals the dual solvers run on: 0 the monolithic dual, S ≥ 1 TFETI with S subdomains
         /// per body (oblique projector); e.g. 0,1,4,8.
         #[arg(long, value_delimiter = ',', default_value = "0")]
         subdomains: Vec<usize>,
         /// Tolerances ε (the dual solvers' ‖r̃_ρ‖ ≤ ε‖b‖; Clarabel's gap and feasibility tolerances).
-        #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10")]
+        #[arg(long, value_parser = positive, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10")]
         eps: Vec<f64>,
         /// Clarabel's tolerances (its time hardly depends on ε; each solve is long).
-        #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
+        #[arg(long, value_parser = positive, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
         clarabel_eps: Vec<f64>,
         /// Rows: gimssn, imssn, mssn, ssn-bicgstab, mpgp (optionally `:paper`), tssn (TFETI also
         /// `tssn:lumped`, `tssn:dirichlet`), clarabel.
@@ -152,13 +209,13 @@ enum Cmd {
               default_value = "gimssn,imssn,mssn,ssn-bicgstab,mpgp,tssn,clarabel")]
         solvers: Vec<tresca_feti::studies::work_precision::Solver>,
         /// ε of the reference solve (SSN-BiCGSTAB).
-        #[arg(long, default_value_t = 1e-12)]
+        #[arg(long, value_parser = positive, default_value_t = 1e-12)]
         reference_eps: f64,
         /// Errors in u the summary gives the time to.
-        #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8")]
+        #[arg(long, value_parser = positive, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8")]
         targets: Vec<f64>,
         /// A dual solve slower than this (seconds) ends its solver's sweep at that N.
-        #[arg(long, default_value_t = 120.0)]
+        #[arg(long, value_parser = positive, default_value_t = 120.0)]
         max_seconds: f64,
         /// A-products a dual solve may use.
         #[arg(long, default_value_t = 50_000)]
@@ -182,7 +239,7 @@ enum Cmd {
         /// Folder for the results (<scene>.h5/.xdmf/.json) and stability.csv.
         #[arg(long, default_value = "out/stability")]
         out: PathBuf,
-        #[arg(long, default_value_t = 100.0)]
+        #[arg(long, value_parser = positive, default_value_t = 100.0)]
         kkt_factor: f64,
     },
     /// The coarse problem's cost as the subdomain count grows.
@@ -192,10 +249,8 @@ enum Cmd {
     /// with `coarse_solve = "factor"`) against one rank's explicit inverse rows (`decomposition.coarse_solve =
     /// "explicit"`) for each pieces-per-rank; one process. The cost model's inputs.
     BenchCoarse {
-        #[arg(long, default_value = "run/seed.toml")]
-        scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        scene: StudyScene,
         /// Subdomains per body, one row each.
         #[arg(long, value_delimiter = ',', default_value = "64,256,1024,2048")]
         subdomains: Vec<usize>,
@@ -203,7 +258,7 @@ enum Cmd {
         #[arg(long, value_delimiter = ',', default_value = "1,16")]
         pieces: Vec<usize>,
         /// Solves timed; the fastest counts.
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, value_parser = at_least_one, default_value_t = 20)]
         repeat: usize,
     },
     /// Validate a scene without solving it.
@@ -211,28 +266,19 @@ enum Cmd {
     /// Prints the resolved scene (every default filled in), the mesh, faces, DOF counts, applied load, contact pairs, the decomposition chosen by
     /// cost and the memory estimate.
     Check {
-        scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        scene: SceneFile,
         /// Price the automatic decomposition for a run on this many ranks (default: the ranks
         /// `check` runs on).
-        #[arg(long)]
+        #[arg(long, value_parser = at_least_one)]
         ranks: Option<usize>,
-        /// Memory the run may use on this host (all its ranks there together), e.g. `8G`,
-        /// `500M` or bytes, in place of MemAvailable (/proc/meminfo); also TRESCA_FETI_MAX_MEMORY.
-        #[arg(long = "max-memory", value_name = "SIZE", value_parser = pipeline::memory::parse_size)]
-        max_memory: Option<u64>,
+        #[command(flatten)]
+        memory: MaxMemory,
     },
 }
 
 fn table1<C: Comm>(comm: &C, args: &tresca_feti::studies::table1::Args) -> tresca_feti::Result<()> {
     use tresca_feti::studies::table1;
-    if !(args.eps > 0.0 && args.eps.is_finite()) {
-        return Err(tresca_feti::Error::scene("--eps", format!("must be finite and > 0, got {}", args.eps)));
-    }
-    if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
-        return Err(tresca_feti::Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
-    }
     table1::check_columns(&args.columns)?;
     // a CSV that cannot be written fails now, not after the whole run
     let csv_dir = comm.agree(match args.csv.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
@@ -267,9 +313,6 @@ fn table1<C: Comm>(comm: &C, args: &tresca_feti::studies::table1::Args) -> tresc
 
 fn stability<C: Comm>(comm: &C, args: &tresca_feti::studies::stability::Args) -> tresca_feti::Result<()> {
     use tresca_feti::studies::stability::{self, Outcome};
-    if !(args.kkt_factor > 0.0 && args.kkt_factor.is_finite()) {
-        return Err(tresca_feti::Error::scene("--kkt-factor", format!("must be finite and > 0, got {}", args.kkt_factor)));
-    }
     let root = comm.is_root();
     if root {
         println!("stability suite: {} ({} rank(s)); converged = ε met and KKT ≤ {}·ε", args.dir.display(), comm.size(), args.kkt_factor);
@@ -296,21 +339,6 @@ fn stability<C: Comm>(comm: &C, args: &tresca_feti::studies::stability::Args) ->
 fn work_precision<C: Comm>(comm: &C, args: &tresca_feti::studies::work_precision::Args) -> tresca_feti::Result<()> {
     use tresca_feti::studies::work_precision as wp;
     use tresca_feti::Error;
-    let positive = |key: &str, v: f64| if v > 0.0 && v.is_finite() { Ok(()) } else { Err(Error::scene(key, format!("must be finite and > 0, got {v}"))) };
-    for &e in &args.eps {
-        positive("--eps", e)?;
-    }
-    for &e in &args.clarabel_eps {
-        positive("--clarabel-eps", e)?;
-    }
-    for &t in &args.targets {
-        positive("--targets", t)?;
-    }
-    positive("--reference-eps", args.reference_eps)?;
-    positive("--max-seconds", args.max_seconds)?;
-    if let Some(&n) = args.sizes.iter().find(|&&n| n < 2) {
-        return Err(Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
-    }
     if let Some(d) = args.csv.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(d).map_err(|e| Error::io(d.display().to_string(), e))?;
     }
@@ -378,26 +406,11 @@ fn bench_tfeti(
             other => Err(Error::scene("--projectors", format!("unknown projector \"{other}\"; known: oblique, orthogonal"))),
         })
         .collect::<tresca_feti::Result<Vec<_>>>()?;
-    if !(eps > 0.0 && eps.is_finite()) {
-        return Err(Error::scene("--eps", format!("must be finite and > 0, got {eps}")));
-    }
-    if repeat == 0 {
-        return Err(Error::scene("--repeat", "must be at least 1"));
-    }
     if ranks.is_empty() {
         return Err(Error::scene("--ranks", "give at least one rank count"));
     }
-    if let Some(&p) = ranks.iter().find(|&&p| p == 0) {
-        return Err(Error::scene("--ranks", format!("every rank count must be at least 1, got {p}")));
-    }
     if sizes.is_empty() || subdomains.is_empty() {
         return Err(Error::scene(if sizes.is_empty() { "--sizes" } else { "--subdomains" }, "give at least one value"));
-    }
-    if let Some(&n) = sizes.iter().find(|&&n| n < 2) {
-        return Err(Error::scene("--sizes", format!("every N must be at least 2, got {n}")));
-    }
-    if !(bandwidth > 0.0 && bandwidth.is_finite()) {
-        return Err(Error::scene("--bandwidth", format!("must be finite and > 0, got {bandwidth}")));
     }
     if mpirun.trim().is_empty() {
         return Err(Error::scene("--mpirun", "must name a launcher (mpirun, srun or a path)"));
@@ -446,7 +459,9 @@ fn main() -> ExitCode {
             return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
-    if let Cmd::BenchTfeti { scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } = cli.cmd {
+    if let Cmd::BenchTfeti { scene: StudyScene { scene, set }, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } =
+        cli.cmd
+    {
         // a driver of mpirun runs, not an MPI program itself
         return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv) {
             Ok(()) => ExitCode::SUCCESS,
@@ -519,10 +534,8 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
         faer::set_global_parallelism(faer::Par::Seq);
     }
     let result = match cmd {
-        Cmd::Solve { scene, mut set, out, quiet, export_fclib, max_memory } => {
-            if let Some(b) = max_memory {
-                pipeline::memory::set_limit(b);
-            }
+        Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, memory } => {
+            memory.apply();
             if let Some(p) = export_fclib {
                 set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
             }
@@ -533,11 +546,23 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
                 print_summary(&s);
             }
         }),
-        Cmd::Table1 { scene, set, sizes, eps, solvers, csv, no_error } => {
+        Cmd::Table1 { scene: StudyScene { scene, set }, sizes, eps, solvers, csv, no_error } => {
             let args = tresca_feti::studies::table1::Args { scene, sets: set, sizes, eps, columns: solvers, csv: Some(csv), error: !no_error };
             table1(comm, &args)
         }
-        Cmd::WorkPrecision { scene, set, sizes, subdomains, eps, clarabel_eps, solvers, reference_eps, targets, max_seconds, max_products, csv } => {
+        Cmd::WorkPrecision {
+            scene: StudyScene { scene, set },
+            sizes,
+            subdomains,
+            eps,
+            clarabel_eps,
+            solvers,
+            reference_eps,
+            targets,
+            max_seconds,
+            max_products,
+            csv,
+        } => {
             let args = tresca_feti::studies::work_precision::Args {
                 scene,
                 sets: set,
@@ -556,20 +581,14 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
         }
         Cmd::Stability { dir, set, out, kkt_factor } => stability(comm, &tresca_feti::studies::stability::Args { dir, sets: set, out, kkt_factor }),
         Cmd::BenchTfeti { .. } => unreachable!("handled before MPI starts"),
-        Cmd::BenchCoarse { scene, set, subdomains, pieces, repeat } => {
+        Cmd::BenchCoarse { scene: StudyScene { scene, set }, subdomains, pieces, repeat } => {
             let args = tresca_feti::studies::coarse_cost::Args { scene, sets: set, subdomains, pieces, repeat };
             bench_coarse(comm, &args)
         }
-        Cmd::Check { scene, set, ranks, max_memory } => {
-            if let Some(b) = max_memory {
-                pipeline::memory::set_limit(b);
-            }
+        Cmd::Check { scene: SceneFile { scene, set }, ranks, memory } => {
+            memory.apply();
             // validation is cheap and deterministic: every rank does it, rank 0 prints
-            let r = match ranks {
-                Some(0) => Err(tresca_feti::Error::scene("--ranks", "must be at least 1")),
-                _ => comm.agree(pipeline::run_check(comm, &scene, &set, ranks.unwrap_or(comm.size()))),
-            };
-            r.map(|text| {
+            comm.agree(pipeline::run_check(comm, &scene, &set, ranks.unwrap_or(comm.size()))).map(|text| {
                 if comm.is_root() {
                     println!("{text}");
                 }

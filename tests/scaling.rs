@@ -102,11 +102,11 @@ fn bad_arguments_give_one_line() {
     let csv = tmpdir("bad").join("b.csv");
     let csv = csv.to_str().unwrap();
     for (args, code, expect) in [
-        (&["--ranks", "0"][..], 1, "error: --ranks: every rank count must be at least 1, got 0"),
-        (&["--ranks", "1,0,2"], 1, "error: --ranks"),
+        (&["--ranks", "0"][..], 2, "error: invalid value '0' for '--ranks <RANKS>': must be at least 1"),
+        (&["--ranks", "1,0,2"], 2, "error: invalid value '0' for '--ranks"),
         (&["--ranks", "1,two"], 2, "error: invalid value 'two' for '--ranks"),
-        (&["--sizes", "1"], 1, "error: --sizes"),
-        (&["--repeat", "0"], 1, "error: --repeat"),
+        (&["--sizes", "1"], 2, "error: invalid value '1' for '--sizes <SIZES>': every N must be at least 2"),
+        (&["--repeat", "0"], 2, "error: invalid value '0' for '--repeat"),
         (&["--mpirun", "/nonexistent/mpirun", "--sizes", "3", "--subdomains", "1", "--ranks", "1"], 1, "error: --mpirun /nonexistent/mpirun"),
         (&["--mpirun-args", "--no-such-mpirun-option", "--sizes", "3", "--subdomains", "1", "--ranks", "1"], 1, "error: case n3_s1_oblique_p1"),
     ] {
