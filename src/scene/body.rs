@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+/// `[mesh]`: the defaults of every box body that gives none of its own.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSettings {
@@ -21,13 +22,17 @@ pub struct MeshSettings {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BoxCells {
+    /// `hex8`: 8-node hexahedra (the default).
     #[default]
     Hex8,
+    /// `tet4`: each hexahedron cut into six 4-node tetrahedra.
     Tet4,
+    /// `tet10`: each hexahedron cut into six 10-node tetrahedra.
     Tet10,
 }
 
 impl BoxCells {
+    /// Whether these are the default `hex8` cells (not written to the resolved scene then).
     pub fn is_hex8(&self) -> bool {
         *self == BoxCells::Hex8
     }
@@ -43,9 +48,11 @@ impl Default for MeshSettings {
     }
 }
 
+/// One `[[material]]`: an isotropic linear-elastic material.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
+    /// The name bodies refer to (unique).
     pub name: String,
     /// Young's modulus (MPa).
     #[serde(rename = "E")]
@@ -54,22 +61,30 @@ pub struct Material {
     pub nu: f64,
 }
 
+/// One `[[body]]`: an elastic body, either a structured box or one physical volume of a Gmsh
+/// file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
+    /// The body's name (unique, non-empty, no `.`): its faces are `name.face`.
     pub name: String,
+    /// Its material: a `material.name`.
     pub material: String,
     /// A structured box; exactly one of `box` and `gmsh`.
     #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
     pub boxed: Option<BoxDef>,
+    /// A body read from a Gmsh 4.1 `.msh`; exactly one of `box` and `gmsh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gmsh: Option<GmshDef>,
 }
 
+/// `body.box`: a structured box mesh (faces `xmin` … `zmax`).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoxDef {
+    /// Lower corner (m).
     pub min: [f64; 3],
+    /// Upper corner (m), > `min` in every direction.
     pub max: [f64; 3],
     /// Nodes per direction; defaults to `[mesh.n; 3]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -92,21 +107,30 @@ pub struct BoxDef {
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Side {
+    /// `zmin`: the box's lower z side.
     Zmin,
+    /// `zmax`: the box's upper z side.
     Zmax,
 }
 
+/// `body.box.cylinder`: bends a side of the box into a cylinder (axis along y).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cylinder {
+    /// The side that is bent.
     pub side: Side,
+    /// Cylinder radius (m), at least half the box's x-width; the bulge must stay below the
+    /// box's height.
     pub radius: f64,
 }
 
+/// `body.box.sphere`: bends a side of the box into a spherical cap (Hertz models).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
+    /// The side that is bent.
     pub side: Side,
+    /// Sphere radius (m), greater than the distance from the pole to the side's farthest corner.
     pub radius: f64,
     /// The pole's (x, y); defaults to the side's centre. A quarter model puts it at a corner.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -152,6 +176,8 @@ impl BoxDef {
     }
 }
 
+/// `body.gmsh`: a body read from a Gmsh 4.1 `.msh` (ASCII or binary; hex8, tet4, tet10 and
+/// wedge6 cells, mixed or not).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct GmshDef {

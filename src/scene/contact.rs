@@ -5,12 +5,14 @@ use serde::{Deserialize, Serialize};
 
 use super::yes;
 
+/// `[contact]`: contact between bodies.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSettings {
     /// `false` drops every contact pair: the bodies are solved as independent elastic problems.
     #[serde(default = "yes")]
     pub enabled: bool,
+    /// The `[[contact.pair]]` entries: one slave face against one master face each.
     #[serde(default)]
     pub pair: Vec<ContactPair>,
 }
@@ -21,18 +23,21 @@ impl Default for ContactSettings {
     }
 }
 
+/// One `[[contact.pair]]`: a slave face against a master face, with its friction law.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactPair {
     /// The slave face (its nodes carry the multipliers); with `master`, or alone with `faces`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub slave: String,
+    /// The master face (another body's); with `slave`, or alone with `faces`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub master: String,
     /// The two faces, where the slave is left to the rule of [`ContactPair::resolve`] (or named
     /// by `slave` or `master` alone).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub faces: Option<[String; 2]>,
+    /// The friction law; default frictionless.
     #[serde(default)]
     pub friction: Friction,
     /// Matching tolerance of slave and master node coordinates (m); default 1e-8 × model size.
@@ -62,13 +67,18 @@ pub struct ContactPair {
 /// `contact.pair.interference`: none, as meshed (`true`), or a stated radial interference δ.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Fit {
+    /// `false` (the default): no press fit.
     #[default]
     None,
+    /// `true`: the bodies overlap as meshed by design and the solution removes the overlap.
     Meshed,
+    /// A length δ (m): every slave node of the pair starts δ inside the master, whatever the
+    /// meshed gap.
     Stated(f64),
 }
 
 impl Fit {
+    /// Whether there is no press fit (`interference = false`).
     pub fn is_none(&self) -> bool {
         *self == Fit::None
     }
@@ -138,7 +148,9 @@ pub fn default_search_distance(diagonal: f64) -> f64 {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Tie {
+    /// The slave face (`body.face`).
     pub slave: String,
+    /// The master face (`body.face`, not the slave).
     pub master: String,
     /// As for contact pairs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -149,22 +161,37 @@ pub struct Tie {
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Friction {
+    /// `none`: frictionless (the default).
     #[default]
     None,
     /// Isotropic Tresca with slip bound g (MPa).
-    Tresca { g: f64 },
+    Tresca {
+        /// Tresca slip bound (MPa), ≥ 0.
+        g: f64,
+    },
     /// Orthotropic Tresca: slip bounds g1 along `direction` (projected onto the contact plane),
     /// g2 across it.
-    Orthotropic { g1: f64, g2: f64, direction: [f64; 3] },
+    Orthotropic {
+        /// Slip bound along `direction` (MPa), ≥ 0.
+        g1: f64,
+        /// Slip bound across `direction` (MPa), ≥ 0.
+        g2: f64,
+        /// Projected onto the contact plane: the first tangent (non-zero).
+        direction: [f64; 3],
+    },
     /// Coulomb: ‖λτ,ᵢ‖ ≤ μ λν,ᵢ (`mu`), or orthotropic with `mu1` along `direction` and `mu2`
     /// across it; solved as a fixed point on the slip bounds (`qp::coulomb`).
     Coulomb {
+        /// Isotropic Coulomb coefficient μ, ≥ 0; either `mu`, or `mu1`, `mu2` and `direction`.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mu: Option<f64>,
+        /// Orthotropic Coulomb coefficient along `direction`, ≥ 0.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mu1: Option<f64>,
+        /// Orthotropic Coulomb coefficient across `direction`, ≥ 0.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mu2: Option<f64>,
+        /// With `mu1`: projected onto the contact plane, the first tangent (non-zero).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         direction: Option<[f64; 3]>,
     },

@@ -94,8 +94,10 @@ impl DecompositionSettings {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Gluing {
+    /// `orthonormal` (the default): an orthonormal basis of gluing rows per node.
     #[default]
     Orthonormal,
+    /// `chain`: ±1 chains.
     Chain,
 }
 
@@ -115,8 +117,11 @@ pub enum DirichletMode {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Projector {
+    /// `oblique` (the default): Gλ = e kept by the oblique projector P̃.
     #[default]
     Oblique,
+    /// `orthogonal`: SMALSE-M's augmented Lagrangian with the orthogonal projector (taken
+    /// automatically for a body held by contact alone).
     Orthogonal,
 }
 
@@ -144,9 +149,11 @@ pub enum OrderingKind {
     Amd,
 }
 
+/// `[factorization]`: the sparse Cholesky factorizations.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Factorization {
+    /// Fill-reducing ordering; default `metis`.
     #[serde(default)]
     pub ordering: OrderingKind,
 }

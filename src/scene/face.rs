@@ -10,17 +10,25 @@ use crate::error::{Error, Result};
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FaceDef {
+    /// The new face's name (non-empty, no `.`).
     pub name: String,
+    /// The body.
     pub body: String,
+    /// The face of that body cut from.
     pub from: String,
+    /// Lower corner of the selecting box (m); with `max`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min: Option<[f64; 3]>,
+    /// Upper corner of the selecting box (m); with `min`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max: Option<[f64; 3]>,
+    /// A ball region.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sphere: Option<SphereRegion>,
+    /// An infinite cylinder region.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cylinder: Option<CylinderRegion>,
+    /// A half-space region.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_space: Option<HalfSpaceRegion>,
 }
@@ -29,7 +37,9 @@ pub struct FaceDef {
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SphereRegion {
+    /// The ball's centre (m).
     pub centre: [f64; 3],
+    /// Its radius (m), > 0.
     pub radius: f64,
 }
 
@@ -37,8 +47,11 @@ pub struct SphereRegion {
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CylinderRegion {
+    /// A point of the axis (m).
     pub point: [f64; 3],
+    /// The axis direction (nonzero; its length does not matter).
     pub axis: [f64; 3],
+    /// Its radius (m), > 0.
     pub radius: f64,
 }
 
@@ -47,16 +60,22 @@ pub struct CylinderRegion {
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct HalfSpaceRegion {
+    /// A point of the plane (m).
     pub point: [f64; 3],
+    /// The plane's normal (nonzero), pointing to the side kept.
     pub normal: [f64; 3],
 }
 
 /// The region a `[[face]]` selects from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Region {
+    /// The box between its lower and upper corners (`face.min`, `face.max`).
     Box([f64; 3], [f64; 3]),
+    /// A ball (`face.sphere`).
     Sphere(SphereRegion),
+    /// An infinite cylinder (`face.cylinder`).
     Cylinder(CylinderRegion),
+    /// A half-space (`face.half_space`).
     HalfSpace(HalfSpaceRegion),
 }
 

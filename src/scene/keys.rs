@@ -19,6 +19,7 @@ use crate::qp;
 /// One key: its dotted path (array-of-tables entries without an index: `body.box.min`).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Key {
+    /// The dotted path (array-of-tables entries without an index: `body.box.min`).
     pub path: String,
     /// The names an enumerated value takes (empty: not an enumeration).
     pub values: Vec<String>,

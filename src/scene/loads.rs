@@ -3,17 +3,23 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A displacement component a `[[dirichlet]]` entry holds (`dirichlet.components`).
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Component {
+    /// `x`.
     X,
+    /// `y`.
     Y,
+    /// `z`.
     Z,
 }
 
+/// One `[[dirichlet]]`: a prescribed displacement on a face.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dirichlet {
+    /// The face (`body.face`).
     pub face: String,
     /// Prescribed displacement (default 0).
     #[serde(default)]
@@ -30,9 +36,11 @@ fn all_components() -> Vec<Component> {
     vec![Component::X, Component::Y, Component::Z]
 }
 
+/// One `[[traction]]`: a constant traction or pressure on a face (consistent nodal loads).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Traction {
+    /// The face (`body.face`).
     pub face: String,
     /// Surface traction (MPa), constant over the face, in global axes; or
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -50,6 +58,8 @@ pub struct Traction {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LoadSettings {
+    /// K, the number of load states solved in order (1 … [`MAX_LOAD_STEPS`]; > 1 needs
+    /// contact); default 1.
     #[serde(default = "one")]
     pub steps: usize,
 }

@@ -60,27 +60,34 @@ fn one() -> usize {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// Free text, printed in the summary and stored in the report; default empty.
     #[serde(default)]
     pub title: String,
     /// The units the scene's numbers are in, for printing and the report only.
     #[serde(default, skip_serializing_if = "Units::is_empty")]
     pub units: Units,
+    /// `[mesh]`: the defaults of the box bodies.
     #[serde(default)]
     pub mesh: MeshSettings,
+    /// The `[[material]]` entries (at least one).
     #[serde(rename = "material")]
     pub materials: Vec<Material>,
+    /// The `[[body]]` entries (at least one).
     #[serde(rename = "body")]
     pub bodies: Vec<Body>,
     /// Extra named faces, cut out of existing ones.
     #[serde(default, rename = "face", skip_serializing_if = "Vec::is_empty")]
     pub faces: Vec<FaceDef>,
+    /// The `[[dirichlet]]` entries: prescribed displacements.
     #[serde(default)]
     pub dirichlet: Vec<Dirichlet>,
+    /// The `[[traction]]` entries: surface loads.
     #[serde(default)]
     pub traction: Vec<Traction>,
     /// The quasi-static load path: `[load] steps = K`.
     #[serde(default)]
     pub load: LoadSettings,
+    /// `[contact]` and its pairs.
     #[serde(default)]
     pub contact: ContactSettings,
     /// Bonded interfaces between bodies (mesh tying by the mortar operator).
@@ -89,10 +96,13 @@ pub struct Scene {
     /// Read by [`SolverSettings::from_table`] (each key checked against the method).
     #[serde(default, skip_deserializing)]
     pub solver: SolverSettings,
+    /// `[decomposition]`: the monolithic dual or TFETI, and how each body is split.
     #[serde(default)]
     pub decomposition: DecompositionSettings,
+    /// `[factorization]`: the sparse Cholesky factorizations.
     #[serde(default)]
     pub factorization: Factorization,
+    /// `[output]`: what is written.
     #[serde(default)]
     pub output: OutputSettings,
 }

@@ -22,6 +22,7 @@ pub const FIELDS: [&str; 12] = [
     "slip",
 ];
 
+/// `[output]`: what is written.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSettings {
@@ -29,10 +30,13 @@ pub struct OutputSettings {
     /// `out/<scene file stem>.h5`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathBuf>,
+    /// The fields written, a subset of [`FIELDS`]; default all.
     #[serde(default = "default_fields")]
     pub fields: Vec<String>,
+    /// Write the XDMF sidecar ParaView opens; default true.
     #[serde(default = "yes")]
     pub xdmf: bool,
+    /// Write the JSON report; default true.
     #[serde(default = "yes")]
     pub report: bool,
     /// After writing, every rank reads the HDF5 file back and checks that it holds the fields

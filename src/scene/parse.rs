@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 /// A scene as loaded: the values plus where it came from.
 #[derive(Clone, Debug)]
 pub struct LoadedScene {
+    /// The scene's values ([`load`] resolves and validates them).
     pub scene: Scene,
     /// The scene file.
     pub path: PathBuf,

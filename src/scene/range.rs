@@ -11,7 +11,9 @@
 //! With E = 1e200 instead, E² already overflows and the solver stops at once with u = 0. The
 //! range is still 30 orders of magnitude either side of SI or mm/MPa units.
 
+/// The smallest magnitude allowed (other than 0 where 0 means "none").
 pub const MIN: f64 = 1e-30;
+/// The largest magnitude allowed.
 pub const MAX: f64 = 1e30;
 /// The smallest 1 − 2ν (and 1 + ν) allowed: λ = Eν/((1+ν)(1−2ν)) is then at most ~1e8·E
 /// (≤ 1e38), and the stiffness's condition number grows by at most ~1e8 over a compressible

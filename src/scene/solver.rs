@@ -16,6 +16,7 @@ pub enum Preconditioner {
     /// Dirichlet for the plain CG of a TFETI scene without contact, none elsewhere.
     #[default]
     Auto,
+    /// No preconditioner.
     None,
     /// K_s's block on the DOFs the rows touch.
     Lumped,
@@ -26,6 +27,7 @@ pub enum Preconditioner {
 }
 
 impl Preconditioner {
+    /// The name `solver.preconditioner` takes (`"dirichlet-dense"`, …).
     pub fn name(self) -> &'static str {
         match self {
             Preconditioner::Auto => "auto",
@@ -50,6 +52,7 @@ pub enum Precision {
 }
 
 impl Precision {
+    /// The name `solver.precision` takes (`"mixed"`, `"double"`).
     pub fn name(self) -> &'static str {
         match self {
             Precision::Mixed => "mixed",
@@ -64,8 +67,11 @@ impl Precision {
 /// structs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolverSettings {
+    /// The method and its parameters: the settings every method reads and the method's own.
     pub params: qp::Params,
+    /// `solver.preconditioner`: the FETI preconditioner (TFETI only); default `auto`.
     pub preconditioner: Preconditioner,
+    /// `solver.precision`: how a contact solve's A-products use the factors; default `mixed`.
     pub precision: Precision,
     /// `method` absent (or `"auto"`): the method is chosen for the dual the scene is solved on
     /// (`pipeline::resolve_method`); `params` holds the default method's defaults until then.

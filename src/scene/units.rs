@@ -7,13 +7,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Units {
+    /// The length unit (1–16 characters), printed after lengths (displacements).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub length: Option<String>,
+    /// The force unit (1–16 characters), printed after forces; with `length`, stresses print in
+    /// force / length².
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub force: Option<String>,
 }
 
 impl Units {
+    /// Whether neither unit is named (no `units` table).
     pub fn is_empty(&self) -> bool {
         self.length.is_none() && self.force.is_none()
     }
