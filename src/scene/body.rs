@@ -183,7 +183,7 @@ impl BoxDef {
 pub struct GmshDef {
     /// Path of a Gmsh 4.1 `.msh`, relative to the scene file.
     pub file: PathBuf,
-    /// Physical volume to take (default: every hexahedron of the file).
+    /// Physical volume to take (default: every volume element of the file).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<String>,
     /// Shift applied to all node coordinates.
