@@ -17,12 +17,14 @@ fn hex_face(hexes: &[Cell], e: usize, f: usize) -> Facet {
 pub const SIDES: [(&str, usize); 6] = [("xmin", 5), ("xmax", 3), ("ymin", 2), ("ymax", 4), ("zmin", 0), ("zmax", 1)];
 
 /// A box `[min, max]` with `n = [nx, ny, nz]` nodes per direction (each ≥ 2); panics where
-/// memory runs out ([`try_generate`] returns the error).
+/// memory runs out ([`try_generate`] returns the error). For the unit tests.
+#[cfg(test)]
 pub fn generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> BodyGeometry {
     try_generate(min, max, n).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// [`generate`], with an allocation that fails (nodes, hexahedra, side quads) as an error.
+/// A box `[min, max]` with `n = [nx, ny, nz]` nodes per direction (each ≥ 2), with an allocation
+/// that fails (nodes, hexahedra, side quads) as an error.
 pub fn try_generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> Result<BodyGeometry> {
     let [nx, ny, nz] = n;
     assert!(nx >= 2 && ny >= 2 && nz >= 2, "box needs at least 2 nodes per direction");

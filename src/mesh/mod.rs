@@ -88,12 +88,13 @@ pub struct Mesh {
 
 impl Mesh {
     /// Appends a body, shifting its local numbering to the global one; panics where memory runs
-    /// out ([`Mesh::try_push_body`] returns the error).
+    /// out ([`Mesh::try_push_body`] returns the error). For the unit tests.
+    #[cfg(test)]
     pub fn push_body(&mut self, name: &str, geom: BodyGeometry) {
         self.try_push_body(name, geom).unwrap_or_else(|e| panic!("{e}"))
     }
 
-    /// [`Mesh::push_body`], with a failed allocation of the mesh's node or element arrays as
+    /// Appends a body, shifting its local numbering to the global one, with a failed allocation of the mesh's node or element arrays as
     /// an error.
     pub fn try_push_body(&mut self, name: &str, geom: BodyGeometry) -> Result<()> {
         try_grow(&mut self.nodes, "mesh nodes", geom.nodes.len())?;
