@@ -445,7 +445,6 @@ fn traction_loads(scene: &Scene, mesh: &Mesh, faces: &FaceIndex, path: &mut Load
 }
 
 /// The (slave, master) faces of every contact pair, and why the slave of each is the one it is.
-#[allow(clippy::type_complexity)]
 fn contact_faces(scene: &Scene, mesh: &Mesh, faces: &FaceIndex, lame: &[Lame]) -> Result<(Vec<(usize, usize)>, Vec<(usize, String)>)> {
     let mut contact = Vec::new();
     let mut slave_choice = Vec::new();

@@ -549,7 +549,6 @@ impl<'m> Elements<'m> {
 
 /// The coordinates of every node in file order, and the file index of every tag (each tag
 /// once, every coordinate finite).
-#[allow(clippy::type_complexity)]
 fn node_index(msh: &Msh, tags: &[u64]) -> Result<(Vec<[f64; 3]>, HashMap<u64, usize>), String> {
     let coords: Vec<[f64; 3]> = msh.data.nodes.iter().flat_map(|n| &n.node_blocks).flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z])).collect();
     if coords.len() != tags.len() {
