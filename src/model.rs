@@ -12,7 +12,7 @@ use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::facet::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
-use crate::mesh::{boxgen, gmsh, rigid, Face, Mesh};
+use crate::mesh::{boxgen, gmsh, rigid, BodyGeometry, Face, Mesh};
 use crate::qp::cone::Coefficient;
 use crate::scene::{Component, LoadedScene, Scene, Side};
 
@@ -242,50 +242,90 @@ pub fn cell_kind(c: crate::scene::BoxCells) -> crate::mesh::CellKind {
 /// Builds the model of a loaded scene.
 pub fn build(ls: &LoadedScene) -> Result<Model> {
     let scene: &Scene = &ls.scene;
+    let mut mesh = read_bodies(ls)?;
+    let (faces, cut_faces) = cut_scene_faces(scene, &mut mesh)?;
+    let lame = body_lame(scene);
+    let mut path = LoadPath { steps: scene.load.steps, ..Default::default() };
+    let constraints = dirichlet_constraints(scene, &mesh, &faces, &mut path)?;
+    let loads = traction_loads(scene, &mesh, &faces, &mut path)?;
+    let (contact, slave_choice) = contact_faces(scene, &mesh, &faces, &lame)?;
+    let tie_faces = tie_faces(scene, &mesh, &faces)?;
+    overlapping_rows(&mesh, &tie_faces, &contact)?;
+    let contact_active = scene.contact.enabled && !contact.is_empty();
+    let pairs = contact_rows(scene, &mesh, &contact, &constraints, &path, contact_active)?;
+    let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
+    // bodies joined by ties move as one in the question of what holds them
+    let groups = tie_groups(mesh.bodies.len(), tie_faces.iter().map(|&(s, m)| (mesh.faces[s].body, mesh.faces[m].body)));
+    let buckets = HoldBuckets::new(&mesh, &constraints, &contact, pairs.as_ref(), contact_active);
+    check_parts(scene, &mesh)?;
+    let floating = floating_groups(&mesh, &groups, &buckets, pairs.as_ref(), contact_active)?;
+    let mut by_kind = [0; 4];
+    for (k, n) in mesh.cell_counts() {
+        by_kind[k.code()] = n;
+    }
+    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
+    let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
+    let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
+    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, cut_faces, orders })
+}
+
+/// The mesh of every body, boxes generated and Gmsh files read, in scene order.
+fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
+    let scene: &Scene = &ls.scene;
     let mut mesh = Mesh::default();
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, &b.gmsh) {
-            (Some(bx), _) => {
-                let mut geom =
-                    boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
-                if let Some(side) = bx.curved_side() {
-                    // the curved side moves out by the bulge, the nodes between in proportion
-                    let (lo, hi) = (bx.min[2], bx.max[2]);
-                    for p in &mut geom.nodes {
-                        let b = bx.bulge(p[0], p[1]);
-                        p[2] += if side == Side::Zmin { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
-                    }
-                }
-                geom
-            }
-            (_, Some(g)) => {
-                let path = ls.dir().join(&g.file);
-                let mut geom = gmsh::read(&path, g.volume.as_deref())?;
-                if let Some(t) = g.translate {
-                    for p in &mut geom.nodes {
-                        for d in 0..3 {
-                            p[d] += t[d];
-                        }
-                    }
-                    // the file's coordinates were checked (gmsh::read); the shift must keep them in range
-                    let far = geom.nodes.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-                    if far > crate::scene::range::MAX {
-                        return Err(Error::scene(
-                            format!("body[{i}].gmsh.translate"),
-                            format!(
-                                "moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)",
-                                b.name,
-                                crate::scene::range::MAX
-                            ),
-                        ));
-                    }
-                }
-                geom
-            }
+            (Some(bx), _) => box_geometry(scene, bx)?,
+            (_, Some(g)) => gmsh_geometry(ls, i, b, g)?,
             _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
         };
         mesh.try_push_body(&b.name, geom)?;
     }
+    Ok(mesh)
+}
+
+/// A box body's generated cells, its curved side (if any) bulged out.
+fn box_geometry(scene: &Scene, bx: &crate::scene::BoxDef) -> Result<BodyGeometry> {
+    let mut geom = boxgen::try_generate_cells(bx.min, bx.max, bx.nodes.unwrap_or([scene.mesh.n; 3]), cell_kind(bx.cells.unwrap_or(scene.mesh.cells)))?;
+    if let Some(side) = bx.curved_side() {
+        // the curved side moves out by the bulge, the nodes between in proportion
+        let (lo, hi) = (bx.min[2], bx.max[2]);
+        for p in &mut geom.nodes {
+            let b = bx.bulge(p[0], p[1]);
+            p[2] += if side == Side::Zmin { -b * (hi - p[2]) / (hi - lo) } else { b * (p[2] - lo) / (hi - lo) };
+        }
+    }
+    Ok(geom)
+}
+
+/// A Gmsh body's cells read from its file, shifted by its `translate` (kept in coordinate range).
+fn gmsh_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, g: &crate::scene::GmshDef) -> Result<BodyGeometry> {
+    let path = ls.dir().join(&g.file);
+    let mut geom = gmsh::read(&path, g.volume.as_deref())?;
+    if let Some(t) = g.translate {
+        for p in &mut geom.nodes {
+            for d in 0..3 {
+                p[d] += t[d];
+            }
+        }
+        // the file's coordinates were checked (gmsh::read); the shift must keep them in range
+        let far = geom.nodes.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        if far > crate::scene::range::MAX {
+            return Err(Error::scene(
+                format!("body[{i}].gmsh.translate"),
+                format!(
+                    "moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)",
+                    b.name,
+                    crate::scene::range::MAX
+                ),
+            ));
+        }
+    }
+    Ok(geom)
+}
+
+/// The face index of the mesh's faces, and the `[[face]]` entries cut from them (added to `mesh`).
+fn cut_scene_faces(scene: &Scene, mesh: &mut Mesh) -> Result<(FaceIndex, Vec<CutFace>)> {
     let body_index: HashMap<&str, usize> = scene.bodies.iter().enumerate().map(|(i, b)| (b.name.as_str(), i)).collect();
     // the first face of each name (as `Mesh::face` finds it)
     let mut faces: FaceIndex = HashMap::with_capacity(mesh.faces.len() + scene.faces.len());
@@ -300,9 +340,9 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         if faces.contains_key(&full) {
             return Err(Error::scene(key("name"), format!("face \"{full}\" already exists")));
         }
-        let src = face_index(&mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
+        let src = face_index(mesh, &faces, key("from"), &format!("{}.{}", f.body, f.from))?;
         let region = f.region(i)?;
-        let (facets, region_area) = cut(&mesh, &mesh.faces[src], &region);
+        let (facets, region_area) = cut(mesh, &mesh.faces[src], &region);
         if facets.is_empty() {
             return Err(Error::scene(format!("face[{i}]"), format!("no facet of \"{}\" has its centre inside {}", mesh.faces[src].name, region.describe())));
         }
@@ -310,28 +350,39 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         cut_faces.push(CutFace { face: mesh.faces.len(), from: src, region: region.describe(), region_area });
         mesh.faces.push(Face { name: full, body, facets });
     }
+    Ok((faces, cut_faces))
+}
 
+/// The Lamé constants of each body's material.
+fn body_lame(scene: &Scene) -> Vec<Lame> {
     let materials = scene.material_index();
-    let lame: Vec<Lame> = scene
+    scene
         .bodies
         .iter()
         .map(|b| {
             let m = &scene.materials[*materials.get(b.material.as_str()).expect("validated")];
             Lame::from_young_poisson(m.e, m.nu)
         })
-        .collect();
+        .collect()
+}
 
-    let steps = scene.load.steps;
-    let factors = |f: &Option<Vec<f64>>| -> Vec<f64> { (1..=steps).map(|k| crate::scene::load_factor(f.as_deref(), k, steps)).collect() };
-    let mut path = LoadPath { steps, ..Default::default() };
+/// The load factor f_k of an entry at every step k (1…`steps`).
+fn step_factors(f: &Option<Vec<f64>>, steps: usize) -> Vec<f64> {
+    (1..=steps).map(|k| crate::scene::load_factor(f.as_deref(), k, steps)).collect()
+}
+
+/// The Dirichlet constraints at the last step (each entry's factors and values recorded in `path`);
+/// a DOF held by two entries must have one value at every step.
+fn dirichlet_constraints(scene: &Scene, mesh: &Mesh, faces: &FaceIndex, path: &mut LoadPath) -> Result<Vec<(usize, usize, f64)>> {
+    let steps = path.steps;
     let mut constraints = Vec::new();
     // (node, component) → the first entry that holds it: a later entry must prescribe the same
     // value at every load step (identical duplicates are accepted; the last entry used to win)
     let mut holder: HashMap<(usize, usize), usize> = HashMap::new();
     let mut entry_face = Vec::with_capacity(scene.dirichlet.len());
     for (i, d) in scene.dirichlet.iter().enumerate() {
-        path.dirichlet.push(factors(&d.factors));
-        let fi = face_index(&mesh, &faces, format!("dirichlet[{i}].face"), &d.face)?;
+        path.dirichlet.push(step_factors(&d.factors, steps));
+        let fi = face_index(mesh, faces, format!("dirichlet[{i}].face"), &d.face)?;
         entry_face.push(fi);
         let f = &mesh.faces[fi];
         for v in f.nodes() {
@@ -370,22 +421,31 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             }
         }
     }
+    Ok(constraints)
+}
 
+/// The nodal loads of the tractions at the last step (each entry's factors and forces recorded in `path`).
+fn traction_loads(scene: &Scene, mesh: &Mesh, faces: &FaceIndex, path: &mut LoadPath) -> Result<Vec<f64>> {
+    let steps = path.steps;
     let mut loads = vec![0.0; 3 * mesh.nodes.len()];
     for (i, t) in scene.traction.iter().enumerate() {
-        let f = &mesh.faces[face_index(&mesh, &faces, format!("traction[{i}].face"), &t.face)?];
+        let f = &mesh.faces[face_index(mesh, faces, format!("traction[{i}].face"), &t.face)?];
         let mut unit = vec![0.0; loads.len()];
         match t.pressure {
-            Some(p) => add_pressure(&mesh, f, p, 0, &mut unit),
-            None => add_traction(&mesh, f, t.p.unwrap_or_default(), 0, &mut unit),
+            Some(p) => add_pressure(mesh, f, p, 0, &mut unit),
+            None => add_traction(mesh, f, t.p.unwrap_or_default(), 0, &mut unit),
         }
-        let fk = factors(&t.factors);
+        let fk = step_factors(&t.factors, steps);
         for (l, u) in loads.iter_mut().zip(&unit) {
             *l += fk[steps - 1] * u;
         }
         path.traction.push((fk, unit.into_iter().enumerate().filter(|x| x.1 != 0.0).collect()));
     }
+    Ok(loads)
+}
 
+/// The (slave, master) faces of every contact pair, and why the slave of each is the one it is.
+fn contact_faces(scene: &Scene, mesh: &Mesh, faces: &FaceIndex, lame: &[Lame]) -> Result<(Vec<(usize, usize)>, Vec<(usize, String)>)> {
     let mut contact = Vec::new();
     let mut slave_choice = Vec::new();
     let young: Vec<f64> = lame.iter().map(Lame::young).collect();
@@ -393,18 +453,18 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         let (s, m) = match &p.faces {
             None => {
                 let (s, m) = (
-                    face_index(&mesh, &faces, format!("contact.pair[{i}].slave"), &p.slave)?,
-                    face_index(&mesh, &faces, format!("contact.pair[{i}].master"), &p.master)?,
+                    face_index(mesh, faces, format!("contact.pair[{i}].slave"), &p.slave)?,
+                    face_index(mesh, faces, format!("contact.pair[{i}].master"), &p.master)?,
                 );
-                if let Some(w) = stiff_slave(&mesh, &young, s, m, i) {
+                if let Some(w) = stiff_slave(mesh, &young, s, m, i) {
                     slave_choice.push((i, w));
                 }
                 (s, m)
             }
             Some(f) => {
-                let a = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[0])?;
-                let b = face_index(&mesh, &faces, format!("contact.pair[{i}].faces"), &f[1])?;
-                let (s, m, why) = choose_slave(&mesh, &young, a, b, p);
+                let a = face_index(mesh, faces, format!("contact.pair[{i}].faces"), &f[0])?;
+                let b = face_index(mesh, faces, format!("contact.pair[{i}].faces"), &f[1])?;
+                let (s, m, why) = choose_slave(mesh, &young, a, b, p);
                 slave_choice.push((i, why));
                 (s, m)
             }
@@ -414,18 +474,33 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         contact.push((s, m));
     }
+    Ok((contact, slave_choice))
+}
+
+/// The (slave, master) faces of every tie.
+fn tie_faces(scene: &Scene, mesh: &Mesh, faces: &FaceIndex) -> Result<Vec<(usize, usize)>> {
     let mut tie_faces = Vec::new();
     for (i, t) in scene.ties.iter().enumerate() {
-        let s = face_index(&mesh, &faces, format!("tie[{i}].slave"), &t.slave)?;
-        let m = face_index(&mesh, &faces, format!("tie[{i}].master"), &t.master)?;
+        let s = face_index(mesh, faces, format!("tie[{i}].slave"), &t.slave)?;
+        let m = face_index(mesh, faces, format!("tie[{i}].master"), &t.master)?;
         if mesh.faces[s].body == mesh.faces[m].body {
             return Err(Error::scene(format!("tie[{i}]"), "slave and master faces belong to the same body"));
         }
         tie_faces.push((s, m));
     }
-    overlapping_rows(&mesh, &tie_faces, &contact)?;
-    let contact_active = scene.contact.enabled && !contact.is_empty();
-    let mut pairs = if contact_active { Some(pairing::pair(&mesh, &scene.contact.pair, &contact)?) } else { None };
+    Ok(tie_faces)
+}
+
+/// The contact rows when contact is active, the tangents of DOFs that Dirichlet holds voided.
+fn contact_rows(
+    scene: &Scene,
+    mesh: &Mesh,
+    contact: &[(usize, usize)],
+    constraints: &[(usize, usize, f64)],
+    path: &LoadPath,
+    contact_active: bool,
+) -> Result<Option<Contact>> {
+    let mut pairs = if contact_active { Some(pairing::pair(mesh, &scene.contact.pair, contact)?) } else { None };
     if let Some(c) = pairs.as_mut() {
         let held: std::collections::HashSet<(usize, usize)> = constraints.iter().map(|&(v, k, _)| (v, k)).collect();
         // held at 0 at every step (a symmetry plane's rollers), not driven
@@ -433,35 +508,52 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             constraints.iter().zip(&path.constraint_entry).filter(|(_, e)| e.1 == 0.0).map(|(&(v, k, _), _)| (v, k)).collect();
         c.void_held_tangents(|v, k| held.contains(&(v, k)), |v, k| still.contains(&(v, k)));
     }
-    let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
+    Ok(pairs)
+}
 
-    // each body's constraints and contact pairs, bucketed once (not a scan of all per body)
-    let body_of = |v: usize| mesh.bodies.partition_point(|b| b.nodes.end <= v);
-    let mut body_constraints: Vec<Vec<(usize, usize)>> = vec![Vec::new(); mesh.bodies.len()];
-    for &(v, c, _) in &constraints {
-        body_constraints[body_of(v)].push((v, c));
-    }
-    // touched by contact
-    let mut body_touches = vec![false; mesh.bodies.len()];
-    if contact_active {
-        for &(s, m) in &contact {
-            body_touches[mesh.faces[s].body] = true;
-            body_touches[mesh.faces[m].body] = true;
+/// Each body's constraints and contact pairs, bucketed once (not a scan of all per body).
+struct HoldBuckets {
+    /// The (node, component) of each body's constraints.
+    constraints: Vec<Vec<(usize, usize)>>,
+    /// Whether contact touches each body.
+    touches: Vec<bool>,
+    /// The contact rows with a node in each body.
+    pairs: Vec<Vec<usize>>,
+}
+
+impl HoldBuckets {
+    /// Buckets `constraints`, the contact faces and the contact rows by body.
+    fn new(mesh: &Mesh, constraints: &[(usize, usize, f64)], contact: &[(usize, usize)], pairs: Option<&Contact>, contact_active: bool) -> Self {
+        let body_of = |v: usize| mesh.bodies.partition_point(|b| b.nodes.end <= v);
+        let mut body_constraints: Vec<Vec<(usize, usize)>> = vec![Vec::new(); mesh.bodies.len()];
+        for &(v, c, _) in constraints {
+            body_constraints[body_of(v)].push((v, c));
         }
-    }
-    // bodies joined by ties move as one in the question of what holds them
-    let groups = tie_groups(mesh.bodies.len(), tie_faces.iter().map(|&(s, m)| (mesh.faces[s].body, mesh.faces[m].body)));
-    let mut body_pairs: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
-    if let Some(c) = &pairs {
-        for i in 0..c.len() {
-            let mut bodies: Vec<usize> = c.row(i).iter().map(|&(v, _)| body_of(v)).collect();
-            bodies.sort_unstable();
-            bodies.dedup();
-            for b in bodies {
-                body_pairs[b].push(i);
+        // touched by contact
+        let mut body_touches = vec![false; mesh.bodies.len()];
+        if contact_active {
+            for &(s, m) in contact {
+                body_touches[mesh.faces[s].body] = true;
+                body_touches[mesh.faces[m].body] = true;
             }
         }
+        let mut body_pairs: Vec<Vec<usize>> = vec![Vec::new(); mesh.bodies.len()];
+        if let Some(c) = pairs {
+            for i in 0..c.len() {
+                let mut bodies: Vec<usize> = c.row(i).iter().map(|&(v, _)| body_of(v)).collect();
+                bodies.sort_unstable();
+                bodies.dedup();
+                for b in bodies {
+                    body_pairs[b].push(i);
+                }
+            }
+        }
+        HoldBuckets { constraints: body_constraints, touches: body_touches, pairs: body_pairs }
     }
+}
+
+/// Refuses a decomposition into more subdomains per body than the body has elements.
+fn check_parts(scene: &Scene, mesh: &Mesh) -> Result<()> {
     for body in &mesh.bodies {
         let ne = body.elems.len();
         let parts = scene.decomposition.parts(3 * body.nodes.len());
@@ -470,11 +562,17 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             return Err(Error::scene(key, format!("{parts} subdomains per body exceed the {ne} elements of body \"{}\"", body.name)));
         }
     }
+    Ok(())
+}
+
+/// The groups whose rigid motions Dirichlet leaves free and contact holds; refuses a group that
+/// nothing holds.
+fn floating_groups(mesh: &Mesh, groups: &[Vec<usize>], buckets: &HoldBuckets, pairs: Option<&Contact>, contact_active: bool) -> Result<Vec<Vec<usize>>> {
     let mut floating = Vec::new();
-    for group in &groups {
-        let name = hold::group_name(&mesh, group);
-        let held = group.iter().any(|&b| !body_constraints[b].is_empty());
-        let touches = group.iter().any(|&b| body_touches[b]);
+    for group in groups {
+        let name = hold::group_name(mesh, group);
+        let held = group.iter().any(|&b| !buckets.constraints[b].is_empty());
+        let touches = group.iter().any(|&b| buckets.touches[b]);
         if !held && !touches {
             let what = if group.len() == 1 { "floats: it has no Dirichlet condition" } else { "float: none of them has a Dirichlet condition" };
             return Err(Error::scene("dirichlet", format!("{name} {what}{}", if contact_active { " and no contact" } else { " (contact is off)" })));
@@ -484,37 +582,17 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
             dir[c] = 1.0;
             dir
         };
-        let dirichlet = group.iter().flat_map(|&b| body_constraints[b].iter().map(|&(v, c)| (v, axis(c))));
-        let free = free_motions(&mesh, group, dirichlet.clone());
+        let dirichlet = group.iter().flat_map(|&b| buckets.constraints[b].iter().map(|&(v, c)| (v, axis(c))));
+        let free = free_motions(mesh, group, dirichlet.clone());
         if free.is_empty() {
             continue;
         }
         let its = if group.len() == 1 { "its" } else { "the group's" };
-        let Some(c) = pairs.as_ref().filter(|_| touches) else {
+        let Some(c) = pairs.filter(|_| touches) else {
             return Err(Error::scene("dirichlet", format!("{name}: {its} rigid motions {} are held by no Dirichlet condition", free.join(", "))));
         };
-        // the pairs' directions at the group's contact nodes: the normal, and each tangent along
-        // which friction can carry a force (a slip bound g or coefficient μ > 0: a zero bound
-        // holds no sliding, like no friction at all)
-        let inside = |v: &usize| group.iter().any(|&b| mesh.bodies[b].nodes.contains(v));
-        let mut rows = Vec::new();
-        let mut zero_bound = false;
-        let mut seen: Vec<usize> = group.iter().flat_map(|&b| body_pairs[b].iter().copied()).collect();
-        seen.sort_unstable();
-        seen.dedup();
-        for i in seen {
-            let holds = tangential_hold(c, i);
-            zero_bound |= holds != [true, true] && (c.bound[i] != SlipBound::None || c.coulomb[i] != Coefficient::Fixed);
-            for v in c.row(i).iter().map(|&(v, _)| v).filter(inside) {
-                rows.push((v, c.normal[i]));
-                for (t, hold) in [(c.t1[i], holds[0]), (c.t2[i], holds[1])] {
-                    if hold {
-                        rows.push((v, t));
-                    }
-                }
-            }
-        }
-        let unheld = free_motions(&mesh, group, dirichlet.chain(rows));
+        let (rows, zero_bound) = contact_hold_rows(mesh, group, &buckets.pairs, c);
+        let unheld = free_motions(mesh, group, dirichlet.chain(rows));
         if !unheld.is_empty() {
             let hint = if zero_bound {
                 " (a zero slip bound or friction coefficient does not hold a sliding motion)"
@@ -530,14 +608,32 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
         }
         floating.push(group.clone());
     }
-    let mut by_kind = [0; 4];
-    for (k, n) in mesh.cell_counts() {
-        by_kind[k.code()] = n;
+    Ok(floating)
+}
+
+/// The pairs' directions at the group's contact nodes: the normal, and each tangent along which
+/// friction can carry a force (a slip bound g or coefficient μ > 0: a zero bound holds no sliding,
+/// like no friction at all); and whether a zero bound or coefficient left a tangent out.
+fn contact_hold_rows(mesh: &Mesh, group: &[usize], body_pairs: &[Vec<usize>], c: &Contact) -> (Vec<(usize, [f64; 3])>, bool) {
+    let inside = |v: &usize| group.iter().any(|&b| mesh.bodies[b].nodes.contains(v));
+    let mut rows = Vec::new();
+    let mut zero_bound = false;
+    let mut seen: Vec<usize> = group.iter().flat_map(|&b| body_pairs[b].iter().copied()).collect();
+    seen.sort_unstable();
+    seen.dedup();
+    for i in seen {
+        let holds = tangential_hold(c, i);
+        zero_bound |= holds != [true, true] && (c.bound[i] != SlipBound::None || c.coulomb[i] != Coefficient::Fixed);
+        for v in c.row(i).iter().map(|&(v, _)| v).filter(inside) {
+            rows.push((v, c.normal[i]));
+            for (t, hold) in [(c.t1[i], holds[0]), (c.t2[i], holds[1])] {
+                if hold {
+                    rows.push((v, t));
+                }
+            }
+        }
     }
-    let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
-    let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
-    let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, cut_faces, orders })
+    (rows, zero_bound)
 }
 
 /// The slave rule in words, as `check` prints it and the docs state it ([`choose_slave`]).

@@ -430,69 +430,126 @@ fn type_counts(counts: &HashMap<ElementType, usize>) -> String {
     v.iter().map(|(t, c)| format!("{t:?}: {c}")).collect::<Vec<_>>().join(", ")
 }
 
-fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: Option<&str>) -> Result<BodyGeometry, String> {
+/// A parsed Gmsh file.
+type Msh = MshFile<u64, i32, f64>;
+
+/// A volume element of the body as the file gives it: its tag, cell type and node tags.
+type FileCell<'m> = (u64, CellKind, &'m [u64]);
+
+/// The body of a parsed file: its cells in a compact local numbering, and its named faces.
+fn build(msh: &Msh, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: Option<&str>) -> Result<BodyGeometry, String> {
     let entities = msh.data.entities.as_ref();
     let surfaces = entities.map_or(&[][..], |e| e.surfaces.as_slice());
-    let volumes = entities.map_or(&[][..], |e| e.volumes.as_slice());
     let surf_groups: HashMap<i32, &[i32]> = surfaces.iter().map(|s| (s.tag, s.physical_tags.as_slice())).collect();
-    let vol_groups: HashMap<i32, &[i32]> = volumes.iter().map(|v| (v.tag, v.physical_tags.as_slice())).collect();
-
-    // Which volume entities make up the body.
-    let selected: Option<HashSet<i32>> = match volume {
-        None => None,
-        Some(name) => {
-            let mut known: BTreeMap<i32, String> = names.iter().filter(|((d, _), _)| *d == 3).map(|((_, t), n)| (*t, n.clone())).collect();
-            for v in volumes {
-                for &t in &v.physical_tags {
-                    known.entry(t).or_insert_with(|| group_name(names, 3, t));
-                }
-            }
-            let wanted: HashSet<i32> = known.iter().filter(|(_, n)| n.as_str() == name).map(|(t, _)| *t).collect();
-            if wanted.is_empty() {
-                let list: Vec<String> = known.values().map(|n| format!("\"{n}\"")).collect();
-                let list = if list.is_empty() { "none".to_string() } else { list.join(", ") };
-                return Err(format!("no physical volume named \"{name}\" (known: {list})"));
-            }
-            Some(vol_groups.iter().filter(|(_, g)| g.iter().any(|t| wanted.contains(t))).map(|(&e, _)| e).collect())
-        }
-    };
+    let selected = selected_volumes(msh, names, volume)?;
     let in_body = |entity: i32| selected.as_ref().is_none_or(|s| s.contains(&entity));
+    let elements = Elements::scan(msh, in_body);
+    elements.check_cells(volume)?;
+    let file_cells = &elements.file_cells;
+    let (coords, index) = node_index(msh, tags)?;
+    check_surface_nodes(msh, &index)?;
+    let (file_nodes, used) = file_cell_nodes(file_cells, &index, coords.len())?;
+    check_listed_twice(&file_nodes, file_cells)?;
+    check_scale(&coords, &file_nodes, file_cells)?;
+    let mut local = vec![usize::MAX; coords.len()];
+    let mut nodes = Vec::new();
+    for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
+        local[i] = nodes.len();
+        nodes.push(*p);
+    }
 
-    // Elements: the cells of the body (other 3D types for the diagnostics) and the surface
-    // elements of every surface entity.
-    let mut all_counts: HashMap<ElementType, usize> = HashMap::new();
-    let mut body_3d: HashMap<ElementType, usize> = HashMap::new();
-    let mut unsupported: HashMap<ElementType, usize> = HashMap::new();
-    let mut file_cells: Vec<(u64, CellKind, &[u64])> = Vec::new();
-    let mut surface_elems: HashMap<i32, Vec<&[u64]>> = HashMap::new();
-    for block in msh.data.elements.iter().flat_map(|e| &e.element_blocks) {
-        *all_counts.entry(block.element_type).or_default() += block.elements.len();
-        if block.entity_dim == 3 && in_body(block.entity_tag) {
-            *body_3d.entry(block.element_type).or_default() += block.elements.len();
-            match cell_kind(block.element_type) {
-                Some(kind) => file_cells.extend(block.elements.iter().map(|e| (e.element_tag, kind, e.nodes.as_slice()))),
-                None => *unsupported.entry(block.element_type).or_default() += block.elements.len(),
-            }
-        } else if block.entity_dim == 2 && surface_kind(block.element_type).is_some() {
-            surface_elems.entry(block.entity_tag).or_default().extend(block.elements.iter().map(|e| e.nodes.as_slice()));
+    // Cells in local numbering, each oriented (consistently inverted ones reordered).
+    let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
+    for (h, &(etag, kind, _)) in file_nodes.iter().zip(file_cells) {
+        let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+        orient(&mut cell, &nodes).map_err(|why| format!("{} {etag} {why}", singular(kind)))?;
+        cells.push(cell);
+    }
+    let faces = named_faces(names, &surf_groups, &elements.surface_elems, &index, &local, &cells);
+    Ok(BodyGeometry { nodes, cells, faces })
+}
+
+/// Which volume entities make up the body: those of physical volume `volume` (None: every one).
+fn selected_volumes(msh: &Msh, names: &HashMap<(i32, i32), String>, volume: Option<&str>) -> Result<Option<HashSet<i32>>, String> {
+    let Some(name) = volume else {
+        return Ok(None);
+    };
+    let volumes = msh.data.entities.as_ref().map_or(&[][..], |e| e.volumes.as_slice());
+    let vol_groups: HashMap<i32, &[i32]> = volumes.iter().map(|v| (v.tag, v.physical_tags.as_slice())).collect();
+    let mut known: BTreeMap<i32, String> = names.iter().filter(|((d, _), _)| *d == 3).map(|((_, t), n)| (*t, n.clone())).collect();
+    for v in volumes {
+        for &t in &v.physical_tags {
+            known.entry(t).or_insert_with(|| group_name(names, 3, t));
         }
     }
-    let body = match volume {
-        Some(name) => format!("physical volume \"{name}\""),
-        None => "the file".to_string(),
-    };
-    if !unsupported.is_empty() {
-        return Err(format!("{body} contains volume elements of a type not supported ({}); supported: {SUPPORTED}", type_counts(&unsupported)));
+    let wanted: HashSet<i32> = known.iter().filter(|(_, n)| n.as_str() == name).map(|(t, _)| *t).collect();
+    if wanted.is_empty() {
+        let list: Vec<String> = known.values().map(|n| format!("\"{n}\"")).collect();
+        let list = if list.is_empty() { "none".to_string() } else { list.join(", ") };
+        return Err(format!("no physical volume named \"{name}\" (known: {list})"));
     }
-    if file_cells.is_empty() {
-        let (what, found) = match volume {
-            Some(_) => (format!("{body} contains"), type_counts(&body_3d)),
-            None => ("contains".to_string(), type_counts(&all_counts)),
-        };
-        return Err(format!("{what} no volume elements (found: {found}); supported: {SUPPORTED}"));
+    Ok(Some(vol_groups.iter().filter(|(_, g)| g.iter().any(|t| wanted.contains(t))).map(|(&e, _)| e).collect()))
+}
+
+/// The elements of the file: the cells of the body (other 3D types for the diagnostics) and
+/// the surface elements of every surface entity.
+struct Elements<'m> {
+    /// Elements of each type in the file, and of each 3D type in the body.
+    all_counts: HashMap<ElementType, usize>,
+    body_3d: HashMap<ElementType, usize>,
+    /// The body's volume elements of a type not read.
+    unsupported: HashMap<ElementType, usize>,
+    file_cells: Vec<FileCell<'m>>,
+    /// Surface entity → the node tags of its triangles and quadrangles.
+    surface_elems: HashMap<i32, Vec<&'m [u64]>>,
+}
+
+impl<'m> Elements<'m> {
+    /// Sorts the file's element blocks: volume ones of the entities `in_body`, surface ones.
+    fn scan(msh: &'m Msh, in_body: impl Fn(i32) -> bool) -> Self {
+        let mut all_counts: HashMap<ElementType, usize> = HashMap::new();
+        let mut body_3d: HashMap<ElementType, usize> = HashMap::new();
+        let mut unsupported: HashMap<ElementType, usize> = HashMap::new();
+        let mut file_cells: Vec<FileCell<'m>> = Vec::new();
+        let mut surface_elems: HashMap<i32, Vec<&[u64]>> = HashMap::new();
+        for block in msh.data.elements.iter().flat_map(|e| &e.element_blocks) {
+            *all_counts.entry(block.element_type).or_default() += block.elements.len();
+            if block.entity_dim == 3 && in_body(block.entity_tag) {
+                *body_3d.entry(block.element_type).or_default() += block.elements.len();
+                match cell_kind(block.element_type) {
+                    Some(kind) => file_cells.extend(block.elements.iter().map(|e| (e.element_tag, kind, e.nodes.as_slice()))),
+                    None => *unsupported.entry(block.element_type).or_default() += block.elements.len(),
+                }
+            } else if block.entity_dim == 2 && surface_kind(block.element_type).is_some() {
+                surface_elems.entry(block.entity_tag).or_default().extend(block.elements.iter().map(|e| e.nodes.as_slice()));
+            }
+        }
+        Elements { all_counts, body_3d, unsupported, file_cells, surface_elems }
     }
 
-    // Nodes: file index of every tag, then a compact numbering of the used ones in file order.
+    /// Refuses a body with volume elements of a type not read, or with none.
+    fn check_cells(&self, volume: Option<&str>) -> Result<(), String> {
+        let body = match volume {
+            Some(name) => format!("physical volume \"{name}\""),
+            None => "the file".to_string(),
+        };
+        if !self.unsupported.is_empty() {
+            return Err(format!("{body} contains volume elements of a type not supported ({}); supported: {SUPPORTED}", type_counts(&self.unsupported)));
+        }
+        if self.file_cells.is_empty() {
+            let (what, found) = match volume {
+                Some(_) => (format!("{body} contains"), type_counts(&self.body_3d)),
+                None => ("contains".to_string(), type_counts(&self.all_counts)),
+            };
+            return Err(format!("{what} no volume elements (found: {found}); supported: {SUPPORTED}"));
+        }
+        Ok(())
+    }
+}
+
+/// The coordinates of every node in file order, and the file index of every tag (each tag
+/// once, every coordinate finite).
+fn node_index(msh: &Msh, tags: &[u64]) -> Result<(Vec<[f64; 3]>, HashMap<u64, usize>), String> {
     let coords: Vec<[f64; 3]> = msh.data.nodes.iter().flat_map(|n| &n.node_blocks).flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z])).collect();
     if coords.len() != tags.len() {
         return Err(format!("{UNREADABLE}: malformed $Nodes section"));
@@ -506,8 +563,12 @@ fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags
             return Err(format!("node {t} has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]));
         }
     }
-    // Surface elements must not name nodes the file does not define (those of other volumes
-    // are fine: such facets are skipped below).
+    Ok((coords, index))
+}
+
+/// Refuses surface elements that name nodes the file does not define (those of other volumes
+/// are fine: such facets are skipped in [`named_faces`]).
+fn check_surface_nodes(msh: &Msh, index: &HashMap<u64, usize>) -> Result<(), String> {
     let blocks = msh.data.elements.iter().flat_map(|e| &e.element_blocks);
     for block in blocks.filter(|b| b.entity_dim == 2) {
         let Some((_, name)) = surface_kind(block.element_type) else { continue };
@@ -517,10 +578,14 @@ fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags
             }
         }
     }
-    // Cells in file indices.
+    Ok(())
+}
+
+/// The cells in file indices, and which of the `n` file nodes they use.
+fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, usize>, n: usize) -> Result<(Vec<Vec<usize>>, Vec<bool>), String> {
     let mut file_nodes: Vec<Vec<usize>> = Vec::with_capacity(file_cells.len());
-    let mut used = vec![false; coords.len()];
-    for &(etag, kind, nodes) in &file_cells {
+    let mut used = vec![false; n];
+    for &(etag, kind, nodes) in file_cells {
         if nodes.len() != kind.len() {
             return Err(format!("{} {etag} has {} nodes, expected {}", singular(kind), nodes.len(), kind.len()));
         }
@@ -532,35 +597,34 @@ fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags
         }
         file_nodes.push(h);
     }
-    // A cell listed twice (the same nodes, in any order, under another tag) would be counted
-    // twice: its faces would stop being boundary faces (a clamped face loses them).
+    Ok((file_nodes, used))
+}
+
+/// Refuses a cell listed twice (the same nodes, in any order, under another tag): it would be
+/// counted twice, and its faces would stop being boundary faces (a clamped face loses them).
+fn check_listed_twice(file_nodes: &[Vec<usize>], file_cells: &[FileCell<'_>]) -> Result<(), String> {
     let mut seen: HashMap<(CellKind, Vec<usize>), u64> = HashMap::with_capacity(file_nodes.len());
-    for (h, &(etag, kind, _)) in file_nodes.iter().zip(&file_cells) {
+    for (h, &(etag, kind, _)) in file_nodes.iter().zip(file_cells) {
         let mut key = h.clone();
         key.sort_unstable();
         if let Some(first) = seen.insert((kind, key), etag) {
             return Err(format!("{} {first} and {etag} have the same {} nodes (an element listed twice); remove one", plural(kind), kind.len()));
         }
     }
-    drop(seen);
-    check_scale(&coords, &file_nodes, &file_cells)?;
-    let mut local = vec![usize::MAX; coords.len()];
-    let mut nodes = Vec::new();
-    for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
-        local[i] = nodes.len();
-        nodes.push(*p);
-    }
+    Ok(())
+}
 
-    // Cells in local numbering, each oriented (consistently inverted ones reordered).
-    let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
-    for (h, &(etag, kind, _)) in file_nodes.iter().zip(&file_cells) {
-        let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
-        orient(&mut cell, &nodes).map_err(|why| format!("{} {etag} {why}", singular(kind)))?;
-        cells.push(cell);
-    }
-
-    // Faces: named physical surfaces, in tag order, merged by name.
-    let boundary = boundary_faces(&cells);
+/// The faces: named physical surfaces, in tag order, merged by name, each the outward boundary
+/// facets of `cells` that its surface elements name.
+fn named_faces(
+    names: &HashMap<(i32, i32), String>,
+    surf_groups: &HashMap<i32, &[i32]>,
+    surface_elems: &HashMap<i32, Vec<&[u64]>>,
+    index: &HashMap<u64, usize>,
+    local: &[usize],
+    cells: &[Cell],
+) -> Vec<(String, Vec<Facet>)> {
+    let boundary = boundary_faces(cells);
     let mut groups: BTreeMap<i32, Vec<i32>> = BTreeMap::new(); // group -> surface entities
     for ((d, t), _) in names.iter() {
         if *d == 2 {
@@ -583,7 +647,7 @@ fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags
         let mut seen: HashSet<(usize, [usize; 4])> = HashSet::new();
         let mut list: Vec<Facet> = Vec::new();
         for q in ents.iter().filter_map(|s| surface_elems.get(s)).flatten() {
-            let Some(loc) = corners_local(q, &index, &local) else {
+            let Some(loc) = corners_local(q, index, local) else {
                 continue;
             };
             if let Some(fq) = find_boundary_facet(&boundary, &loc) {
@@ -610,7 +674,7 @@ fn build(msh: &MshFile<u64, i32, f64>, names: &HashMap<(i32, i32), String>, tags
             }
         }
     }
-    Ok(BodyGeometry { nodes, cells, faces })
+    faces
 }
 
 /// The volume element types read, for messages.

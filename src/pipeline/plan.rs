@@ -113,46 +113,177 @@ pub fn automatic(dec: &DecompositionSettings) -> bool {
 /// candidate whole (its partition, B and fills) — and sum the figures, so every rank gets the
 /// same table.
 pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solver: &Common, ranks: usize) -> Result<Vec<Candidate>> {
-    let eps = solver.eps;
-    let mesh = &model.mesh;
-    let ranks = ranks.max(1);
-    let (me, workers) = (comm.rank(), comm.size());
-    let contact = model.pairs.as_ref();
-    let contact_rows = contact.map_or(0, |c| c.len() * if c.has_friction() { 3 } else { 1 });
-    let digits = (1.0 / eps).log10().max(1.0);
-    // the σ_max estimate's products (none when σ is given)
-    let power = if solver.sigma.is_some() { 0.0 } else { solver.power_iterations as f64 };
+    let pricing = Pricing::new(comm, model, solver, ranks);
     let mut out = Vec::new();
-    let nb = mesh.bodies.len();
-    let body_dofs: Vec<usize> = mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect();
-    let largest = body_dofs.iter().copied().max().unwrap_or(0);
-    // one fill per piece, counted by rank (piece % ranks) and summed over the ranks
-    let fills = |n: usize, f: &dyn Fn(usize) -> Result<Fill>| -> Result<Vec<Fill>> {
-        let mut v = vec![0.0; 2 * n];
-        let mut failed = Ok(());
-        for i in (me..n).step_by(workers) {
-            match f(i) {
-                Ok(x) => (v[2 * i], v[2 * i + 1]) = (x.nnz_l, x.flops),
-                Err(e) => {
-                    failed = Err(e);
-                    break;
-                }
-            }
+    if !dec.tfeti {
+        out.push(pricing.monolithic()?);
+    }
+    let specs = pricing.tfeti_specs(dec.tfeti);
+    out.extend(pricing.tfeti_candidates(dec, specs)?);
+    Ok(out)
+}
+
+/// A record of figures that one rank fills in and the ranks sum (every other rank holds zeros
+/// there: x + 0 is exact), packed into `LEN` numbers for the sum.
+trait Summed: Sized {
+    /// The numbers of one record.
+    const LEN: usize;
+    /// Writes the record's numbers into `out` (`LEN` of them).
+    fn pack(&self, out: &mut [f64]);
+    /// The record of `LEN` numbers.
+    fn unpack(x: &[f64]) -> Self;
+}
+
+/// Sums every record over the ranks of `comm`.
+fn sum_records<C: Comm, T: Summed>(comm: &C, records: &mut [T]) {
+    let mut v = vec![0.0; T::LEN * records.len()];
+    for (r, out) in records.iter().zip(v.chunks_mut(T::LEN)) {
+        r.pack(out);
+    }
+    comm.sum_f64(&mut v);
+    for (r, x) in records.iter_mut().zip(v.chunks(T::LEN)) {
+        *r = T::unpack(x);
+    }
+}
+
+/// A body's fill, and whether its factor orders the contact nodes last (the monolithic dual's
+/// explicit products).
+#[derive(Clone, Copy, Debug, Default)]
+struct BodyFill {
+    fill: Fill,
+    last: bool,
+}
+
+impl Summed for BodyFill {
+    const LEN: usize = 3;
+    fn pack(&self, out: &mut [f64]) {
+        out.copy_from_slice(&[self.fill.nnz_l, self.fill.flops, if self.last { 1.0 } else { 0.0 }]);
+    }
+    fn unpack(x: &[f64]) -> Self {
+        BodyFill { fill: Fill { nnz_l: x[0], flops: x[1] }, last: x[2] > 0.0 }
+    }
+}
+
+/// A TFETI candidate's figures as its pricing rank computes them.
+#[derive(Clone, Copy, Debug, Default)]
+struct Figures {
+    nnz_l: f64,
+    nnz_l_rank: f64,
+    gluing_rows: f64,
+    dirichlet_rows: f64,
+    n_a: f64,
+    t_product: f64,
+    t_factor: f64,
+    time: f64,
+}
+
+impl Figures {
+    /// The figures of a priced candidate.
+    fn of(c: &Candidate) -> Self {
+        Figures {
+            nnz_l: c.nnz_l,
+            nnz_l_rank: c.nnz_l_rank,
+            gluing_rows: c.gluing_rows as f64,
+            dirichlet_rows: c.dirichlet_rows as f64,
+            n_a: c.n_a,
+            t_product: c.t_product,
+            t_factor: c.t_factor,
+            time: c.time,
         }
-        // every rank reaches the sum, then all fail together
-        comm.sum_f64(&mut v);
-        comm.agree(failed)?;
-        Ok(v.chunks(2).map(|c| Fill { nnz_l: c[0], flops: c[1] }).collect())
-    };
-    // a candidate from its pieces' fills, ranks and DOFs, its rows of B and its nA
+    }
+
+    /// The TFETI candidate of these figures.
+    fn candidate(self, spec: Spec, contact_rows: usize) -> Candidate {
+        Candidate {
+            parts: spec.parts,
+            tfeti: true,
+            target_dofs: Some(spec.target),
+            nnz_l: self.nnz_l,
+            nnz_l_rank: self.nnz_l_rank,
+            contact_rows,
+            gluing_rows: self.gluing_rows as usize,
+            dirichlet_rows: self.dirichlet_rows as usize,
+            n_a: self.n_a,
+            t_product: self.t_product,
+            t_factor: self.t_factor,
+            time: self.time,
+            explicit: false,
+        }
+    }
+}
+
+impl Summed for Figures {
+    const LEN: usize = 8;
+    fn pack(&self, out: &mut [f64]) {
+        out.copy_from_slice(&[self.nnz_l, self.nnz_l_rank, self.gluing_rows, self.dirichlet_rows, self.n_a, self.t_product, self.t_factor, self.time]);
+    }
+    fn unpack(x: &[f64]) -> Self {
+        Figures { nnz_l: x[0], nnz_l_rank: x[1], gluing_rows: x[2], dirichlet_rows: x[3], n_a: x[4], t_product: x[5], t_factor: x[6], time: x[7] }
+    }
+}
+
+/// A TFETI candidate to price: the subdomains `s` of the largest body, the DOFs per subdomain
+/// asked for, and each body's parts.
+struct Spec {
+    s: usize,
+    target: usize,
+    parts: Vec<usize>,
+}
+
+/// What every candidate's pricing shares: the model, the ranks and the solve's figures.
+struct Pricing<'a, C: Comm> {
+    comm: &'a C,
+    model: &'a Model,
+    ranks: usize,
+    me: usize,
+    workers: usize,
+    contact: Option<&'a crate::contact::pairing::Contact>,
+    contact_rows: usize,
+    /// log10(1/ε), at least 1.
+    digits: f64,
+    /// The σ_max estimate's products (none when σ is given).
+    power: f64,
+    /// 3 × nodes of each body, and the most of them.
+    body_dofs: Vec<usize>,
+    largest: usize,
+}
+
+impl<'a, C: Comm> Pricing<'a, C> {
+    /// The shared figures of a pricing for `ranks` ranks with the solver settings `solver`.
+    fn new(comm: &'a C, model: &'a Model, solver: &Common, ranks: usize) -> Self {
+        let eps = solver.eps;
+        let mesh = &model.mesh;
+        let contact = model.pairs.as_ref();
+        let body_dofs: Vec<usize> = mesh.bodies.iter().map(|b| 3 * b.nodes.len()).collect();
+        let largest = body_dofs.iter().copied().max().unwrap_or(0);
+        Pricing {
+            comm,
+            model,
+            ranks: ranks.max(1),
+            me: comm.rank(),
+            workers: comm.size(),
+            contact,
+            contact_rows: contact.map_or(0, |c| c.len() * if c.has_friction() { 3 } else { 1 }),
+            digits: (1.0 / eps).log10().max(1.0),
+            power: if solver.sigma.is_some() { 0.0 } else { solver.power_iterations as f64 },
+            body_dofs,
+            largest,
+        }
+    }
+
+    /// A candidate from its pieces' fills, ranks and DOFs, its rows of B and its nA.
     #[allow(clippy::too_many_arguments)]
-    let candidate = |parts: Vec<usize>,
-                     target_dofs: Option<usize>,
-                     f: &[Fill],
-                     rank_of: &dyn Fn(usize) -> usize,
-                     dofs_of: &dyn Fn(usize) -> f64,
-                     rows: (usize, usize),
-                     n_a: f64| {
+    fn candidate(
+        &self,
+        parts: Vec<usize>,
+        target_dofs: Option<usize>,
+        f: &[Fill],
+        rank_of: &dyn Fn(usize) -> usize,
+        dofs_of: &dyn Fn(usize) -> f64,
+        rows: (usize, usize),
+        n_a: f64,
+    ) -> Candidate {
+        let ranks = self.ranks;
         let (mut nnz, mut flops, mut dofs) = (vec![0.0; ranks], vec![0.0; ranks], vec![0.0; ranks]);
         for (i, x) in f.iter().enumerate() {
             let r = rank_of(i);
@@ -164,7 +295,7 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             target_dofs,
             nnz_l: f.iter().map(|x| x.nnz_l).sum(),
             nnz_l_rank: max(&nnz),
-            contact_rows,
+            contact_rows: self.contact_rows,
             gluing_rows: rows.0,
             dirichlet_rows: rows.1,
             n_a,
@@ -176,10 +307,31 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
         c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
         c.time = c.t_factor + n_a * c.t_product;
         c
-    };
-    if !dec.tfeti {
-        let by_body = crate::model::constraints_by_body(mesh, &model.constraints);
-        let f = fills(nb, &|b| {
+    }
+
+    /// The monolithic dual: one factor per body, the contact nodes ordered last with contact.
+    fn monolithic(&self) -> Result<Candidate> {
+        let (mesh, ranks, contact) = (&self.model.mesh, self.ranks, self.contact);
+        let nb = mesh.bodies.len();
+        let by_body = crate::model::constraints_by_body(mesh, &self.model.constraints);
+        let f = self.body_fills(&by_body)?;
+        let fills: Vec<Fill> = f.iter().map(|x| x.fill).collect();
+        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * self.digits + self.power } else { 1.0 };
+        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), n_a);
+        if contact.is_some() && f.iter().all(|x| x.last) {
+            self.explicit_products(&mut mono, &by_body, n_a);
+        }
+        Ok(mono)
+    }
+
+    /// Each body's fill (its node order kept for the factorization), counted by rank
+    /// (body % workers) and summed over the ranks.
+    fn body_fills(&self, by_body: &[Vec<(usize, usize, f64)>]) -> Result<Vec<BodyFill>> {
+        let (model, mesh) = (self.model, &self.model.mesh);
+        let n = mesh.bodies.len();
+        let mut v = vec![BodyFill::default(); n];
+        let mut failed = Ok(());
+        for b in (self.me..n).step_by(self.workers) {
             let body = &mesh.bodies[b];
             let graph = || {
                 let dofs = DofMap::new(body.nodes.clone(), &by_body[b]);
@@ -188,136 +340,129 @@ pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solv
             };
             // with contact the contact nodes are ordered last (the explicit products); the
             // order is kept for the factorization
-            let order = super::body_order(model, b, contact.is_some(), graph)?;
-            let mut x = order.fill;
-            // the explicit products are marked by a negative flop count (restored below)
-            if order.last {
-                x.flops = -x.flops;
-            }
-            Ok(x)
-        })?;
-        let explicit: Vec<bool> = f.iter().map(|x| x.flops < 0.0).collect();
-        let f: Vec<Fill> = f.into_iter().map(|x| Fill { flops: x.flops.abs(), ..x }).collect();
-        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * digits + power } else { 1.0 };
-        let mut mono = candidate(vec![1; nb], None, &f, &|b| super::owner(b, ranks), &|b| body_dofs[b] as f64, (0, 0), n_a);
-        if contact.is_some() && explicit.iter().all(|&e| e) {
-            // a product: two dense triangular solves with each body's trailing block
-            let mut dense = vec![0.0; ranks];
-            for b in 0..nb {
-                let last = super::contact_nodes(model, b);
-                let dofs = DofMap::new(mesh.bodies[b].nodes.clone(), &by_body[b]);
-                let n =
-                    (0..last.len()).filter(|&l| last[l]).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count()).sum::<usize>()
-                        as f64;
-                dense[super::owner(b, ranks)] += n * n;
-            }
-            mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
-            mono.time = mono.t_factor + n_a * mono.t_product;
-            mono.explicit = true;
-        }
-        out.push(mono);
-    }
-    let mut counts: Vec<usize> = SUBDOMAIN_COUNTS.to_vec();
-    if dec.tfeti {
-        counts.insert(0, 1);
-    }
-    // the TFETI candidates (target DOFs, parts): each priced whole — its partition, B, fills —
-    // by one rank (balanced below), the figures summed (x + 0 is exact), so
-    // every rank gets the same table and none repeats another's partitions
-    let specs: Vec<(usize, usize, Vec<usize>)> = counts
-        .into_iter()
-        .map(|s| (s, largest.div_ceil(s)))
-        .map(|(s, target)| (s, target, body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect::<Vec<usize>>()))
-        .filter(|(s, target, parts)| !((*s > 1 && *target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len())))
-        .collect();
-    // each candidate priced by one rank, the ranks balanced by the work of its pricing: the
-    // partition (~ nodes · log2 S) and the nested dissections of the sample (~ its nodes)
-    let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
-    let per: Vec<f64> = specs.iter().map(|(_, _, parts)| total_nodes as f64 / parts.iter().sum::<usize>() as f64).collect();
-    let samples: Vec<usize> = specs.iter().zip(&per).map(|((_, _, parts), &p)| sample_size(parts.iter().sum(), p)).collect();
-    let work: Vec<f64> =
-        specs.iter().enumerate().map(|(j, (s, _, _))| total_nodes as f64 * (1.0 + 0.33 * (*s as f64).log2()) + 11.0 * per[j] * samples[j] as f64).collect();
-    let pricer = balance(&work, workers);
-    const FIGURES: usize = 8;
-    let mut figures = vec![0.0; FIGURES * specs.len()];
-    let mut failed = Ok(());
-    for (j, (s, target, parts)) in specs.iter().enumerate().filter(|(j, _)| pricer[*j] == me) {
-        let priced = (|| -> Result<Candidate> {
-            let d = decompose_each(mesh, parts)?;
-            let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
-            let cons = constraints::build(&d, &model.constraints, contact, &model.ties, dec.gluing, &elim);
-            // counted on a sample of the subdomains (a quarter of them, 2 to SAMPLED, at most
-            // SAMPLED_NODES nodes), the others scaled from it by their node count (nested
-            // dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²)
-            let ns = d.subdomains.len();
-            let stride = ns.div_ceil(samples[j].min(ns));
-            let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
-            let counted = sampled
-                .iter()
-                .map(|&s| {
-                    let sd = &d.subdomains[s];
-                    let (xadj, adj) = node_graph(&mesh.cells, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
-                    // the DOFs held inside the subdomain cost no fill
-                    let mut free = vec![3u8; sd.nodes.len()];
-                    elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);
-                    Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
-                })
-                .collect::<Result<Vec<Fill>>>()?;
-            let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
-            let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
-            for (&s, x) in sampled.iter().zip(&counted) {
-                (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
-            }
-            let f: Vec<Fill> = (0..ns)
-                .map(|s| match sampled.binary_search(&s) {
-                    Ok(i) => counted[i],
-                    Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
-                })
-                .collect();
-            let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, ranks);
-            let growth = 1.0 + TFETI_GROWTH * (*s as f64).log2();
-            let n_a = if contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
-            let rows = (cons.gluing_rows, cons.dirichlet_rows);
-            Ok(candidate(parts.clone(), Some(*target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a))
-        })();
-        match priced {
-            Ok(c) => figures[FIGURES * j..FIGURES * (j + 1)].copy_from_slice(&[
-                c.nnz_l,
-                c.nnz_l_rank,
-                c.gluing_rows as f64,
-                c.dirichlet_rows as f64,
-                c.n_a,
-                c.t_product,
-                c.t_factor,
-                c.time,
-            ]),
-            Err(e) => {
-                failed = Err(e);
-                break;
+            match super::body_order(model, b, self.contact.is_some(), graph) {
+                Ok(order) => v[b] = BodyFill { fill: order.fill, last: order.last },
+                Err(e) => {
+                    failed = Err(e);
+                    break;
+                }
             }
         }
+        // every rank reaches the sum, then all fail together
+        sum_records(self.comm, &mut v);
+        self.comm.agree(failed)?;
+        Ok(v)
     }
-    // every rank reaches the sum, then all fail together
-    comm.sum_f64(&mut figures);
-    comm.agree(failed)?;
-    for ((_, target, parts), x) in specs.into_iter().zip(figures.chunks(FIGURES)) {
-        out.push(Candidate {
-            parts,
-            tfeti: true,
-            target_dofs: Some(target),
-            nnz_l: x[0],
-            nnz_l_rank: x[1],
-            contact_rows,
-            gluing_rows: x[2] as usize,
-            dirichlet_rows: x[3] as usize,
-            n_a: x[4],
-            t_product: x[5],
-            t_factor: x[6],
-            time: x[7],
-            explicit: false,
-        });
+
+    /// Prices the monolithic dual's products through the bodies' trailing blocks: two dense
+    /// triangular solves with each body's trailing block per product.
+    fn explicit_products(&self, mono: &mut Candidate, by_body: &[Vec<(usize, usize, f64)>], n_a: f64) {
+        let (model, mesh, ranks) = (self.model, &self.model.mesh, self.ranks);
+        let mut dense = vec![0.0; ranks];
+        for b in 0..mesh.bodies.len() {
+            let last = super::contact_nodes(model, b);
+            let dofs = DofMap::new(mesh.bodies[b].nodes.clone(), &by_body[b]);
+            let n = (0..last.len()).filter(|&l| last[l]).map(|l| (0..3).filter(|c| dofs.free[3 * l + c] != crate::fem::assembly::FIXED).count()).sum::<usize>()
+                as f64;
+            dense[super::owner(b, ranks)] += n * n;
+        }
+        mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
+        mono.time = mono.t_factor + n_a * mono.t_product;
+        mono.explicit = true;
     }
-    Ok(out)
+
+    /// The TFETI candidates to price (one subdomain first where `decomposition.tfeti`): the
+    /// counts whose subdomains are large enough and no more than each body's elements.
+    fn tfeti_specs(&self, with_one: bool) -> Vec<Spec> {
+        let mesh = &self.model.mesh;
+        let mut counts: Vec<usize> = SUBDOMAIN_COUNTS.to_vec();
+        if with_one {
+            counts.insert(0, 1);
+        }
+        counts
+            .into_iter()
+            .map(|s| (s, self.largest.div_ceil(s)))
+            .map(|(s, target)| (s, target, self.body_dofs.iter().map(|&d| d.div_ceil(target).max(1)).collect::<Vec<usize>>()))
+            .filter(|(s, target, parts)| !((*s > 1 && *target < MIN_SUBDOMAIN_DOFS) || parts.iter().zip(&mesh.bodies).any(|(&p, b)| p > b.elems.len())))
+            .map(|(s, target, parts)| Spec { s, target, parts })
+            .collect()
+    }
+
+    /// The TFETI candidates (target DOFs, parts): each priced whole — its partition, B, fills —
+    /// by one rank (balanced by the work of its pricing), the figures summed (x + 0 is exact), so
+    /// every rank gets the same table and none repeats another's partitions.
+    fn tfeti_candidates(&self, dec: &DecompositionSettings, specs: Vec<Spec>) -> Result<Vec<Candidate>> {
+        let mesh = &self.model.mesh;
+        // each candidate priced by one rank, the ranks balanced by the work of its pricing: the
+        // partition (~ nodes · log2 S) and the nested dissections of the sample (~ its nodes)
+        let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
+        let per: Vec<f64> = specs.iter().map(|spec| total_nodes as f64 / spec.parts.iter().sum::<usize>() as f64).collect();
+        let samples: Vec<usize> = specs.iter().zip(&per).map(|(spec, &p)| sample_size(spec.parts.iter().sum(), p)).collect();
+        let work: Vec<f64> =
+            specs.iter().enumerate().map(|(j, spec)| total_nodes as f64 * (1.0 + 0.33 * (spec.s as f64).log2()) + 11.0 * per[j] * samples[j] as f64).collect();
+        let pricer = balance(&work, self.workers);
+        let mut figures = vec![Figures::default(); specs.len()];
+        let mut failed = Ok(());
+        for (j, spec) in specs.iter().enumerate().filter(|(j, _)| pricer[*j] == self.me) {
+            match self.tfeti(dec, spec, samples[j]) {
+                Ok(c) => figures[j] = Figures::of(&c),
+                Err(e) => {
+                    failed = Err(e);
+                    break;
+                }
+            }
+        }
+        // every rank reaches the sum, then all fail together
+        sum_records(self.comm, &mut figures);
+        self.comm.agree(failed)?;
+        Ok(specs.into_iter().zip(figures).map(|(spec, x)| x.candidate(spec, self.contact_rows)).collect())
+    }
+
+    /// Prices one TFETI candidate: its partition, B and the fills of `sample` of its subdomains.
+    fn tfeti(&self, dec: &DecompositionSettings, spec: &Spec, sample: usize) -> Result<Candidate> {
+        let (model, mesh) = (self.model, &self.model.mesh);
+        let d = decompose_each(mesh, &spec.parts)?;
+        let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
+        let cons = constraints::build(&d, &model.constraints, self.contact, &model.ties, dec.gluing, &elim);
+        let f = sampled_fills(mesh, &d, &elim, sample)?;
+        let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, self.ranks);
+        let growth = 1.0 + TFETI_GROWTH * (spec.s as f64).log2();
+        let (digits, power) = (self.digits, self.power);
+        let n_a = if self.contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
+        let rows = (cons.gluing_rows, cons.dirichlet_rows);
+        Ok(self.candidate(spec.parts.clone(), Some(spec.target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a))
+    }
+}
+
+/// Every subdomain's fill, counted on a sample of them (a quarter of them, 2 to SAMPLED, at most
+/// SAMPLED_NODES nodes: `sample`), the others scaled from it by their node count (nested
+/// dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²).
+fn sampled_fills(mesh: &crate::mesh::Mesh, d: &crate::feti::decomposition::Decomposition, elim: &[Vec<usize>], sample: usize) -> Result<Vec<Fill>> {
+    let ns = d.subdomains.len();
+    let stride = ns.div_ceil(sample.min(ns));
+    let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
+    let counted = sampled
+        .iter()
+        .map(|&s| {
+            let sd = &d.subdomains[s];
+            let (xadj, adj) = node_graph(&mesh.cells, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
+            // the DOFs held inside the subdomain cost no fill
+            let mut free = vec![3u8; sd.nodes.len()];
+            elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);
+            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
+        })
+        .collect::<Result<Vec<Fill>>>()?;
+    let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
+    let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
+    for (&s, x) in sampled.iter().zip(&counted) {
+        (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
+    }
+    Ok((0..ns)
+        .map(|s| match sampled.binary_search(&s) {
+            Ok(i) => counted[i],
+            Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
+        })
+        .collect())
 }
 
 /// Subdomains whose fill a candidate counts: a quarter of its `ns`, 2 to [`SAMPLED`], at most

@@ -306,30 +306,15 @@ pub(crate) fn pcg<A: Operator>(
     let a = qp.a;
     let sp = a.space();
     let n = x.len();
-    let (mut h, mut z, mut d, mut ad, mut md) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut pz = if opts.preconditioner.is_some() { vec![0.0; n] } else { vec![] };
-    let mut work = if opts.coarse.is_some() { vec![0.0; n] } else { vec![] };
-    let mut applications = 0;
-    // z = Π M h (z = h without a preconditioner)
-    let mut apply_m = |h: &[f64], z: &mut [f64]| match opts.preconditioner {
-        Some((m, scale)) => {
-            precondition(m, scale, opts.system, opts.coarse, h, z, &mut pz);
-            applications += 1;
-        }
-        None => z.copy_from_slice(h),
-    };
-    opts.system.apply(g, None, &mut h);
-    project(opts.system, opts.coarse, &mut h, &mut work);
-    let preconditioned = opts.preconditioner.is_some();
-    let mut hz = sp.dot(&h, &h);
-    let mut hnorm = hz.sqrt();
-    let threshold = threshold(hnorm);
+    let mut run = PcgRun::new(opts, n);
+    run.residual(sp, g);
+    let threshold = threshold(run.hnorm);
     // projected: the directions lie in Ker G, so A d = F d + Gᵀ(…) (`apply_kernel`), whose Gᵀ
     // part the projection of md removes; the gradient's recurrence sums F d and is mapped to
     // A's once at the end (`finish_kernel`)
     let g0 = if opts.coarse.is_some() { g.to_vec() } else { vec![] };
     debug_assert!(bank.is_none() || opts.coefficients == Coefficients::Standard);
-    let deflation = match (&bank, hnorm > threshold) {
+    let deflation = match (&bank, run.hnorm > threshold) {
         (Some(b), true) => {
             let mut scratch = vec![0.0; n];
             Deflation::new(sp, b, opts.system, opts.coarse, &mut scratch)
@@ -337,120 +322,38 @@ pub(crate) fn pcg<A: Operator>(
         _ => None,
     };
     if let Some(df) = &deflation {
-        // the start's Galerkin correction over U
-        let c = df.coefficients(sp, &h, true);
-        for (j, cj) in c.iter().enumerate() {
-            for i in 0..n {
-                x[i] -= cj * df.u[j][i];
-                g[i] -= cj * df.au[j][i];
-                h[i] -= cj * df.su[j][i];
-            }
-        }
-        hz = sp.dot(&h, &h);
-        hnorm = hz.sqrt();
+        run.correct_start(sp, df, x, g);
     }
-    // d = z − U E⁺ (SU)ᵀ z
-    let deflate = |z: &[f64], d: &mut [f64]| {
-        if let Some(df) = &deflation {
-            let mu = df.coefficients(sp, z, false);
-            for (j, mj) in mu.iter().enumerate() {
-                for i in 0..n {
-                    d[i] -= mj * df.u[j][i];
-                }
-            }
-        }
-    };
-    if preconditioned {
-        apply_m(&h, &mut z);
-        hz = sp.dot(&h, &z);
-    } else {
-        z.copy_from_slice(&h);
-    }
-    d.copy_from_slice(&z);
-    deflate(&z, &mut d);
-    let h_start = hnorm;
+    run.first_direction(sp, deflation.as_ref());
+    let h_start = run.hnorm;
     let mut kept: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     let (mut it, mut inexact) = (0, 0);
     // the CG coefficients α_j, β_j: the Lanczos tridiagonal of the preconditioned system
     let mut lanczos: (Vec<f64>, Vec<f64>) = (vec![], vec![]);
-    while hnorm > threshold && it < opts.max_iter {
-        // inexact Krylov: a product's error enters the iterate in proportion to the step, which
-        // shrinks with ‖h‖, so the error allowed grows as ‖h‖ falls toward the threshold
-        if let Some(kappa) = opts.relax {
-            // a product's error η·‖A‖‖d‖ against the ‖A d‖ ≥ λ_min‖d‖ of the worst direction
-            if a.allow_error(RELAXATION * threshold / (hnorm * kappa)) {
-                inexact += 1;
-            }
+    while run.hnorm > threshold && it < opts.max_iter {
+        if run.relax(a, threshold) {
+            inexact += 1;
         }
-        if opts.coarse.is_some() {
-            a.apply_kernel(&d, &mut ad);
-        } else {
-            a.apply(&d, &mut ad);
-        }
-        opts.system.apply(&ad, Some(&d), &mut md);
-        project(opts.system, opts.coarse, &mut md, &mut work);
-        let dmd = positive_curvature(sp.dot(&d, &md), "the curvature dᵀSd", opts.outer)?;
+        let dmd = run.product(a)?;
         if bank.is_some() {
-            kept.push((d.clone(), ad.clone()));
+            kept.push((run.d.clone(), run.ad.clone()));
         }
         it += 1;
-        let alpha = match opts.coefficients {
-            Coefficients::Standard => hz / dmd,
-            Coefficients::Conjugated => sp.dot(&h, &d) / dmd,
-        };
+        let alpha = run.alpha(sp, dmd);
         if opts.lanczos && lanczos.0.len() < LANCZOS_MAX {
             lanczos.0.push(alpha);
         }
-        if opts.feasible {
-            let alpha_f = sp.min(qp.set.max_step(x, &d));
-            if alpha > alpha_f {
-                // the CG step would leave Λ: go to the boundary and stop
-                for i in 0..n {
-                    x[i] -= alpha_f * d[i];
-                    g[i] -= alpha_f * ad[i];
-                }
-                each(hnorm);
-                break;
-            }
+        if opts.feasible && run.to_boundary(qp, alpha, x, g) {
+            each(run.hnorm);
+            break;
         }
-        for i in 0..n {
-            x[i] -= alpha * d[i];
-            g[i] -= alpha * ad[i];
-            h[i] -= alpha * md[i];
+        run.step(alpha, x, g);
+        let beta = run.next_direction(sp, dmd, deflation.as_ref());
+        if let Some(beta) = beta.filter(|_| opts.lanczos && lanczos.1.len() < LANCZOS_MAX) {
+            lanczos.1.push(beta);
         }
-        match opts.coefficients {
-            Coefficients::Standard => {
-                let hz_new = if preconditioned {
-                    apply_m(&h, &mut z);
-                    let v = sp.dot(&h, &z);
-                    hnorm = sp.norm(&h);
-                    v
-                } else {
-                    z.copy_from_slice(&h);
-                    let v = sp.dot(&h, &h);
-                    hnorm = v.sqrt();
-                    v
-                };
-                let beta = hz_new / hz;
-                if opts.lanczos && lanczos.1.len() < LANCZOS_MAX {
-                    lanczos.1.push(beta);
-                }
-                hz = hz_new;
-                for i in 0..n {
-                    d[i] = z[i] + beta * d[i];
-                }
-                deflate(&z, &mut d);
-            }
-            Coefficients::Conjugated => {
-                let beta = sp.dot(&h, &md) / dmd;
-                for i in 0..n {
-                    d[i] = h[i] - beta * d[i];
-                }
-                hnorm = sp.dot(&h, &h).sqrt();
-            }
-        }
-        each(hnorm);
-        if deflation.is_some() && hnorm > 2.0 * h_start {
+        each(run.hnorm);
+        if deflation.is_some() && run.hnorm > 2.0 * h_start {
             // stale deflation (the tangents moved more than the drift test saw): the iteration
             // is no longer a CG; stop here and let the Newton step go on from x
             break;
@@ -458,16 +361,11 @@ pub(crate) fn pcg<A: Operator>(
     }
     a.allow_error(0.0);
     if opts.coarse.is_some() && it > 0 {
-        // g = g₀ − Σ α A d = g₀ − P̃(g₀ − g)
-        let mut sum: Vec<f64> = g0.iter().zip(g.iter()).map(|(a, b)| a - b).collect();
-        a.finish_kernel(&mut sum);
-        for ((gi, g0i), si) in g.iter_mut().zip(&g0).zip(&sum) {
-            *gi = g0i - si;
-        }
+        finish_gradient(a, &g0, g);
     }
-    if preconditioned {
+    if run.preconditioned {
         // the last residual's preconditioning counts too (as it always did: one per iteration + 1)
-        debug_assert_eq!(applications, it + 1);
+        debug_assert_eq!(run.applications, it + 1);
     }
     if let Some(b) = bank {
         for (d, ad) in kept {
@@ -475,7 +373,203 @@ pub(crate) fn pcg<A: Operator>(
         }
     }
     let kappa = (opts.lanczos && opts.coefficients == Coefficients::Standard).then(|| condition(&lanczos.0, &lanczos.1)).flatten();
-    Ok(PcgInfo { iterations: it, applications, inexact, kappa })
+    Ok(PcgInfo { iterations: it, applications: run.applications, inexact, kappa })
+}
+
+/// g = g₀ − Σ α A d = g₀ − P̃(g₀ − g): the projected solve's gradient mapped to A's.
+fn finish_gradient<A: Operator>(a: &A, g0: &[f64], g: &mut [f64]) {
+    let mut sum: Vec<f64> = g0.iter().zip(g.iter()).map(|(a, b)| a - b).collect();
+    a.finish_kernel(&mut sum);
+    for ((gi, g0i), si) in g.iter_mut().zip(g0).zip(&sum) {
+        *gi = g0i - si;
+    }
+}
+
+/// d −= U E⁺ (SU)ᵀ z: a direction made S-orthogonal to the deflation space (none: unchanged).
+fn deflate<S: Space>(sp: &S, deflation: Option<&Deflation>, z: &[f64], d: &mut [f64]) {
+    if let Some(df) = deflation {
+        let n = d.len();
+        let mu = df.coefficients(sp, z, false);
+        for (j, mj) in mu.iter().enumerate() {
+            for i in 0..n {
+                d[i] -= mj * df.u[j][i];
+            }
+        }
+    }
+}
+
+/// The vectors and scalars of one [`pcg`] run: residual h, preconditioned residual z,
+/// direction d and its products A d and S d.
+struct PcgRun<'o, 'a> {
+    opts: &'o Pcg<'a>,
+    h: Vec<f64>,
+    z: Vec<f64>,
+    d: Vec<f64>,
+    ad: Vec<f64>,
+    md: Vec<f64>,
+    /// The preconditioner's and the projection's scratch (empty where unused).
+    pz: Vec<f64>,
+    work: Vec<f64>,
+    /// Applications of the preconditioner.
+    applications: usize,
+    /// hᵀz and ‖h‖.
+    hz: f64,
+    hnorm: f64,
+    preconditioned: bool,
+}
+
+impl<'o, 'a> PcgRun<'o, 'a> {
+    /// The run's vectors for n unknowns, zero.
+    fn new(opts: &'o Pcg<'a>, n: usize) -> Self {
+        PcgRun {
+            opts,
+            h: vec![0.0; n],
+            z: vec![0.0; n],
+            d: vec![0.0; n],
+            ad: vec![0.0; n],
+            md: vec![0.0; n],
+            pz: if opts.preconditioner.is_some() { vec![0.0; n] } else { vec![] },
+            work: if opts.coarse.is_some() { vec![0.0; n] } else { vec![] },
+            applications: 0,
+            hz: 0.0,
+            hnorm: 0.0,
+            preconditioned: opts.preconditioner.is_some(),
+        }
+    }
+
+    /// z = Π M h (z = h without a preconditioner).
+    fn apply_m(&mut self) {
+        match self.opts.preconditioner {
+            Some((m, scale)) => {
+                precondition(m, scale, self.opts.system, self.opts.coarse, &self.h, &mut self.z, &mut self.pz);
+                self.applications += 1;
+            }
+            None => self.z.copy_from_slice(&self.h),
+        }
+    }
+
+    /// The system's residual h = Π g (projected), hᵀh and ‖h‖.
+    fn residual<S: Space>(&mut self, sp: &S, g: &[f64]) {
+        self.opts.system.apply(g, None, &mut self.h);
+        project(self.opts.system, self.opts.coarse, &mut self.h, &mut self.work);
+        self.hz = sp.dot(&self.h, &self.h);
+        self.hnorm = self.hz.sqrt();
+    }
+
+    /// The start's Galerkin correction over the deflation space U.
+    fn correct_start<S: Space>(&mut self, sp: &S, df: &Deflation, x: &mut [f64], g: &mut [f64]) {
+        let n = x.len();
+        let c = df.coefficients(sp, &self.h, true);
+        for (j, cj) in c.iter().enumerate() {
+            for i in 0..n {
+                x[i] -= cj * df.u[j][i];
+                g[i] -= cj * df.au[j][i];
+                self.h[i] -= cj * df.su[j][i];
+            }
+        }
+        self.hz = sp.dot(&self.h, &self.h);
+        self.hnorm = self.hz.sqrt();
+    }
+
+    /// z = Π M h, hᵀz, and the first direction d = z − U E⁺ (SU)ᵀ z.
+    fn first_direction<S: Space>(&mut self, sp: &S, deflation: Option<&Deflation>) {
+        if self.preconditioned {
+            self.apply_m();
+            self.hz = sp.dot(&self.h, &self.z);
+        } else {
+            self.z.copy_from_slice(&self.h);
+        }
+        self.d.copy_from_slice(&self.z);
+        deflate(sp, deflation, &self.z, &mut self.d);
+    }
+
+    /// Allows this iteration's product an error where the solve relaxes (inexact Krylov: a
+    /// product's error enters the iterate in proportion to the step, which shrinks with ‖h‖, so
+    /// the error allowed grows as ‖h‖ falls toward the threshold); whether it is inexact.
+    fn relax<A: Operator>(&self, a: &A, threshold: f64) -> bool {
+        // a product's error η·‖A‖‖d‖ against the ‖A d‖ ≥ λ_min‖d‖ of the worst direction
+        self.opts.relax.is_some_and(|kappa| a.allow_error(RELAXATION * threshold / (self.hnorm * kappa)))
+    }
+
+    /// A d, S d (projected) and the curvature dᵀSd, which must be positive.
+    fn product<A: Operator>(&mut self, a: &A) -> Result<f64, QpError> {
+        let opts = self.opts;
+        if opts.coarse.is_some() {
+            a.apply_kernel(&self.d, &mut self.ad);
+        } else {
+            a.apply(&self.d, &mut self.ad);
+        }
+        opts.system.apply(&self.ad, Some(&self.d), &mut self.md);
+        project(opts.system, opts.coarse, &mut self.md, &mut self.work);
+        positive_curvature(a.space().dot(&self.d, &self.md), "the curvature dᵀSd", opts.outer)
+    }
+
+    /// The step length α along d.
+    fn alpha<S: Space>(&self, sp: &S, dmd: f64) -> f64 {
+        match self.opts.coefficients {
+            Coefficients::Standard => self.hz / dmd,
+            Coefficients::Conjugated => sp.dot(&self.h, &self.d) / dmd,
+        }
+    }
+
+    /// CGMfeas: where the CG step α would leave Λ, goes to the boundary instead; whether it did
+    /// (the solve then stops).
+    fn to_boundary<A: Operator>(&self, qp: &Qp<'_, A>, alpha: f64, x: &mut [f64], g: &mut [f64]) -> bool {
+        let alpha_f = qp.a.space().min(qp.set.max_step(x, &self.d));
+        if alpha > alpha_f {
+            for i in 0..x.len() {
+                x[i] -= alpha_f * self.d[i];
+                g[i] -= alpha_f * self.ad[i];
+            }
+            return true;
+        }
+        false
+    }
+
+    /// x, g and h moved by the step α along d.
+    fn step(&mut self, alpha: f64, x: &mut [f64], g: &mut [f64]) {
+        for i in 0..x.len() {
+            x[i] -= alpha * self.d[i];
+            g[i] -= alpha * self.ad[i];
+            self.h[i] -= alpha * self.md[i];
+        }
+    }
+
+    /// The next direction and ‖h‖ (with the standard coefficients also z and hᵀz); the
+    /// standard coefficients' β.
+    fn next_direction<S: Space>(&mut self, sp: &S, dmd: f64, deflation: Option<&Deflation>) -> Option<f64> {
+        let n = self.d.len();
+        match self.opts.coefficients {
+            Coefficients::Standard => {
+                let hz_new = if self.preconditioned {
+                    self.apply_m();
+                    let v = sp.dot(&self.h, &self.z);
+                    self.hnorm = sp.norm(&self.h);
+                    v
+                } else {
+                    self.z.copy_from_slice(&self.h);
+                    let v = sp.dot(&self.h, &self.h);
+                    self.hnorm = v.sqrt();
+                    v
+                };
+                let beta = hz_new / self.hz;
+                self.hz = hz_new;
+                for i in 0..n {
+                    self.d[i] = self.z[i] + beta * self.d[i];
+                }
+                deflate(sp, deflation, &self.z, &mut self.d);
+                Some(beta)
+            }
+            Coefficients::Conjugated => {
+                let beta = sp.dot(&self.h, &self.md) / dmd;
+                for i in 0..n {
+                    self.d[i] = self.h[i] - beta * self.d[i];
+                }
+                self.hnorm = sp.dot(&self.h, &self.h).sqrt();
+                None
+            }
+        }
+    }
 }
 
 /// BiCGSTAB workspace: the solution x of J x = rhs and A x, accumulated from the products.

@@ -17,14 +17,16 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::comm::Comm;
+use crate::contact::pairing::Contact;
 use crate::dual::monolithic::MonolithicDual;
 use crate::dual::DualProblem;
 use crate::error::{Error, Result};
+use crate::model::Model;
 use crate::pipeline::tfeti::setup;
 use crate::pipeline::{assemble_and_factorize, preconditioner, DualKind, Timings};
 use crate::qp::cone::Coefficient;
 use crate::qp::{self, kkt, Lambda, Method, Operator, Params, Preconditioner, Qp, QpSolution, Silent, Space};
-use crate::scene::Projector;
+use crate::scene::{LoadedScene, Projector};
 use crate::studies::socp::PrimalSocp;
 use crate::studies::table1::{u_error, Column};
 
@@ -199,7 +201,7 @@ fn sweep<A: Operator>(
 
 /// Runs the study; `on_problem` sees each problem when it is set up and `on_point` each point
 /// when it is done.
-pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem), mut on_point: impl FnMut(&Point)) -> Result<(Vec<Problem>, Vec<Point>)> {
+pub fn run<C: Comm>(comm: &C, args: &Args, on_problem: impl FnMut(&Problem), on_point: impl FnMut(&Point)) -> Result<(Vec<Problem>, Vec<Point>)> {
     if comm.size() != 1 {
         return Err(Error::scene("work-precision", "runs on one rank (Clarabel needs every body on it): run it without mpirun"));
     }
@@ -214,7 +216,7 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
     if let (Some(&s), Some(&n)) = (args.subdomains.iter().find(|&&s| s > 0), args.sizes.first()) {
         tfeti_scene(args, &sets_at(n), s)?;
     }
-    let (mut problems, mut points) = (Vec::new(), Vec::new());
+    let mut study = Study { args, eps_dual, eps_clarabel, on_problem, on_point, problems: Vec::new(), points: Vec::new() };
     for &n in &args.sizes {
         let sets = sets_at(n);
         let ls = crate::scene::load(&args.scene, &sets)?;
@@ -225,8 +227,55 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         if coulomb.is_some() && args.solvers.contains(&Solver::Clarabel) {
             return Err(Error::scene("--solvers", "clarabel solves the Tresca SOCP: leave it out for a Coulomb scene"));
         }
+        let r = Reference::new(comm, args, n, &ls, &model, contact, coulomb)?;
+        for &s in &args.subdomains {
+            let problem = if s == 0 { study.monolithic_rows(comm, &r, &ls)? } else { study.tfeti_rows(comm, &r, &ls, &sets, s)? };
+            study.problems.push(problem);
+        }
+    }
+    Ok((study.problems, study.points))
+}
+
+/// The study's settings and what it has run so far.
+struct Study<'s, P, Q> {
+    args: &'s Args,
+    /// The dual solvers' and Clarabel's tolerances, loose → tight.
+    eps_dual: Vec<f64>,
+    eps_clarabel: Vec<f64>,
+    on_problem: P,
+    on_point: Q,
+    problems: Vec<Problem>,
+    points: Vec<Point>,
+}
+
+/// One mesh size's monolithic dual and its reference solution, against which every row of the
+/// size is measured.
+struct Reference<'a, C: Comm> {
+    n: usize,
+    contact: &'a Contact,
+    /// The contact's friction coefficients, for a Coulomb scene.
+    coulomb: Option<Vec<Coefficient>>,
+    dual: MonolithicDual<'a, C>,
+    b: Vec<f64>,
+    set: Lambda,
+    /// Assembly and factorization of the monolithic dual.
+    factorize_s: f64,
+    bnorm: f64,
+    solution: QpSolution,
+    /// The reference displacements of each body, and per mesh node (for the subdomains' copies).
+    u_ref: Vec<Vec<f64>>,
+    u_nodes: Vec<[f64; 3]>,
+    /// The largest reference displacement component (the TFETI rows' scale of err(u)).
+    u_max: f64,
+    dofs: usize,
+}
+
+impl<'a, C: Comm> Reference<'a, C> {
+    /// Assembles and factorizes the monolithic dual at size `n` and solves it to the reference
+    /// tolerance (SSN-BiCGSTAB).
+    fn new(comm: &'a C, args: &Args, n: usize, ls: &LoadedScene, model: &Model, contact: &'a Contact, coulomb: Option<Vec<Coefficient>>) -> Result<Self> {
         let mut t = Timings::default();
-        let bodies = assemble_and_factorize(comm, &model, ls.scene.factorization.ordering, true, &mut t)?;
+        let bodies = assemble_and_factorize(comm, model, ls.scene.factorization.ordering, true, &mut t)?;
         let factorize_s: f64 = t.phases.iter().map(|p| p.1).sum();
         let (dual, b) = MonolithicDual::new(comm, contact, bodies);
         let set = contact.constraint_set();
@@ -238,13 +287,8 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         p.common.eps = args.reference_eps;
         p.common.max_outer = 10_000;
         let what = format!("the reference solve (SSN-BiCGSTAB, ε = {:.0e}) at N = {n}", args.reference_eps);
-        let reference = qp::solve_friction(&qp_mono, coulomb.as_deref(), &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
-        // the cones the KKT residuals are taken against: cut at each solution's λν (Coulomb)
-        let cones = |set: &crate::qp::Lambda, l: &[f64]| match &coulomb {
-            Some(mu) => crate::qp::cone::bounds(set, mu, l),
-            None => set.clone(),
-        };
-        let u_ref = dual.recover(&reference.lambda).u;
+        let solution = qp::solve_friction(&qp_mono, coulomb.as_deref(), &zero, &p, &mut Silent).map_err(|e| Error::solver(&what, e))?;
+        let u_ref = dual.recover(&solution.lambda).u;
         // the reference per mesh node, for the subdomains' copies
         let mut u_nodes = vec![[0.0; 3]; model.mesh.nodes.len()];
         for (blk, u) in dual.blocks.iter().zip(&u_ref) {
@@ -253,108 +297,100 @@ pub fn run<C: Comm>(comm: &C, args: &Args, mut on_problem: impl FnMut(&Problem),
         }
         let u_max = u_nodes.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
         let dofs = 3 * model.mesh.nodes.len();
-        for &s in &args.subdomains {
-            if s == 0 {
-                let problem = Problem {
-                    n,
-                    subdomains: 0,
-                    dofs,
-                    pairs: contact.len(),
-                    factorize_s,
-                    reference: reference.info.clone(),
-                    default: default_method(&ls, DualKind::Monolithic),
-                };
-                on_problem(&problem);
-                let measure = |sol: &QpSolution| {
-                    let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &u_ref);
-                    (e_u, lambda_error(&sol.lambda, &reference.lambda), kkt::residuals(&cones(&set, &sol.lambda), &sol.lambda, &sol.gradient, bnorm).worst())
-                };
-                for &solver in &args.solvers {
-                    match solver {
-                        // the monolithic dual has no preconditioner
-                        Solver::Dual(c) if preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err() => {}
-                        Solver::Dual(c) => sweep(
-                            &qp_mono,
-                            coulomb.as_deref(),
-                            c,
-                            base,
-                            args,
-                            &eps_dual,
-                            &blank(n, 0, solver, factorize_s),
-                            &measure,
-                            &mut on_point,
-                            &mut points,
-                        ),
-                        Solver::Clarabel => clarabel(
-                            comm,
-                            &dual,
-                            &b,
-                            &set,
-                            &reference.lambda,
-                            &u_ref,
-                            bnorm,
-                            &eps_clarabel,
-                            &blank(n, 0, solver, factorize_s),
-                            &mut on_point,
-                            &mut points,
-                        )?,
-                    }
+        Ok(Reference { n, contact, coulomb, dual, b, set, factorize_s, bnorm, solution, u_ref, u_nodes, u_max, dofs })
+    }
+
+    /// The cones the KKT residuals are taken against: cut at each solution's λν (Coulomb).
+    fn cones(&self, set: &Lambda, l: &[f64]) -> Lambda {
+        match &self.coulomb {
+            Some(mu) => crate::qp::cone::bounds(set, mu, l),
+            None => set.clone(),
+        }
+    }
+
+    /// The problem of `subdomains` (0: the monolithic dual) with this set-up time and default.
+    fn problem(&self, subdomains: usize, factorize_s: f64, default: Method) -> Problem {
+        Problem { n: self.n, subdomains, dofs: self.dofs, pairs: self.contact.len(), factorize_s, reference: self.solution.info.clone(), default }
+    }
+}
+
+impl<P: FnMut(&Problem), Q: FnMut(&Point)> Study<'_, P, Q> {
+    /// Every solver's sweep on the monolithic dual of `r`.
+    fn monolithic_rows<C: Comm>(&mut self, comm: &C, r: &Reference<'_, C>, ls: &LoadedScene) -> Result<Problem> {
+        let (n, args) = (r.n, self.args);
+        let problem = r.problem(0, r.factorize_s, default_method(ls, DualKind::Monolithic));
+        (self.on_problem)(&problem);
+        let (dual, set) = (&r.dual, &r.set);
+        let qp_mono = Qp::new(dual, &r.b, set);
+        let base = &ls.scene.solver.params;
+        let measure = |sol: &QpSolution| {
+            let e_u = u_error(comm, &dual.recover(&sol.lambda).u, &r.u_ref);
+            (e_u, lambda_error(&sol.lambda, &r.solution.lambda), kkt::residuals(&r.cones(set, &sol.lambda), &sol.lambda, &sol.gradient, r.bnorm).worst())
+        };
+        for &solver in &args.solvers {
+            let template = blank(n, 0, solver, r.factorize_s);
+            match solver {
+                // the monolithic dual has no preconditioner
+                Solver::Dual(c) if preconditioner(c.method, c.preconditioner(), DualKind::Monolithic).is_err() => {}
+                Solver::Dual(c) => {
+                    sweep(&qp_mono, r.coulomb.as_deref(), c, base, args, &self.eps_dual, &template, &measure, &mut self.on_point, &mut self.points)
                 }
-                problems.push(problem);
-                continue;
+                Solver::Clarabel => {
+                    clarabel(comm, dual, &r.b, set, &r.solution.lambda, &r.u_ref, r.bnorm, &self.eps_clarabel, &template, &mut self.on_point, &mut self.points)?
+                }
             }
-            let tls = tfeti_scene(args, &sets, s)?;
-            let mut tmodel = crate::model::build(&tls)?;
-            let mut tt = Timings::default();
-            let mut prob = setup(comm, &tls, &mut tmodel, &mut tt)?;
-            let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
-            let problem = Problem {
-                n,
-                subdomains: s,
-                dofs,
-                pairs: contact.len(),
-                factorize_s: setup_s,
-                reference: reference.info.clone(),
-                default: default_method(&tls, DualKind::of(&tls, &tmodel)),
-            };
-            on_problem(&problem);
-            let ni = set.layout.dim();
-            for &solver in &args.solvers {
-                let Solver::Dual(c) = solver else { continue };
-                let t0 = Instant::now();
-                let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true })?;
-                prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, prob.weights.clone())?;
-                let pc_s = t0.elapsed().as_secs_f64();
-                let (dual_t, share) = (&prob.dual, &prob.share);
-                let measure = |sol: &QpSolution| {
-                    // the seed's bodies are held by Dirichlet conditions: α always exists; were
-                    // it not, the row reads NaN (no panic)
-                    let Some(rec) = dual_t.recover_with(&sol.lambda, None) else { return (f64::NAN, f64::NAN, f64::NAN) };
-                    let mut e = 0.0f64;
-                    for (ls, uc) in dual_t.pieces.iter().zip(&rec.u) {
-                        for (m, sub) in ls.sys.subs.iter().enumerate() {
-                            let us = ls.sys.part(uc, m);
-                            for (l, &v) in share.layout[share.position(sub.index)].nodes.iter().enumerate() {
-                                for c in 0..3 {
-                                    e = e.max((us[3 * l + c] - u_nodes[v][c]).abs());
-                                }
+        }
+        Ok(problem)
+    }
+
+    /// Every dual solver's sweep on TFETI with `s` subdomains per body (the scene `ls` with
+    /// `sets` on the TFETI path; the solver settings of `ls`), measured against `r`.
+    fn tfeti_rows<C: Comm>(&mut self, comm: &C, r: &Reference<'_, C>, ls: &LoadedScene, sets: &[String], s: usize) -> Result<Problem> {
+        let (n, args) = (r.n, self.args);
+        let tls = tfeti_scene(args, sets, s)?;
+        let mut tmodel = crate::model::build(&tls)?;
+        let mut tt = Timings::default();
+        let mut prob = setup(comm, &tls, &mut tmodel, &mut tt)?;
+        let setup_s: f64 = tt.phases.iter().map(|p| p.1).sum();
+        let problem = r.problem(s, setup_s, default_method(&tls, DualKind::of(&tls, &tmodel)));
+        (self.on_problem)(&problem);
+        let base = &ls.scene.solver.params;
+        let ni = r.set.layout.dim();
+        for &solver in &args.solvers {
+            let Solver::Dual(c) = solver else { continue };
+            let t0 = Instant::now();
+            let pc = preconditioner(c.method, c.preconditioner(), DualKind::Tfeti { orthogonal: false, contact: true, projected: true })?;
+            prob.dual.set_preconditioner(pc.unwrap_or(crate::scene::Preconditioner::None), &prob.constraints, prob.weights.clone())?;
+            let pc_s = t0.elapsed().as_secs_f64();
+            let (dual_t, share) = (&prob.dual, &prob.share);
+            let measure = |sol: &QpSolution| {
+                // the seed's bodies are held by Dirichlet conditions: α always exists; were
+                // it not, the row reads NaN (no panic)
+                let Some(rec) = dual_t.recover_with(&sol.lambda, None) else { return (f64::NAN, f64::NAN, f64::NAN) };
+                let mut e = 0.0f64;
+                for (piece, uc) in dual_t.pieces.iter().zip(&rec.u) {
+                    for (m, sub) in piece.sys.subs.iter().enumerate() {
+                        let us = piece.sys.part(uc, m);
+                        for (l, &v) in share.layout[share.position(sub.index)].nodes.iter().enumerate() {
+                            for c in 0..3 {
+                                e = e.max((us[3 * l + c] - r.u_nodes[v][c]).abs());
                             }
                         }
                     }
-                    let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
-                    (e / u_max, lambda_error(&li, &reference.lambda), kkt::residuals(&cones(&set, &li), &li, &ri, bnorm).worst())
-                };
-                let m = prob.dual.preconditioner();
-                let dk = DualKind::Tfeti { orthogonal: false, contact: true, projected: true };
-                let coarse = crate::pipeline::projected(c.method, dk).then_some(&prob.dual as &dyn crate::qp::Coarse);
-                let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner)).with_coarse(coarse);
-                let mu = coulomb.as_ref().map(|_| contact.coefficients(&prob.dual.dist.pairs));
-                sweep(&qp, mu.as_deref(), c, base, args, &eps_dual, &blank(n, s, solver, setup_s + pc_s), &measure, &mut on_point, &mut points);
-            }
-            problems.push(problem);
+                }
+                let (li, ri) = (dual_t.dist.all_rows(&rec.lambda, ni), dual_t.dist.all_rows(&rec.gap, ni));
+                (e / r.u_max, lambda_error(&li, &r.solution.lambda), kkt::residuals(&r.cones(&r.set, &li), &li, &ri, r.bnorm).worst())
+            };
+            let m = prob.dual.preconditioner();
+            let dk = DualKind::Tfeti { orthogonal: false, contact: true, projected: true };
+            let coarse = crate::pipeline::projected(c.method, dk).then_some(&prob.dual as &dyn crate::qp::Coarse);
+            let qp = Qp::new(&prob.dual, &prob.b, &prob.set).with_preconditioner(m.as_ref().map(|m| m as &dyn Preconditioner)).with_coarse(coarse);
+            let mu = r.coulomb.as_ref().map(|_| r.contact.coefficients(&prob.dual.dist.pairs));
+            let template = blank(n, s, solver, setup_s + pc_s);
+            sweep(&qp, mu.as_deref(), c, base, args, &self.eps_dual, &template, &measure, &mut self.on_point, &mut self.points);
         }
+        Ok(problem)
     }
-    Ok((problems, points))
 }
 
 /// The scene with S subdomains per body on the TFETI path (oblique projector, no preconditioner:
