@@ -19,6 +19,7 @@ use crate::scene::{Component, LoadedScene, Scene, Side};
 /// Mesh + boundary conditions, ready for assembly.
 #[derive(Clone, Debug)]
 pub struct Model {
+    /// The bodies' nodes, cells and named faces (released under TFETI once every rank holds its share).
     pub mesh: Mesh,
     /// The sizes of the whole mesh (they stay when TFETI releases the mesh arrays:
     /// [`Model::release_mesh`]).
@@ -55,8 +56,9 @@ pub struct Model {
 /// A face cut from another by a region: the facets whose centres lie in it.
 #[derive(Clone, Debug)]
 pub struct CutFace {
-    /// Its index in `mesh.faces`, and the face it is cut from.
+    /// Its index in `mesh.faces`.
     pub face: usize,
+    /// The index in `mesh.faces` of the face it is cut from.
     pub from: usize,
     /// The region, in words.
     pub region: String,
@@ -93,7 +95,9 @@ fn cut(mesh: &Mesh, face: &Face, region: &crate::scene::Region) -> (Vec<crate::m
 /// Nodes and elements of the whole mesh.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MeshSize {
+    /// Nodes of all bodies.
     pub nodes: usize,
+    /// Cells (volume elements) of all bodies.
     pub elements: usize,
     /// Cells of each type, in [`crate::mesh::CellKind::ALL`] order.
     pub by_kind: [usize; 4],
@@ -110,6 +114,7 @@ impl MeshSize {
 /// entry's times the entry's factor f_k.
 #[derive(Clone, Debug, Default)]
 pub struct LoadPath {
+    /// The load steps solved (those before a stop, on a path cut short).
     pub steps: usize,
     /// The Dirichlet entry of every constraint (parallel to [`Model::constraints`]) and its
     /// value at factor 1.
@@ -127,9 +132,13 @@ pub struct LoadPath {
 /// group, and the reason).
 #[derive(Clone, Debug)]
 pub struct Stopped {
+    /// The first step without equilibrium (1-based).
     pub at: usize,
+    /// The steps the scene asked for.
     pub of: usize,
+    /// The body or tied group that is not held.
     pub what: String,
+    /// Why: the load it carries that nothing holds.
     pub why: String,
 }
 

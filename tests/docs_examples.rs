@@ -94,7 +94,7 @@ fn assert_printed(doc: &str, printed: &str, out: &str) {
     for want in printed.lines().map(strip).filter(|l| !l.trim().is_empty() && l.trim() != "…") {
         let found = match want.split_once('…') {
             Some((head, _)) => lines.iter().any(|l| l.starts_with(head.trim_end())),
-            None => lines.iter().any(|l| *l == want),
+            None => lines.contains(&want),
         };
         assert!(found, "{doc} prints\n  {want}\nbut the program prints:\n{out}");
         n += 1;

@@ -14,7 +14,7 @@ use tresca_feti::mesh::{boxgen, Mesh};
 /// A unit-cube mesh with `n` nodes per edge; interior nodes moved pseudo-randomly by up to
 /// `jitter`·h.
 fn cube(n: usize, jitter: f64) -> Mesh {
-    let mut g = boxgen::generate([0.0; 3], [1.0; 3], [n; 3]);
+    let mut g = boxgen::try_generate([0.0; 3], [1.0; 3], [n; 3]).unwrap();
     let h = 1.0 / (n - 1) as f64;
     let mut seed = 12345u64;
     let mut rnd = || {
@@ -30,7 +30,7 @@ fn cube(n: usize, jitter: f64) -> Mesh {
         }
     }
     let mut m = Mesh::default();
-    m.push_body("cube", g);
+    m.try_push_body("cube", g).unwrap();
     m
 }
 
@@ -279,7 +279,7 @@ fn the_fine_rule_integrates_degree_seven_exactly() {
 fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
     let mut g = match kind {
         CellKind::Wedge6 => {
-            let hex = boxgen::generate([0.0; 3], [1.0; 3], [n; 3]);
+            let hex = boxgen::try_generate([0.0; 3], [1.0; 3], [n; 3]).unwrap();
             let cells = hex
                 .cells
                 .iter()
@@ -315,7 +315,7 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
         }
     }
     let mut m = Mesh::default();
-    m.push_body("cube", g);
+    m.try_push_body("cube", g).unwrap();
     m
 }
 

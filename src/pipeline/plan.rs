@@ -65,6 +65,7 @@ pub const SUBDOMAIN_COUNTS: [usize; 8] = [2, 4, 8, 16, 32, 64, 128, 256];
 pub struct Candidate {
     /// Subdomains of each body (all 1 for the monolithic dual).
     pub parts: Vec<usize>,
+    /// Solved on the TFETI dual (else the monolithic one).
     pub tfeti: bool,
     /// DOFs per subdomain asked for (TFETI).
     pub target_dofs: Option<usize>,
@@ -72,14 +73,19 @@ pub struct Candidate {
     pub nnz_l: f64,
     /// nnz(L) of the busiest rank.
     pub nnz_l_rank: f64,
-    /// Dual rows: contact, gluing, Dirichlet.
+    /// Dual rows of the contact constraints.
     pub contact_rows: usize,
+    /// Dual rows gluing the subdomains (TFETI).
     pub gluing_rows: usize,
+    /// Dual rows of the Dirichlet conditions (TFETI).
     pub dirichlet_rows: usize,
-    /// Predicted A-products, seconds per product, setup (assembly to factors) and total seconds.
+    /// Predicted A-products of the solve.
     pub n_a: f64,
+    /// Predicted seconds per A-product.
     pub t_product: f64,
+    /// Predicted set-up seconds (assembly to factors).
     pub t_factor: f64,
+    /// Predicted total seconds: set-up and products.
     pub time: f64,
     /// The monolithic dual's products through the factors' trailing blocks (contact nodes
     /// ordered last where that costs little fill: [`order_last_if_cheap`]).
@@ -88,6 +94,7 @@ pub struct Candidate {
 }
 
 impl Candidate {
+    /// `monolithic` or `TFETI p₁/p₂/…` (subdomains per body), as the table prints it.
     pub fn label(&self) -> String {
         if self.tfeti {
             format!("TFETI {}", self.parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("/"))
@@ -96,6 +103,7 @@ impl Candidate {
         }
     }
 
+    /// All dual rows: contact, gluing and Dirichlet.
     pub fn dual_rows(&self) -> usize {
         self.contact_rows + self.gluing_rows + self.dirichlet_rows
     }

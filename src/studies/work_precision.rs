@@ -33,7 +33,9 @@ use crate::studies::table1::{u_error, Column};
 /// One row of the study: a dual solver (with its parameter preset) or Clarabel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Solver {
+    /// A dual solver with its parameter preset.
     Dual(Column),
+    /// Clarabel's interior-point method on the primal SOCP.
     Clarabel,
 }
 
@@ -46,6 +48,7 @@ impl Solver {
         Column::parse(s).map(Solver::Dual).map_err(|e| format!("{e}, or clarabel"))
     }
 
+    /// The row's name in the table and the CSV.
     pub fn label(&self) -> String {
         match self {
             Solver::Dual(c) => c.label(),
@@ -57,8 +60,11 @@ impl Solver {
 /// What `work-precision` is asked to do.
 #[derive(Clone, Debug)]
 pub struct Args {
+    /// The scene (its `mesh.n` is set per size).
     pub scene: PathBuf,
+    /// `--set` overrides of the scene.
     pub sets: Vec<String>,
+    /// Mesh sizes N (nodes per edge of each block).
     pub sizes: Vec<usize>,
     /// The duals to run the dual solvers on: 0 the monolithic dual, S ≥ 1 TFETI with S
     /// subdomains per body (oblique projector; Clarabel runs with the monolithic one only).
@@ -67,7 +73,9 @@ pub struct Args {
     pub eps: Vec<f64>,
     /// Clarabel's (its time hardly depends on ε: a few points suffice).
     pub clarabel_eps: Vec<f64>,
+    /// The rows of the study.
     pub solvers: Vec<Solver>,
+    /// Where the CSV goes (none: not written).
     pub csv: Option<PathBuf>,
     /// ε of the reference solve.
     pub reference_eps: f64,
@@ -82,7 +90,9 @@ pub struct Args {
 /// How one point of the sweep ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Status {
+    /// Converged to its ε.
     Ok,
+    /// Stopped with this reason (no convergence, breakdown, a limit).
     Failed(String),
     /// Not run: a looser ε of the same solver failed or took longer than `max_seconds`.
     Skipped,
@@ -91,20 +101,34 @@ pub enum Status {
 /// One solve: a solver at one ε on the problem of size N.
 #[derive(Clone, Debug)]
 pub struct Point {
+    /// Mesh size N.
     pub n: usize,
     /// 0: the monolithic dual; S: TFETI with S subdomains per body.
     pub subdomains: usize,
+    /// The row's solver.
     pub solver: Solver,
+    /// The tolerance it ran at.
     pub eps: f64,
+    /// How it ended.
     pub status: Status,
+    /// Outer iterations (Clarabel: its interior-point iterations).
     pub iterations: usize,
+    /// A-products of the solve, σ_max's estimate included.
     pub n_a: usize,
+    /// A-products of σ_max's estimate alone.
     pub n_a_power: usize,
+    /// Inner (Krylov) iterations.
     pub inner: usize,
+    /// Seconds of the set-up the solve stands on (the dual's: assembly and factors, or TFETI's
+    /// set-up and preconditioner; Clarabel: building the SOCP).
     pub setup_s: f64,
+    /// Seconds of the solve.
     pub solve_s: f64,
+    /// Max-norm error of u relative to the reference's.
     pub err_u: f64,
+    /// Euclidean error of λ relative to the reference's.
     pub err_lambda: f64,
+    /// The worst KKT residual of the solution.
     pub kkt: f64,
     /// The solver's own final measure (dual: ‖r̃_ρ‖/‖b‖; Clarabel: NaN).
     pub residual: f64,
@@ -113,14 +137,18 @@ pub struct Point {
 /// The problem at one N.
 #[derive(Clone, Debug)]
 pub struct Problem {
+    /// Mesh size N.
     pub n: usize,
     /// 0: the monolithic dual; S: TFETI with S subdomains per body.
     pub subdomains: usize,
+    /// DOFs of the model.
     pub dofs: usize,
+    /// Contact pairs.
     pub pairs: usize,
     /// The set-up the dual solvers share: assembly and factorization (monolithic), or
     /// decomposition, factorization, coarse problem and b̃ (TFETI).
     pub factorize_s: f64,
+    /// The reference solve's counters.
     pub reference: qp::Info,
     /// The scene's solver: the default the summary compares with.
     pub default: Method,
