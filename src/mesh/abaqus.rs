@@ -466,7 +466,7 @@ impl Deck {
             "PART" | "INSTANCE" | "ASSEMBLY" => {
                 return Err(Fail::at(
                     i,
-                    format!("*{name}: parts, instances and assemblies are not read; flatten the assembly (Abaqus/CAE: Model > Edit Attributes, uncheck \"Do not use parts and assemblies in input files\", then Write Input) or give a *PART-free input"),
+                    format!("*{name}: parts, instances and assemblies are not read; flatten the assembly (Abaqus/CAE: Model > Edit Attributes, tick \"Do not use parts and assemblies in input files\", then Write Input) or give a *PART-free input"),
                 ))
             }
             _ => Block::Skip,
