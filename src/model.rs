@@ -12,9 +12,9 @@ use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::facet::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
-use crate::mesh::{boxgen, gmsh, rigid, BodyGeometry, Face, Mesh};
+use crate::mesh::{abaqus, boxgen, gmsh, rigid, BodyGeometry, Face, Mesh};
 use crate::qp::cone::Coefficient;
-use crate::scene::{Component, LoadedScene, Scene, Side};
+use crate::scene::{Component, LoadedScene, MeshFormat, Scene, Side};
 
 /// Mesh + boundary conditions, ready for assembly.
 #[derive(Clone, Debug)]
@@ -283,10 +283,10 @@ fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
     let scene: &Scene = &ls.scene;
     let mut mesh = Mesh::default();
     for (i, b) in scene.bodies.iter().enumerate() {
-        let geom = match (&b.boxed, &b.gmsh) {
+        let geom = match (&b.boxed, b.mesh_file()) {
             (Some(bx), _) => box_geometry(scene, bx)?,
-            (_, Some(g)) => gmsh_geometry(ls, i, b, g)?,
-            _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
+            (_, Some((key, m))) => file_geometry(ls, i, b, key, &m)?,
+            _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box`, `mesh` and `gmsh`")),
         };
         mesh.try_push_body(&b.name, geom)?;
     }
@@ -307,21 +307,26 @@ fn box_geometry(scene: &Scene, bx: &crate::scene::BoxDef) -> Result<BodyGeometry
     Ok(geom)
 }
 
-/// A Gmsh body's cells read from its file, shifted by its `translate` (kept in coordinate range).
-fn gmsh_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, g: &crate::scene::GmshDef) -> Result<BodyGeometry> {
+/// A mesh-file body's cells read from its file (Abaqus or Gmsh), shifted by its `translate`
+/// (kept in coordinate range); `key` is the scene key it was given under (`mesh`, `gmsh`).
+fn file_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, key: &str, g: &crate::scene::MeshDef) -> Result<BodyGeometry> {
     let path = ls.dir().join(&g.file);
-    let mut geom = gmsh::read(&path, g.volume.as_deref())?;
+    let mut geom = match g.resolved_format() {
+        Some(MeshFormat::Abaqus) => abaqus::read(&path, g.volume.as_deref())?,
+        Some(MeshFormat::Gmsh) => gmsh::read(&path, g.volume.as_deref())?,
+        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh)")),
+    };
     if let Some(t) = g.translate {
         for p in &mut geom.nodes {
             for d in 0..3 {
                 p[d] += t[d];
             }
         }
-        // the file's coordinates were checked (gmsh::read); the shift must keep them in range
+        // the file's coordinates were checked by the reader; the shift must keep them in range
         let far = geom.nodes.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
         if far > crate::scene::range::MAX {
             return Err(Error::scene(
-                format!("body[{i}].gmsh.translate"),
+                format!("body[{i}].{key}.translate"),
                 format!(
                     "moves body \"{}\" to coordinates up to {far:.3e} m, outside ±{:e} m (the element sizes would be lost in them)",
                     b.name,

@@ -52,13 +52,19 @@ pub fn results(ls: &LoadedScene, out_key: &str) -> Vec<Named> {
     r
 }
 
-/// The files a solve of `ls` reads: the scene and every body's Gmsh mesh (relative to the
-/// scene's folder).
+/// The files a solve of `ls` reads: the scene and every body's mesh file (relative to the
+/// scene's folder), with the files an Abaqus input includes.
 pub fn inputs(ls: &LoadedScene) -> Vec<Named> {
     let mut r = vec![Named::new("scene", "the scene file", ls.path.clone())];
     for (i, b) in ls.scene.bodies.iter().enumerate() {
-        if let Some(g) = &b.gmsh {
-            r.push(Named::new(&format!("body[{i}].gmsh.file"), &format!("the mesh of body[{i}]"), ls.dir().join(&g.file)));
+        if let Some((key, g)) = b.mesh_file() {
+            let path = ls.dir().join(&g.file);
+            r.push(Named::new(&format!("body[{i}].{key}.file"), &format!("the mesh of body[{i}]"), path.clone()));
+            if g.resolved_format() == Some(crate::scene::MeshFormat::Abaqus) {
+                for inc in crate::mesh::abaqus::files(&path).into_iter().skip(1) {
+                    r.push(Named::new(&format!("body[{i}].{key}.file"), &format!("a file the mesh of body[{i}] includes"), inc));
+                }
+            }
         }
     }
     r

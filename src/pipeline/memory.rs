@@ -106,9 +106,13 @@ impl MeshCount {
                 let (n, kind) = (bx.nodes.unwrap_or([scene.mesh.n; 3]), crate::model::cell_kind(bx.cells.unwrap_or(scene.mesh.cells)));
                 c.transient = c.transient.max(tetrahedralize_bytes(n, kind));
                 box_counts(n, kind)
-            } else if let Some(g) = &b.gmsh {
-                let (nodes, elements, bytes) =
-                    crate::mesh::gmsh::header_counts(&ls.dir().join(&g.file)).map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));
+            } else if let Some((_, g)) = b.mesh_file() {
+                let path = ls.dir().join(&g.file);
+                let counts = match g.resolved_format() {
+                    Some(crate::scene::MeshFormat::Abaqus) => crate::mesh::abaqus::counts(&path),
+                    _ => crate::mesh::gmsh::header_counts(&path),
+                };
+                let (nodes, elements, bytes) = counts.map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));
                 c.files += bytes + GMSH_NODE_BYTES * nodes + GMSH_ELEMENT_BYTES * elements;
                 // a hexahedral mesh's boundary: about 6 e^(2/3) quadrilaterals
                 (nodes, elements, 6.0 * elements.powf(2.0 / 3.0))
@@ -197,10 +201,10 @@ pub fn tetrahedralize_bytes(n: [usize; 3], kind: CellKind) -> f64 {
 fn key_of(ls: &LoadedScene, i: usize) -> String {
     let scene = &ls.scene;
     match scene.bodies.get(i) {
-        Some(b) => match (&b.boxed, &b.gmsh) {
+        Some(b) => match (&b.boxed, b.mesh_file()) {
             (Some(bx), _) if bx.nodes.is_none_or(|n| n == [scene.mesh.n; 3]) => "mesh.n".into(),
             (Some(_), _) => format!("body[{i}].box.nodes"),
-            (_, Some(_)) => format!("body[{i}].gmsh.file"),
+            (_, Some((key, _))) => format!("body[{i}].{key}.file"),
             _ => format!("body[{i}]"),
         },
         None => "mesh".into(),

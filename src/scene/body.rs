@@ -70,12 +70,77 @@ pub struct Body {
     pub name: String,
     /// Its material: a `material.name`.
     pub material: String,
-    /// A structured box; exactly one of `box` and `gmsh`.
+    /// A structured box; exactly one of `box`, `mesh` and `gmsh`.
     #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
     pub boxed: Option<BoxDef>,
-    /// A body read from a Gmsh 4.1 `.msh`; exactly one of `box` and `gmsh`.
+    /// A body read from a mesh file (Abaqus `.inp` or Gmsh 4.1 `.msh`); exactly one of `box`,
+    /// `mesh` and `gmsh`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshDef>,
+    /// A body read from a Gmsh 4.1 `.msh` (`mesh` with `format = "gmsh"`); exactly one of
+    /// `box`, `mesh` and `gmsh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gmsh: Option<GmshDef>,
+}
+
+impl Body {
+    /// The body's mesh file as `body.mesh` (the `gmsh` alias converted, its format Gmsh), and
+    /// the key it was given under (`mesh` or `gmsh`); `None` for a box.
+    pub fn mesh_file(&self) -> Option<(&'static str, MeshDef)> {
+        match (&self.mesh, &self.gmsh) {
+            (Some(m), _) => Some(("mesh", m.clone())),
+            (None, Some(g)) => {
+                Some(("gmsh", MeshDef { file: g.file.clone(), volume: g.volume.clone(), format: Some(MeshFormat::Gmsh), translate: g.translate }))
+            }
+            (None, None) => None,
+        }
+    }
+}
+
+/// The format of a mesh file (`body.mesh.format`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshFormat {
+    /// `abaqus`: an Abaqus input file (`.inp`).
+    Abaqus,
+    /// `gmsh`: a Gmsh 4.1 `.msh` (ASCII or binary).
+    Gmsh,
+}
+
+impl MeshFormat {
+    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh; any case).
+    pub fn of_extension(file: &std::path::Path) -> Option<MeshFormat> {
+        match file.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "inp" => Some(MeshFormat::Abaqus),
+            "msh" => Some(MeshFormat::Gmsh),
+            _ => None,
+        }
+    }
+}
+
+/// `body.mesh`: a body read from a mesh file (hex8, tet4, tet10 and wedge6 cells, mixed or not).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDef {
+    /// Path of the mesh file, relative to the scene file.
+    pub file: PathBuf,
+    /// The part of the file that is this body: a Gmsh physical volume or an Abaqus element set
+    /// (default: every volume element of the file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<String>,
+    /// The file's format; defaults to the one its extension names (`.inp`, `.msh`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format: Option<MeshFormat>,
+    /// Shift applied to all node coordinates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f64; 3]>,
+}
+
+impl MeshDef {
+    /// The file's format: `format`, else the one its extension names.
+    pub fn resolved_format(&self) -> Option<MeshFormat> {
+        self.format.or_else(|| MeshFormat::of_extension(&self.file))
+    }
 }
 
 /// `body.box`: a structured box mesh (faces `xmin` … `zmax`).

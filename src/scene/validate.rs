@@ -144,7 +144,8 @@ fn materials(materials: &[Material]) -> Result<HashSet<&str>> {
     Ok(names)
 }
 
-/// `[[body]]` number `i`: a unique name, a known material, exactly one of `box` and `gmsh`.
+/// `[[body]]` number `i`: a unique name, a known material, exactly one of `box`, `mesh` and
+/// `gmsh`, a mesh file of a known format.
 fn body<'a>(i: usize, b: &'a Body, materials: &HashSet<&str>, names: &mut HashSet<&'a str>, mesh_n: usize) -> Result<()> {
     let k = |f: &str| format!("body[{i}].{f}");
     if b.name.is_empty() || b.name.contains('.') {
@@ -156,13 +157,26 @@ fn body<'a>(i: usize, b: &'a Body, materials: &HashSet<&str>, names: &mut HashSe
     if !materials.contains(b.material.as_str()) {
         return Err(Error::scene(k("material"), format!("unknown material \"{}\"", b.material)));
     }
-    match (&b.boxed, &b.gmsh) {
-        (Some(bx), None) => box_body(&k, &b.name, bx, mesh_n),
-        (None, Some(g)) => match g.translate {
-            Some(t) => finite(k("gmsh.translate"), &t),
-            None => Ok(()),
-        },
-        _ => Err(Error::scene(format!("body[{i}]"), "give exactly one of `box` and `gmsh`")),
+    let given = [b.boxed.is_some(), b.mesh.is_some(), b.gmsh.is_some()].iter().filter(|&&g| g).count();
+    if given != 1 {
+        return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box`, `mesh` and `gmsh`"));
+    }
+    if let Some(bx) = &b.boxed {
+        return box_body(&k, &b.name, bx, mesh_n);
+    }
+    let Some((key, m)) = b.mesh_file() else { return Ok(()) };
+    if m.resolved_format().is_none() {
+        return Err(Error::scene(
+            k(&format!("{key}.file")),
+            format!(
+                "cannot tell the format of \"{}\" from its extension (known: .inp for abaqus, .msh for gmsh); give `format = \"abaqus\"` or `\"gmsh\"`",
+                m.file.display()
+            ),
+        ));
+    }
+    match m.translate {
+        Some(t) => finite(k(&format!("{key}.translate")), &t),
+        None => Ok(()),
     }
 }
 

@@ -434,7 +434,7 @@ fn type_counts(counts: &HashMap<ElementType, usize>) -> String {
 type Msh = MshFile<u64, i32, f64>;
 
 /// A volume element of the body as the file gives it: its tag, cell type and node tags.
-type FileCell<'m> = (u64, CellKind, &'m [u64]);
+pub(super) type FileCell<'m> = (u64, CellKind, &'m [u64]);
 
 /// The body of a parsed file: its cells in a compact local numbering, and its named faces.
 fn build(msh: &Msh, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: Option<&str>) -> Result<BodyGeometry, String> {
@@ -582,7 +582,7 @@ fn check_surface_nodes(msh: &Msh, index: &HashMap<u64, usize>) -> Result<(), Str
 }
 
 /// The cells in file indices, and which of the `n` file nodes they use.
-fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, usize>, n: usize) -> Result<(Vec<Vec<usize>>, Vec<bool>), String> {
+pub(super) fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, usize>, n: usize) -> Result<(Vec<Vec<usize>>, Vec<bool>), String> {
     let mut file_nodes: Vec<Vec<usize>> = Vec::with_capacity(file_cells.len());
     let mut used = vec![false; n];
     for &(etag, kind, nodes) in file_cells {
@@ -602,7 +602,7 @@ fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, usize>, n: 
 
 /// Refuses a cell listed twice (the same nodes, in any order, under another tag): it would be
 /// counted twice, and its faces would stop being boundary faces (a clamped face loses them).
-fn check_listed_twice(file_nodes: &[Vec<usize>], file_cells: &[FileCell<'_>]) -> Result<(), String> {
+pub(super) fn check_listed_twice(file_nodes: &[Vec<usize>], file_cells: &[FileCell<'_>]) -> Result<(), String> {
     let mut seen: HashMap<(CellKind, Vec<usize>), u64> = HashMap::with_capacity(file_nodes.len());
     for (h, &(etag, kind, _)) in file_nodes.iter().zip(file_cells) {
         let mut key = h.clone();
@@ -678,7 +678,7 @@ fn named_faces(
 }
 
 /// The volume element types read, for messages.
-const SUPPORTED: &str = "Hex8, Tet4, Tet10, Pri6 (wedge)";
+pub(super) const SUPPORTED: &str = "Hex8, Tet4, Tet10, Pri6 (wedge)";
 
 /// The cell type of a Gmsh volume element type, if it is one this reader takes.
 fn cell_kind(t: ElementType) -> Option<CellKind> {
@@ -704,7 +704,7 @@ fn surface_kind(t: ElementType) -> Option<(usize, &'static str)> {
 }
 
 /// One cell of a type, in messages.
-fn singular(kind: CellKind) -> &'static str {
+pub(super) fn singular(kind: CellKind) -> &'static str {
     match kind {
         CellKind::Hex8 => "hexahedron",
         CellKind::Tet4 => "tetrahedron",
@@ -739,7 +739,7 @@ fn edges(kind: CellKind) -> &'static [[usize; 2]] {
 /// within what double precision carries through element volumes (∝ h³) and the stiffness
 /// (∝ E·h): [`crate::scene::range`]. (An element collapsed to a point is left to the
 /// orientation check, which calls it degenerate.)
-fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind, &[u64])]) -> Result<(), String> {
+pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind, &[u64])]) -> Result<(), String> {
     use crate::scene::range::{MAX, MIN};
     // (edge, element tag, type) of the shortest and the longest longest-edge
     let mut lo: Option<(f64, u64, CellKind)> = None;
@@ -799,7 +799,7 @@ fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Opt
 /// one whose corner Jacobians are all negative (mirrored) is reordered, anything else is the
 /// error (the reason, to follow the cell's name). (A 10-node tetrahedron whose edge nodes are
 /// out of place, inverted between its corners, is refused by the assembly's Jacobian check.)
-fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
+pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
     let p = cell.coords(x);
     let j: Vec<f64> = match cell.kind {
         CellKind::Hex8 => corner_jacobians(p.as_slice().try_into().map_err(|_| "has a wrong node count")?).to_vec(),

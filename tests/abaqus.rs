@@ -1,0 +1,122 @@
+//! Bodies read from Abaqus input files (`body.mesh`, `format = "abaqus"` or a `.inp` file):
+//! the two-block contact model read from `mesh/two_blocks.inp` (Gmsh's own Abaqus export of
+//! `mesh/two_blocks.msh`) solves exactly as the same model read from the `.msh`; a hand-written
+//! 10-node tetrahedron comes out in the program's node order; malformed inputs are one-line
+//! errors naming the file and the line.
+
+mod common;
+
+use std::path::Path;
+
+use common::{assert_clean_failure, root, solve, tmpdir};
+
+const GMSH: &str = include_str!("../run/gmsh_blocks.toml");
+
+/// `run/gmsh_blocks.toml` with its bodies read through `body.mesh` from `mesh` (absolute).
+fn abaqus_scene(mesh: &Path) -> String {
+    let from = |v: &str| format!("gmsh = {{ file = \"../mesh/two_blocks.msh\", volume = \"{v}\" }}");
+    let to = |v: &str| format!("mesh = {{ file = \"{}\", volume = \"{v}\" }}", mesh.display());
+    assert!(GMSH.contains(&from("upper")) && GMSH.contains(&from("lower")));
+    GMSH.replace(&from("upper"), &to("upper")).replace(&from("lower"), &to("lower"))
+}
+
+#[test]
+fn two_blocks_from_abaqus_solve_as_from_gmsh() {
+    let dir = tmpdir("same");
+    let gmsh = solve(&root().join("run/gmsh_blocks.toml"), &[], &dir.join("gmsh.h5"));
+    let scene = dir.join("abaqus.toml");
+    std::fs::write(&scene, abaqus_scene(&root().join("mesh/two_blocks.inp"))).unwrap();
+    let abaqus = solve(&scene, &[], &dir.join("abaqus.h5"));
+    let (a, g) = (&abaqus.solution.displacement, &gmsh.solution.displacement);
+    assert_eq!(a.len(), g.len());
+    let umax = common::max_abs(g);
+    assert!(umax > 0.0);
+    let diff = a.iter().zip(g).flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs())).fold(0.0f64, f64::max);
+    // the same model to the solver's tolerance (the iterations differ in round-off only)
+    assert!(diff <= 1e-7 * umax, "displacements differ by {diff:e} (max {umax:e})");
+    let (ra, rg) = (&abaqus.report.results, &gmsh.report.results);
+    assert!((ra.max_displacement - rg.max_displacement).abs() <= 1e-7 * rg.max_displacement);
+    assert!((ra.max_von_mises - rg.max_von_mises).abs() <= 1e-6 * rg.max_von_mises);
+    let (ca, cg) = (abaqus.report.contact.as_ref().unwrap(), gmsh.report.contact.as_ref().unwrap());
+    assert_eq!((ca.contact, ca.stick, ca.slip), (cg.contact, cg.stick, cg.slip));
+}
+
+#[test]
+fn format_key_and_extension() {
+    let dir = tmpdir("format");
+    // a copy without the .inp extension needs `format`
+    let copy = tmpdir("format-mesh").join("blocks.txt");
+    std::fs::copy(root().join("mesh/two_blocks.inp"), &copy).unwrap();
+    let scene = abaqus_scene(&copy);
+    assert_clean_failure("unknown-extension", &scene, &[], &["body[0].mesh.file", "abaqus", "gmsh"]);
+    let with_format = scene
+        .replace("volume = \"upper\" }", "volume = \"upper\", format = \"abaqus\" }")
+        .replace("volume = \"lower\" }", "volume = \"lower\", format = \"abaqus\" }");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, with_format).unwrap();
+    let s = solve(&path, &[], &dir.join("r.h5"));
+    assert!(s.report.results.max_displacement > 0.0);
+    // an unknown element set is named with the known ones
+    let bad = abaqus_scene(&root().join("mesh/two_blocks.inp")).replace("volume = \"lower\"", "volume = \"nowhere\"");
+    assert_clean_failure("unknown-elset", &bad, &[], &["two_blocks.inp", "nowhere", "\"upper\""]);
+}
+
+#[test]
+fn malformed_inputs_are_one_line_errors_naming_file_and_line() {
+    let full = std::fs::read_to_string(root().join("mesh/two_blocks.inp")).unwrap();
+    let line_of = |needle: &str| full.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    let first_hex = "82, 89, 17, 2, 23, 185, 97, 33, 117";
+    let cases: Vec<(&str, String, String)> = vec![
+        ("absent-node", full.replacen(first_hex, "82, 89, 17, 2, 23, 185, 97, 33, 9999", 1), format!("line {}", line_of(first_hex))),
+        (
+            "unknown-type",
+            full.replacen("*ELEMENT, type=C3D8, ELSET=Volume1", "*ELEMENT, type=XQ7, ELSET=Volume1", 1),
+            format!("line {}", line_of("*ELEMENT, type=C3D8, ELSET=Volume1")),
+        ),
+        ("no-node", full.replacen("*NODE", "*NOTNODE", 1), "*NODE".to_string()),
+        ("part", full.replacen("*Heading", "*Part, name=p", 1), "line 1".to_string()),
+        (
+            "bad-surface",
+            full.replacen("*ELSET,ELSET=upper_top", "*SURFACE, NAME=s\nghost, S1\n*ELSET,ELSET=upper_top", 1),
+            format!("line {}", line_of("*ELSET,ELSET=upper_top") + 1),
+        ),
+    ];
+    for (name, text, at) in cases {
+        let dir = tmpdir(&format!("{name}-mesh"));
+        let mesh = dir.join("bad.inp");
+        std::fs::write(&mesh, text).unwrap();
+        assert_clean_failure(name, &abaqus_scene(&mesh), &[], &["bad.inp", &at]);
+    }
+}
+
+#[test]
+fn tet10_edge_nodes_come_in_our_order() {
+    // Abaqus C3D10: nodes 5-10 on edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4
+    let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let edges = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
+    let mut text = "*NODE\n".to_string();
+    for (i, p) in x.iter().enumerate() {
+        text += &format!("{}, {}, {}, {}\n", i + 1, p[0], p[1], p[2]);
+    }
+    for (k, [a, b]) in edges.iter().enumerate() {
+        let m: Vec<f64> = (0..3).map(|d| 0.5 * (x[*a][d] + x[*b][d])).collect();
+        text += &format!("{}, {}, {}, {}\n", k + 5, m[0], m[1], m[2]);
+    }
+    text += "*ELEMENT, TYPE=C3D10, ELSET=tet\n1, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10\n*SURFACE, NAME=base\ntet, S1\n";
+    let dir = tmpdir("tet10");
+    let path = dir.join("tet10.inp");
+    std::fs::write(&path, text).unwrap();
+    let g = tresca_feti::mesh::abaqus::read(&path, Some("tet")).unwrap();
+    let c = &g.cells[0];
+    // ours (Gmsh's): 4:(0,1) 5:(1,2) 6:(2,0) 7:(3,0) 8:(3,2) 9:(3,1)
+    let ours = [[0, 1], [1, 2], [2, 0], [3, 0], [3, 2], [3, 1]];
+    let p = |i: usize| g.nodes[c.nodes()[i]];
+    for (k, [a, b]) in ours.iter().enumerate() {
+        for d in 0..3 {
+            assert!((p(4 + k)[d] - 0.5 * (p(*a)[d] + p(*b)[d])).abs() < 1e-15, "edge node {}", 4 + k);
+        }
+    }
+    let base = &g.faces.iter().find(|(n, _)| n == "base").unwrap().1;
+    assert_eq!(base.len(), 1);
+    assert!(base[0].nodes().iter().all(|&v| g.nodes[v][2] == 0.0));
+}
