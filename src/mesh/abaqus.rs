@@ -34,7 +34,7 @@ use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, FileCell, SUPPORTED};
+use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell, SUPPORTED};
 use super::topology::{boundary_faces, find_boundary_facet};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
@@ -564,12 +564,7 @@ impl Deck {
         let (file_nodes, used) = file_cell_nodes(&file_cells, &index, coords.len()).map_err(Fail::file)?;
         check_listed_twice(&file_nodes, &file_cells).map_err(Fail::file)?;
         check_scale(&coords, &file_nodes, &file_cells).map_err(Fail::file)?;
-        let mut local = vec![usize::MAX; coords.len()];
-        let mut nodes = Vec::new();
-        for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
-            local[i] = nodes.len();
-            nodes.push(*p);
-        }
+        let (local, nodes) = used_nodes(&coords, &used);
         let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
         for ((h, &(label, kind, _)), &e) in file_nodes.iter().zip(&file_cells).zip(&cells_at) {
             let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());

@@ -451,12 +451,7 @@ fn build(msh: &Msh, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: O
     let (file_nodes, used) = file_cell_nodes(file_cells, &index, coords.len())?;
     check_listed_twice(&file_nodes, file_cells)?;
     check_scale(&coords, &file_nodes, file_cells)?;
-    let mut local = vec![usize::MAX; coords.len()];
-    let mut nodes = Vec::new();
-    for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
-        local[i] = nodes.len();
-        nodes.push(*p);
-    }
+    let (local, nodes) = used_nodes(&coords, &used);
 
     // Cells in local numbering, each oriented (consistently inverted ones reordered).
     let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
@@ -579,6 +574,18 @@ fn check_surface_nodes(msh: &Msh, index: &HashMap<u64, usize>) -> Result<(), Str
         }
     }
     Ok(())
+}
+
+/// The nodes the cells use, in file order: each file node's local index (`usize::MAX` where
+/// unused) and the coordinates of the used ones.
+pub(super) fn used_nodes(coords: &[[f64; 3]], used: &[bool]) -> (Vec<usize>, Vec<[f64; 3]>) {
+    let mut local = vec![usize::MAX; coords.len()];
+    let mut nodes = Vec::new();
+    for (i, p) in coords.iter().enumerate().filter(|(i, _)| used[*i]) {
+        local[i] = nodes.len();
+        nodes.push(*p);
+    }
+    (local, nodes)
 }
 
 /// The cells in file indices, and which of the `n` file nodes they use.
