@@ -929,17 +929,7 @@ mod tests {
         let twice = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "upper.zmin", "lower.zmax")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), seed_pair(Friction::None)], &twice).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
-        let swapped = ContactPair {
-            slave: "lower.zmax".into(),
-            master: "upper.zmin".into(),
-            friction: Friction::None,
-            tolerance: None,
-            discretization: None,
-            search_distance: None,
-            max_overlap: None,
-            interference: crate::scene::Fit::None,
-            faces: None,
-        };
+        let swapped = ContactPair { slave: "lower.zmax".into(), master: "upper.zmin".into(), ..seed_pair(Friction::None) };
         let both = [faces(&m, "upper.zmin", "lower.zmax"), faces(&m, "lower.zmax", "upper.zmin")].concat();
         let e = pair(&m, &[seed_pair(Friction::None), swapped], &both).unwrap_err().to_string();
         assert!(e.contains("contact.pair[1]") && e.contains("already a pair of contact.pair[0]"), "{e}");
