@@ -20,19 +20,22 @@ RUN touch src/lib.rs src/main.rs && cargo build --release --locked \
 FROM debian:bookworm-slim
 WORKDIR /work
 COPY run/install-deps run/packages-runtime.txt run/
+# OpenMPI as run/env.sh sets it: more ranks than cores, no warnings about missing interconnects;
+# no single-copy (CMA) transfers between the ranks, whose process_vm_readv a container without
+# CAP_SYS_PTRACE is refused on hosts with Yama ptrace_scope 1 (Ubuntu's default). In the image's
+# MCA parameter file, not in ENV: the file has the lowest precedence, so that in the hybrid model
+# (a host's mpirun or srun starting the image's binary, docs/containers.md) the host's OMPI_MCA_*
+# settings, which its launcher passes to the ranks, win; an ENV would override them.
 RUN run/install-deps packages-runtime.txt && rm -rf /var/lib/apt/lists/* \
+ && printf '%s\n' '# tresca-feti (Dockerfile)' rmaps_base_oversubscribe=1 btl=self,vader,tcp \
+    btl_base_warn_component_unused=0 btl_vader_single_copy_mechanism=none >> /etc/openmpi/openmpi-mca-params.conf \
  && useradd --uid 1000 --user-group --create-home tresca \
  && install -d -m 1777 out
 COPY mesh mesh
 COPY run run
-# OpenMPI as run/env.sh sets it: more ranks than cores, no warnings about missing interconnects;
-# no single-copy (CMA) transfers between the ranks, whose process_vm_readv a container without
-# CAP_SYS_PTRACE is refused on hosts with Yama ptrace_scope 1 (Ubuntu's default); allowed as
-# root, which only `--user 0` (or root's own `--user "$(id -u):$(id -g)"`) asks for.
-ENV OMPI_MCA_rmaps_base_oversubscribe=1 \
-    OMPI_MCA_btl=self,vader,tcp OMPI_MCA_btl_base_warn_component_unused=0 \
-    OMPI_MCA_btl_vader_single_copy_mechanism=none \
-    OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# mpirun allowed as root, which only `--user 0` (or root's own `--user "$(id -u):$(id -g)"`)
+# asks for (read by mpirun alone, not by the ranks)
+ENV OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 USER 1000:1000
 ENTRYPOINT ["tresca-feti"]
 CMD ["--help"]
