@@ -1,5 +1,5 @@
 //! `[mesh]`, `[[material]]` and `[[body]]`: what the bodies are made of and meshed from
-//! (structured boxes with an optional curved side, or Gmsh files).
+//! (structured boxes with an optional curved side, or Gmsh, Abaqus or MED files).
 
 use std::path::PathBuf;
 
