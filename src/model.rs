@@ -12,7 +12,7 @@ use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::facet::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
-use crate::mesh::{abaqus, boxgen, gmsh, rigid, BodyGeometry, Face, Mesh};
+use crate::mesh::{abaqus, boxgen, gmsh, med, rigid, BodyGeometry, Face, Mesh};
 use crate::qp::cone::Coefficient;
 use crate::scene::{Component, LoadedScene, MeshFormat, Scene, Side};
 
@@ -307,14 +307,15 @@ fn box_geometry(scene: &Scene, bx: &crate::scene::BoxDef) -> Result<BodyGeometry
     Ok(geom)
 }
 
-/// A mesh-file body's cells read from its file (Abaqus or Gmsh), shifted by its `translate`
+/// A mesh-file body's cells read from its file (Abaqus, Gmsh or MED), shifted by its `translate`
 /// (kept in coordinate range); `key` is the scene key it was given under (`mesh`, `gmsh`).
 fn file_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, key: &str, g: &crate::scene::MeshDef) -> Result<BodyGeometry> {
     let path = ls.dir().join(&g.file);
     let mut geom = match g.resolved_format() {
         Some(MeshFormat::Abaqus) => abaqus::read(&path, g.volume.as_deref())?,
         Some(MeshFormat::Gmsh) => gmsh::read(&path, g.volume.as_deref())?,
-        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh)")),
+        Some(MeshFormat::Med) => med::read(&path, g.volume.as_deref())?,
+        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, med)")),
     };
     if let Some(t) = g.translate {
         for p in &mut geom.nodes {

@@ -1,5 +1,5 @@
 //! `[mesh]`, `[[material]]` and `[[body]]`: what the bodies are made of and meshed from
-//! (structured boxes with an optional curved side, or Gmsh files).
+//! (structured boxes with an optional curved side, or Gmsh, Abaqus or MED files).
 
 use std::path::PathBuf;
 
@@ -73,7 +73,7 @@ pub struct Body {
     /// A structured box; exactly one of `box`, `mesh` and `gmsh`.
     #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
     pub boxed: Option<BoxDef>,
-    /// A body read from a mesh file (Abaqus `.inp` or Gmsh 4.1 `.msh`); exactly one of `box`,
+    /// A body read from a mesh file (Abaqus `.inp`, Gmsh 4.1 `.msh` or MED `.med`); exactly one of `box`,
     /// `mesh` and `gmsh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mesh: Option<MeshDef>,
@@ -105,14 +105,17 @@ pub enum MeshFormat {
     Abaqus,
     /// `gmsh`: a Gmsh 4.1 `.msh` (ASCII or binary).
     Gmsh,
+    /// `med`: a Salome / code_aster MED file (`.med`, MED 3.x/4.x on HDF5).
+    Med,
 }
 
 impl MeshFormat {
-    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh; any case).
+    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh, `.med`: MED; any case).
     pub fn of_extension(file: &std::path::Path) -> Option<MeshFormat> {
         match file.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "inp" => Some(MeshFormat::Abaqus),
             "msh" => Some(MeshFormat::Gmsh),
+            "med" => Some(MeshFormat::Med),
             _ => None,
         }
     }
