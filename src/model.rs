@@ -250,8 +250,17 @@ pub fn cell_kind(c: crate::scene::BoxCells) -> crate::mesh::CellKind {
 
 /// Builds the model of a loaded scene.
 pub fn build(ls: &LoadedScene) -> Result<Model> {
+    build_timed(ls, &mut Vec::new())
+}
+
+/// [`build`], adding the wall time of its large parts to `times`: `mesh read` (the files read
+/// and parsed, the boxes generated), `pairing` (the contact and tie pairs) and `hold buckets`
+/// (what holds each body, the floating groups).
+pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>) -> Result<Model> {
     let scene: &Scene = &ls.scene;
+    let clock = std::time::Instant::now();
     let mut mesh = read_bodies(ls)?;
+    times.push(("mesh read", clock.elapsed().as_secs_f64()));
     let (faces, cut_faces) = cut_scene_faces(scene, &mut mesh)?;
     let lame = body_lame(scene);
     let mut path = LoadPath { steps: scene.load.steps, ..Default::default() };
@@ -261,13 +270,17 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     let tie_faces = tie_faces(scene, &mesh, &faces)?;
     overlapping_rows(&mesh, &tie_faces, &contact)?;
     let contact_active = scene.contact.enabled && !contact.is_empty();
+    let clock = std::time::Instant::now();
     let pairs = contact_rows(scene, &mesh, &contact, &constraints, &path, contact_active)?;
     let ties = pairing::tie(&mesh, &scene.ties, &tie_faces)?;
+    times.push(("pairing", clock.elapsed().as_secs_f64()));
     // bodies joined by ties move as one in the question of what holds them
     let groups = tie_groups(mesh.bodies.len(), tie_faces.iter().map(|&(s, m)| (mesh.faces[s].body, mesh.faces[m].body)));
+    let clock = std::time::Instant::now();
     let buckets = HoldBuckets::new(&mesh, &constraints, &contact, pairs.as_ref(), contact_active);
     check_parts(scene, &mesh)?;
     let floating = floating_groups(&mesh, &groups, &buckets, pairs.as_ref(), contact_active)?;
+    times.push(("hold buckets", clock.elapsed().as_secs_f64()));
     let mut by_kind = [0; 4];
     for (k, n) in mesh.cell_counts() {
         by_kind[k.code()] = n;
@@ -278,19 +291,57 @@ pub fn build(ls: &LoadedScene) -> Result<Model> {
     Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, cut_faces, orders })
 }
 
-/// The mesh of every body, boxes generated and Gmsh files read, in scene order.
+/// The mesh of every body, boxes generated and mesh files read, in scene order. Each file is
+/// read and parsed once, at its first body, and every body that names it is built from it.
 fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
     let scene: &Scene = &ls.scene;
     let mut mesh = Mesh::default();
+    // the bodies built from a file already parsed, by body index
+    let mut read: HashMap<usize, Result<BodyGeometry>> = HashMap::new();
     for (i, b) in scene.bodies.iter().enumerate() {
         let geom = match (&b.boxed, b.mesh_file()) {
             (Some(bx), _) => box_geometry(scene, bx)?,
-            (_, Some((key, m))) => file_geometry(ls, i, b, key, &m)?,
+            (_, Some((_, m))) => match read.remove(&i) {
+                Some(geom) => geom?,
+                None => {
+                    read.extend(file_bodies(ls, i, &m)?);
+                    read.remove(&i).expect("the file's first body is among its bodies")?
+                }
+            },
             _ => return Err(Error::scene(format!("body[{i}]"), "give exactly one of `box`, `mesh` and `gmsh`")),
+        };
+        let geom = match b.mesh_file() {
+            Some((key, m)) if b.boxed.is_none() => translated(i, b, key, &m, geom)?,
+            _ => geom,
         };
         mesh.try_push_body(&b.name, geom)?;
     }
     Ok(mesh)
+}
+
+/// Every body from body `first` on that reads the same file, in the same format, as body
+/// `first` (its mesh `g`), built from one parse of the file (translations not yet applied).
+fn file_bodies(ls: &LoadedScene, first: usize, g: &crate::scene::MeshDef) -> Result<Vec<(usize, Result<BodyGeometry>)>> {
+    let path = ls.dir().join(&g.file);
+    let format = g.resolved_format();
+    let same: Vec<(usize, crate::scene::MeshDef)> = ls.scene.bodies[first..]
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.boxed.is_none())
+        .filter_map(|(k, b)| b.mesh_file().map(|(_, m)| (first + k, m)))
+        .filter(|(_, m)| ls.dir().join(&m.file) == path && m.resolved_format() == format)
+        .collect();
+    let volumes: Vec<Option<&str>> = same.iter().map(|(_, m)| m.volume.as_deref()).collect();
+    let bodies = match format {
+        Some(MeshFormat::Abaqus) => abaqus::read_many(&path, &volumes)?,
+        Some(MeshFormat::Gmsh) => gmsh::read_many(&path, &volumes)?,
+        Some(MeshFormat::Med) => med::read_many(&path, &volumes)?,
+        None => {
+            let key = ls.scene.bodies[first].mesh_file().map_or("mesh", |(k, _)| k);
+            return Err(Error::scene(format!("body[{first}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, med)"));
+        }
+    };
+    Ok(same.into_iter().map(|(k, _)| k).zip(bodies).collect())
 }
 
 /// A box body's generated cells, its curved side (if any) bulged out.
@@ -307,16 +358,9 @@ fn box_geometry(scene: &Scene, bx: &crate::scene::BoxDef) -> Result<BodyGeometry
     Ok(geom)
 }
 
-/// A mesh-file body's cells read from its file (Abaqus, Gmsh or MED), shifted by its `translate`
-/// (kept in coordinate range); `key` is the scene key it was given under (`mesh`, `gmsh`).
-fn file_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, key: &str, g: &crate::scene::MeshDef) -> Result<BodyGeometry> {
-    let path = ls.dir().join(&g.file);
-    let mut geom = match g.resolved_format() {
-        Some(MeshFormat::Abaqus) => abaqus::read(&path, g.volume.as_deref())?,
-        Some(MeshFormat::Gmsh) => gmsh::read(&path, g.volume.as_deref())?,
-        Some(MeshFormat::Med) => med::read(&path, g.volume.as_deref())?,
-        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, med)")),
-    };
+/// A mesh-file body's cells `geom` as read from its file, shifted by its `translate` (kept in
+/// coordinate range); `key` is the scene key it was given under (`mesh`, `gmsh`).
+fn translated(i: usize, b: &crate::scene::Body, key: &str, g: &crate::scene::MeshDef, mut geom: BodyGeometry) -> Result<BodyGeometry> {
     if let Some(t) = g.translate {
         for p in &mut geom.nodes {
             for d in 0..3 {

@@ -52,10 +52,17 @@ const ABAQUS_SUPPORTED: &str = "C3D8 (C3D8R, C3D8I, C3D8H), C3D4, C3D10 (C3D10M)
 /// the Abaqus input file `path`, in a compact local numbering that keeps the file's node order;
 /// its faces are the element-based surfaces and the sets of surface elements that bound it.
 pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
+    read_many(path, &[volume])?.pop().expect("one volume asked, one body read")
+}
+
+/// [`read`] for several bodies of one input file: its lines are loaded and parsed once, then
+/// each element set of `volumes` is built from the parsed deck. The outer error is the file's;
+/// the inner ones are each body's.
+pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
     let mut lines = Vec::new();
     load(path, 0, &mut lines, None)?;
     let deck = Deck::parse(&lines)?;
-    deck.build(volume).map_err(|f| f.into_error(path, &lines))
+    Ok(volumes.iter().map(|&v| deck.build(v).map_err(|f| f.into_error(path, &lines))).collect())
 }
 
 /// Node, element and byte counts of an input file and the files it includes, from one cheap

@@ -104,13 +104,19 @@ struct Med {
 /// file `path`, in a compact local numbering that keeps the file's node order; its faces are the
 /// groups of face cells that bound it.
 pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
+    read_many(path, &[volume])?.pop().expect("one body asked for")
+}
+
+/// The bodies of the MED file `path` with the given volume groups (`None`: every volume cell),
+/// from one read of the file; the file's errors fail all, a body's own errors only that body.
+pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
     let err = |msg: String| Error::mesh(path.display().to_string(), msg);
     if let Err(e) = std::fs::metadata(path) {
         return Err(Error::io(path.display().to_string(), e));
     }
     let file = File::open(path).map_err(|e| err(format!("not a readable MED file (HDF5): {}", one_line(&e.to_string()))))?;
     let med = Med::load(&file).map_err(err)?;
-    med.build(volume).map_err(err)
+    Ok(volumes.iter().map(|&v| med.build(v).map_err(err)).collect())
 }
 
 /// Node, cell and byte counts of a MED file from its `NBR` attributes; `None` when it cannot be

@@ -45,7 +45,16 @@ pub fn prepare<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], out: 
         output::guard::check(&ls, out_key)?;
         Ok(ls)
     })?;
-    let model = t.phase(comm, "mesh", || memory::check_before_mesh(comm, &ls).and_then(|()| model::build(&ls)).and_then(|mut m| m.check_held().map(|()| m)))?;
+    let mut parts = Vec::new();
+    let model = t.phase(comm, "mesh", || {
+        memory::check_before_mesh(comm, &ls).and_then(|()| model::build_timed(&ls, &mut parts)).and_then(|mut m| {
+            let clock = std::time::Instant::now();
+            let held = m.check_held();
+            parts.push(("hold check", clock.elapsed().as_secs_f64()));
+            held.map(|()| m)
+        })
+    })?;
+    t.split(comm, "mesh", &parts);
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();

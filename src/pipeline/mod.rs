@@ -87,6 +87,26 @@ impl Timings {
         r
     }
 
+    /// Splits `parts` off the time of phase `name` (it ran on every rank and succeeded there,
+    /// so every rank calls this): each part becomes its own line (max over the ranks) before
+    /// `name`, which keeps the rest. Totals are unchanged but for the max over ranks per part.
+    pub fn split<C: Comm>(&mut self, comm: &C, name: &str, parts: &[(&'static str, f64)]) {
+        let mut t: Vec<f64> = parts.iter().map(|p| p.1).collect();
+        comm.max_f64(&mut t);
+        let Some(at) = self.phases.iter().position(|p| p.0 == name) else { return };
+        self.phases[at].1 = (self.phases[at].1 - t.iter().sum::<f64>()).max(0.0);
+        for (part, secs) in parts.iter().map(|p| p.0).zip(t) {
+            // a phase run again (a load step, a study's repeat) adds to its parts
+            match self.phases.iter_mut().find(|p| p.0 == part) {
+                Some(p) => p.1 += secs,
+                None => {
+                    let at = self.phases.iter().position(|p| p.0 == name).unwrap_or(self.phases.len());
+                    self.phases.insert(at, (part.to_string(), secs));
+                }
+            }
+        }
+    }
+
     /// Sum of the phase times, in seconds.
     pub fn total(&self) -> f64 {
         self.phases.iter().map(|p| p.1).sum()

@@ -42,12 +42,20 @@ const UNREADABLE: &str = "not a readable Gmsh 4.1 mesh";
 /// outward boundary facets of the kept cells that its triangles and quadrangles name; surfaces
 /// with no such facet are left out.
 pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
+    read_many(path, &[volume])?.pop().expect("one volume asked, one body read")
+}
+
+/// [`read`] for several bodies of one file: the file is read and parsed once, then each body of
+/// `volumes` is built from the parsed file. The outer error is the file's (unreadable,
+/// malformed); the inner ones are each body's (a volume not in the file, a bad cell).
+pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
     let file = path.display().to_string();
     let bytes = read_bytes(path).map_err(|e| match e {
         Error::Memory { msg, .. } => Error::memory(&file, msg),
         e => e,
     })?;
-    parse(&bytes, volume).map_err(|msg| Error::mesh(file, msg))
+    let parsed = Parsed::new(&bytes).map_err(|msg| Error::mesh(&file, msg))?;
+    Ok(volumes.iter().map(|&v| parsed.build(v).map_err(|msg| Error::mesh(&file, msg))).collect())
 }
 
 /// The whole file, its buffer reserved first: a file larger than the memory left is an error,
@@ -166,21 +174,42 @@ fn read_up_to(f: &mut std::fs::File, buf: &mut [u8]) -> usize {
     n
 }
 
-/// Everything but the file access; errors are one-line messages.
-fn parse(bytes: &[u8], volume: Option<&str>) -> Result<BodyGeometry, String> {
-    let encoding = check_header(bytes)?;
-    // mshio still has a few `unimplemented!`/overflow paths on malformed input: never let them
-    // escape as a panic.
-    let msh = std::panic::catch_unwind(|| mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e)))
-        .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
-    for (present, section) in [(msh.data.nodes.is_some(), "$Nodes"), (msh.data.elements.is_some(), "$Elements")] {
-        if !present {
-            return Err(format!("{UNREADABLE}: it has no {section} section"));
+/// A file parsed once: mshio's sections, the physical names and the node tags, from which
+/// [`Parsed::build`] makes any of its bodies.
+struct Parsed {
+    msh: Msh,
+    names: HashMap<(i32, i32), String>,
+    tags: Vec<u64>,
+}
+
+impl Parsed {
+    /// Parses the bytes of a whole file.
+    fn new(bytes: &[u8]) -> Result<Self, String> {
+        let encoding = check_header(bytes)?;
+        // mshio still has a few `unimplemented!`/overflow paths on malformed input: never let them
+        // escape as a panic.
+        let msh = std::panic::catch_unwind(|| mshio::parse_msh_bytes(bytes).map_err(|e| describe(bytes, encoding, &e)))
+            .map_err(|_| format!("{UNREADABLE}: the parser gave up on malformed content"))??;
+        for (present, section) in [(msh.data.nodes.is_some(), "$Nodes"), (msh.data.elements.is_some(), "$Elements")] {
+            if !present {
+                return Err(format!("{UNREADABLE}: it has no {section} section"));
+            }
         }
+        let names = physical_names(bytes)?;
+        let tags = node_tags(bytes, encoding, &msh)?;
+        Ok(Parsed { msh, names, tags })
     }
-    let names = physical_names(bytes)?;
-    let tags = node_tags(bytes, encoding, &msh)?;
-    build(&msh, &names, &tags, volume)
+
+    /// Body `volume` (every volume element when `None`) of the parsed file.
+    fn build(&self, volume: Option<&str>) -> Result<BodyGeometry, String> {
+        build(&self.msh, &self.names, &self.tags, volume)
+    }
+}
+
+/// Body `volume` of the file whose bytes are `bytes`.
+#[cfg(test)]
+fn parse(bytes: &[u8], volume: Option<&str>) -> Result<BodyGeometry, String> {
+    Parsed::new(bytes)?.build(volume)
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -363,3 +363,20 @@ fn unsupported_volume_types_are_named() {
     let msg = parse(msh_text(&x, &[], &[(2, vec![(1, vec![1, 2, 3])])]).as_bytes(), None).unwrap_err();
     assert!(msg.contains("no volume elements (found: Tri3: 1)"), "{msg}");
 }
+
+/// One parse for several bodies gives each body exactly as its own read does (nodes compared
+/// bit for bit through their Debug form, cells and faces too); a volume not in the file is that
+/// body's error only.
+#[test]
+fn one_parse_builds_every_body_as_its_own_read() {
+    let p = mesh_file("sphere_on_block.msh");
+    let many = read_many(&p, &[Some("ball"), Some("missing"), Some("block"), None]).expect("parses");
+    assert!(many[1].is_err());
+    for (got, volume) in many.iter().zip([Some("ball"), None, Some("block"), None]) {
+        if let Ok(got) = got {
+            let want = read(&p, volume).expect("reads");
+            assert_eq!(format!("{got:?}"), format!("{want:?}"), "{volume:?}");
+        }
+    }
+    assert!(many[0].as_ref().unwrap().cells.len() != many[2].as_ref().unwrap().cells.len());
+}
