@@ -284,14 +284,15 @@ mod tests {
         // translate by (1, 0, 0), then 90° about the z axis through (0, 0, 0)-(0, 0, 1):
         // (1, 0, 0) → (2, 0, 0) → (0, 2, 0); (0, 1, 5) → (1, 1, 5) → (-1, 1, 5)
         let p = Placing { name: "i".into(), part: "p".into(), line: 0, data: vec![(vec![1.0, 0.0, 0.0], 1), (vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 90.0], 2)] };
-        let m = motion(&p).unwrap();
+        let Ok(m) = motion(&p) else { panic!("no motion") };
         for (x, want) in [([1.0, 0.0, 0.0], [0.0, 2.0, 0.0]), ([0.0, 1.0, 5.0], [-1.0, 1.0, 5.0])] {
             let y = m(x);
             assert!((0..3).all(|d| (y[d] - want[d]).abs() < 1e-14), "{x:?} → {y:?}, want {want:?}");
         }
         // 120° about the diagonal (1, 1, 1) through the origin permutes the axes: x → y → z
         let p = Placing { data: vec![(vec![0.0; 3], 1), (vec![0.0, 0.0, 0.0, 2.0, 2.0, 2.0, 120.0], 2)], ..p };
-        let y = motion(&p).unwrap()([3.0, 0.0, 0.0]);
+        let Ok(m) = motion(&p) else { panic!("no motion") };
+        let y = m([3.0, 0.0, 0.0]);
         assert!((y[0]).abs() < 1e-14 && (y[1] - 3.0).abs() < 1e-14 && y[2].abs() < 1e-14, "{y:?}");
         let p = Placing { data: vec![(vec![0.0; 3], 1), (vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 30.0], 2)], ..p };
         assert!(motion(&p).is_err());

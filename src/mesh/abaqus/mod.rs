@@ -846,7 +846,7 @@ mod tests {
         assert_eq!(upper.len(), 5);
         assert!(upper.iter().all(|q| q.nodes().iter().all(|&v| g.nodes[v][2] >= 1.0)));
         let e = err(&text.replace("topn, 1.0", "nowhere, 1.0"));
-        assert!(e.contains("nowhere") && e.contains("line 36"), "{e}");
+        assert!(e.contains("nowhere") && e.contains("line 37"), "{e}");
     }
 
     /// A unit cube as a part, placed twice: translated by (1, 0, 0) then turned 90° about z,
