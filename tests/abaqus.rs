@@ -2,7 +2,9 @@
 //! the two-block contact model read from `mesh/two_blocks.inp` (Gmsh's own Abaqus export of
 //! `mesh/two_blocks.msh`, its coordinates written in full precision) solves bit for bit as the same model read from the `.msh`; a hand-written
 //! 10-node tetrahedron comes out in the program's node order; malformed inputs are one-line
-//! errors naming the file and the line.
+//! errors naming the file and the line. The same model written as Abaqus/CAE writes parts and
+//! an assembly (`mesh/two_blocks_assembly.inp`, made by `mesh/make_two_blocks_assembly.py`)
+//! solves bit for bit as the plain input, and `check` lists the keywords it skipped.
 
 mod common;
 
@@ -113,4 +115,70 @@ fn tet10_edge_nodes_come_in_our_order() {
     let base = &g.faces.iter().find(|(n, _)| n == "base").unwrap().1;
     assert_eq!(base.len(), 1);
     assert!(base[0].nodes().iter().all(|&v| g.nodes[v][2] == 0.0));
+}
+
+#[test]
+fn two_blocks_as_parts_and_instances_solve_as_the_plain_input() {
+    let dir = tmpdir("assembly");
+    let plain = dir.join("plain.toml");
+    std::fs::write(&plain, abaqus_scene(&root().join("mesh/two_blocks.inp"))).unwrap();
+    let plain = solve(&plain, &[], &dir.join("plain.h5"));
+    // instances "upper" (its part written one unit down, translated by (0, 0, 1)) and "lower";
+    // the named faces are assembly-level element surfaces over `instance=` element sets
+    let mesh = root().join("mesh/two_blocks_assembly.inp");
+    let scene = dir.join("assembly.toml");
+    std::fs::write(&scene, abaqus_scene(&mesh)).unwrap();
+    let asm = solve(&scene, &[], &dir.join("assembly.h5"));
+    assert!(common::max_abs(&plain.solution.displacement) > 0.0);
+    assert_eq!(asm.solution.displacement, plain.solution.displacement);
+    assert_eq!(asm.report.results.max_von_mises, plain.report.results.max_von_mises);
+    // the instance's part-level element set, by `instance.set`, is the same body
+    let by_set = dir.join("by_set.toml");
+    std::fs::write(&by_set, abaqus_scene(&mesh).replace("volume = \"upper\"", "volume = \"upper.upper_all\"")).unwrap();
+    let by_set = solve(&by_set, &[], &dir.join("by_set.h5"));
+    assert_eq!(by_set.solution.displacement, plain.solution.displacement);
+    // check names the skipped keywords once per file, with their counts
+    let o = common::run(&["check", scene.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{text}{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("abaqus: skipped keywords")).collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    for k in ["*PREPRINT (1)", "*SOLID SECTION (2)", "*MATERIAL (2)", "*ELASTIC (2)", "*STEP (1)", "*STATIC (1)", "*END STEP (1)"] {
+        assert!(lines[0].contains(k), "{k} not in {}", lines[0]);
+    }
+    assert!(!lines[0].contains("*PART") && !lines[0].contains("*NODE"), "{}", lines[0]);
+}
+
+#[test]
+fn part_and_instance_errors_name_file_and_line() {
+    let full = std::fs::read_to_string(root().join("mesh/two_blocks_assembly.inp")).unwrap();
+    let line_of = |needle: &str| full.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    let upper = line_of("*Instance, name=upper");
+    let cases: Vec<(&str, String, String, &str)> = vec![
+        ("undefined-part", full.replacen("*Instance, name=upper, part=upper", "*Instance, name=upper, part=ghost", 1), format!("line {upper}"), "ghost"),
+        (
+            "empty-part",
+            full.replacen("*Part, name=upper", "*Part, name=empty\n*Node\n1, 0, 0, 0\n*End Part\n*Part, name=upper", 1).replacen(
+                "*Instance, name=upper, part=upper",
+                "*Instance, name=upper, part=empty",
+                1,
+            ),
+            format!("line {}", upper + 4),
+            "no volume elements",
+        ),
+        (
+            "unknown-instance",
+            full.replacen("internal, instance=upper", "internal, instance=nowhere", 1),
+            format!("line {}", line_of("*Elset, elset=_upper_top_S3")),
+            "nowhere",
+        ),
+        ("open-part", full[..full.rfind("*End Part").unwrap()].to_string(), format!("line {}", line_of("*Part, name=upper")), "*END PART"),
+        ("bad-translation", full.replacen("          0.,           0.,          1.0", "0., 1.0", 1), format!("line {}", upper + 1), "translation"),
+    ];
+    for (name, text, at, what) in cases {
+        let dir = tmpdir(&format!("{name}-mesh"));
+        let mesh = dir.join("bad.inp");
+        std::fs::write(&mesh, text).unwrap();
+        assert_clean_failure(name, &abaqus_scene(&mesh), &[], &["bad.inp", &at, what]);
+    }
 }

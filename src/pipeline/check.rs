@@ -114,6 +114,7 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ran
     let u = Units { length: unit(0), force: unit(1), stress: unit(2), area: unit(3) };
     let mut s = String::new();
     let _ = writeln!(s, "# resolved scene {}\n{}", ls.path.display(), ls.scene.to_toml());
+    skipped_keywords(&mut s, &ls);
     let free = bodies(&mut s, &model);
     faces(&mut s, &model, &u);
     tractions(&mut s, &ls, &model, &u);
@@ -139,6 +140,25 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ran
     let _ = write!(s, "{}", memory::summary(&needs, ranks)?);
     let _ = write!(s, "dual: {}", if tfeti { "TFETI" } else { "monolithic" });
     Ok(s)
+}
+
+/// One line per Abaqus input file of the scene: the keywords its reader skipped (they do not
+/// describe the mesh), with their counts.
+fn skipped_keywords(s: &mut String, ls: &LoadedScene) {
+    let mut seen = Vec::new();
+    for b in &ls.scene.bodies {
+        let Some((_, g)) = b.mesh_file().filter(|(_, g)| g.resolved_format() == Some(crate::scene::MeshFormat::Abaqus)) else { continue };
+        let path = ls.dir().join(&g.file);
+        if seen.contains(&path) {
+            continue;
+        }
+        let skipped = crate::mesh::abaqus::skipped(&path);
+        if !skipped.is_empty() {
+            let list: Vec<String> = skipped.iter().map(|(k, n)| format!("*{k} ({n})")).collect();
+            let _ = writeln!(s, "abaqus: skipped keywords in {}: {}", g.file.display(), list.join(", "));
+        }
+        seen.push(path);
+    }
 }
 
 /// The unit suffixes of the scene's `[units]` (empty without).

@@ -3,13 +3,17 @@
 //! the same steps (node references, elements listed twice, length scale, orientation).
 //!
 //! Read: `*NODE` (rectangular coordinates; `NSET=`), `*ELEMENT, TYPE=…` (`ELSET=`), `*ELSET`
-//! and `*NSET` (labels, set names, `GENERATE`), `*SURFACE, TYPE=ELEMENT` (lines `elset or
-//! element, S1…S6`; no face identifier: every boundary facet of those elements), `*INCLUDE,
-//! INPUT=` and `INPUT=` on `*NODE`/`*ELEMENT`/`*ELSET`/`*NSET` (paths relative to the file
-//! that names them). Keywords and set names are case-insensitive, `**` lines are comments, a
-//! keyword line or an element's data line that ends with a comma goes on on the next line.
-//! Every other keyword (`*MATERIAL`, `*STEP`, `*BOUNDARY`, …) is skipped with its data;
-//! `*PART`, `*INSTANCE` and `*ASSEMBLY` are refused (flatten the assembly first).
+//! and `*NSET` (labels, set names, `GENERATE`, `INSTANCE=`), `*SURFACE, TYPE=ELEMENT` (lines
+//! `elset or element, S1…S6`; no face identifier: every boundary facet of those elements),
+//! `*SURFACE, TYPE=NODE` (lines `nset or node[, weight]`), `*INCLUDE, INPUT=` and `INPUT=` on
+//! `*NODE`/`*ELEMENT`/`*ELSET`/`*NSET` (paths relative to the file that names them), and
+//! `*PART`/`*END PART`, `*ASSEMBLY`/`*END ASSEMBLY`, `*INSTANCE`/`*END INSTANCE` as Abaqus/CAE
+//! writes them ([`assembly`]: each instance a moved copy of its part; its elements are the
+//! element set `instance`, its part's sets and surfaces `instance.name`). Keywords and set
+//! names are case-insensitive, `**` lines are comments, a keyword line or an element's data
+//! line that ends with a comma goes on on the next line. Every other keyword (`*MATERIAL`,
+//! `*STEP`, `*BOUNDARY`, …) is skipped with its data, and [`skipped`] lists them (`check`
+//! prints the list).
 //!
 //! Volume elements: `C3D8`, `C3D8R`, `C3D8I`, `C3D8H`, `C3D8RH`, `C3D8IH` (read as 8-node
 //! hexahedra: the program's own integration, not Abaqus's reduced or incompatible-mode one),
@@ -20,14 +24,18 @@
 //!
 //! Faces, each named by its set or surface name (the scene says `body.name`):
 //! - every `*SURFACE, TYPE=ELEMENT` whose facets bound the body's elements (Abaqus face
-//!   numbering: C3D8 S1 1-2-3-4, S2 5-8-7-6, S3 1-5-6-2, S4 2-6-7-3, S5 3-7-8-4, S6 4-8-5-1;
-//!   C3D4/C3D10 S1 1-2-3, S2 1-4-2, S3 2-4-3, S4 3-4-1; C3D6 S1 1-2-3, S2 4-6-5, S3 1-4-5-2,
-//!   S4 2-5-6-3, S5 3-6-4-1);
+//!   numbering, Abaqus Analysis User's Guide, "Three-dimensional solid element library", face
+//!   tables; the same in Bower's `abq_facenodes_3D` of his Abaqus UEL code: C3D8 S1 1-2-3-4,
+//!   S2 5-8-7-6, S3 1-5-6-2, S4 2-6-7-3, S5 3-7-8-4, S6 4-8-5-1; C3D4/C3D10 S1 1-2-3, S2 1-4-2,
+//!   S3 2-4-3, S4 3-4-1; C3D6 S1 1-2-3, S2 4-6-5, S3 1-2-5-4, S4 2-3-6-5, S5 3-1-4-6);
 //! - every element set holding surface elements (`CPS3`, `CPS4`, `S4R`, `M3D4`, `SFM3D4`,
 //!   `R3D4`, … — Gmsh writes a physical surface this way): the body's boundary facets with the
 //!   same corners, as the Gmsh importer reads a physical surface.
 //!
-//! `*SURFACE, TYPE=NODE` and node sets do not make faces.
+//! - every `*SURFACE, TYPE=NODE`: the body's boundary facets whose nodes all lie in the
+//!   surface's nodes (weights ignored). Node sets alone do not make faces.
+
+mod assembly;
 
 use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
@@ -81,13 +89,27 @@ pub fn files(path: &Path) -> Vec<PathBuf> {
     s.files
 }
 
-/// The cheap pass of [`counts`] and [`files`].
+/// The keywords that describe the mesh, read; every other one is skipped with its data lines.
+const READ: [&str; 13] =
+    ["NODE", "ELEMENT", "ELSET", "NSET", "SURFACE", "INCLUDE", "HEADING", "PART", "END PART", "ASSEMBLY", "END ASSEMBLY", "INSTANCE", "END INSTANCE"];
+
+/// The keywords skipped in an input file and the files it includes (not describing the mesh:
+/// `*MATERIAL`, `*STEP`, `*BOUNDARY`, …), each with how often it occurs, in order of first
+/// occurrence; `*SURFACE` of a type not read counts as `SURFACE, TYPE=…`.
+pub fn skipped(path: &Path) -> Vec<(String, usize)> {
+    let mut s = Scan::default();
+    s.scan(path, 0);
+    s.skipped
+}
+
+/// The cheap pass of [`counts`], [`files`] and [`skipped`].
 #[derive(Default)]
 struct Scan {
     nodes: u64,
     elements: u64,
     bytes: u64,
     files: Vec<PathBuf>,
+    skipped: Vec<(String, usize)>,
 }
 
 impl Scan {
@@ -106,6 +128,13 @@ impl Scan {
             }
             if t.starts_with('*') {
                 let (name, params) = keyword(t);
+                let surface_type = param(&params, "TYPE").map(str::to_ascii_uppercase).filter(|t| name == "SURFACE" && t != "ELEMENT" && t != "NODE");
+                if let Some(skip) = surface_type.map(|t| format!("SURFACE, TYPE={t}")).or_else(|| (!READ.contains(&name.as_str())).then(|| name.clone())) {
+                    match self.skipped.iter_mut().find(|(n, _)| *n == skip) {
+                        Some((_, c)) => *c += 1,
+                        None => self.skipped.push((skip, 1)),
+                    }
+                }
                 block = match name.as_str() {
                     "NODE" => 1,
                     "ELEMENT" => 2,
@@ -310,9 +339,10 @@ struct SurfaceItem {
     line: usize,
 }
 
-/// An element-based surface.
+/// An element-based surface (`node`: a node-based one, `*SURFACE, TYPE=NODE`).
 struct Surface {
     name: String,
+    node: bool,
     items: Vec<SurfaceItem>,
 }
 
@@ -320,10 +350,25 @@ struct Surface {
 enum Block {
     Skip,
     Node(Option<String>),
-    Element { ty: Ty, type_name: Rc<str>, elset: Option<String>, count: Option<usize> },
-    Elset { name: String, generate: bool },
-    Nset { name: String, generate: bool },
+    Element {
+        ty: Ty,
+        type_name: Rc<str>,
+        elset: Option<String>,
+        count: Option<usize>,
+    },
+    Elset {
+        name: String,
+        generate: bool,
+        instance: Option<usize>,
+    },
+    Nset {
+        name: String,
+        generate: bool,
+        instance: Option<usize>,
+    },
     Surface(usize),
+    /// The translation and rotation lines of an `*INSTANCE`.
+    Instance,
 }
 
 /// The mesh part of an input file.
@@ -337,6 +382,11 @@ struct Deck {
     elsets: Sets,
     nsets: Sets,
     surfaces: Vec<Surface>,
+    /// Parts by upper-case name (`*PART` … `*END PART`), each read as a deck of its own.
+    parts: HashMap<String, (String, Deck)>,
+    /// Instance names in order: instance `k` (from 1) holds its part's label `L` as
+    /// [`assembly::shifted`]`(k, L)`.
+    instances: Vec<String>,
 }
 
 /// The comma-separated fields of a data line (empty ones, as after a trailing comma, dropped).
@@ -365,6 +415,7 @@ impl Deck {
         let mut block = Block::Skip;
         let mut pending: Option<(String, usize)> = None; // an element line going on
         let mut seen_node = false;
+        let mut nest = assembly::Nest::default();
         for (i, l) in lines.iter().enumerate() {
             let t = l.text.as_str();
             if t.is_empty() || t.starts_with("**") {
@@ -375,6 +426,10 @@ impl Deck {
                     return Err(Fail::at(at, format!("element line \"{p}\" ends with a comma but no line goes on")));
                 }
                 let (name, params) = keyword(t);
+                if self.structure(&name, &params, i, &mut nest)? {
+                    block = if name == "INSTANCE" { Block::Instance } else { Block::Skip };
+                    continue;
+                }
                 let next = self.keyword_block(&name, &params, i)?;
                 if name == "NODE" {
                     seen_node = true;
@@ -401,19 +456,21 @@ impl Deck {
                     }
                     self.element_line(&text, *ty, type_name, elset.as_deref(), *count, at)?;
                 }
-                Block::Elset { name, generate } => {
-                    let labels = set_line(t, *generate, &self.elsets, i)?;
+                Block::Elset { name, generate, instance } => {
+                    let labels = set_line(t, *generate, &self.elsets, *instance, &self.instances, i)?;
                     self.elsets.entry(name).extend(labels);
                 }
-                Block::Nset { name, generate } => {
-                    let labels = set_line(t, *generate, &self.nsets, i)?;
+                Block::Nset { name, generate, instance } => {
+                    let labels = set_line(t, *generate, &self.nsets, *instance, &self.instances, i)?;
                     self.nsets.entry(name).extend(labels);
                 }
+                Block::Instance => nest.data_line(t, i)?,
                 Block::Surface(s) => {
                     let mut f = fields(t);
                     let what = f.next().unwrap_or("").to_string();
                     let face = match f.next() {
                         None => None,
+                        Some(_) if self.surfaces[*s].node => None, // a node surface's weight
                         Some(id) => {
                             let n = id.to_ascii_uppercase().strip_prefix('S').and_then(|d| d.parse::<usize>().ok()).filter(|n| (1..=6).contains(n));
                             Some(
@@ -428,6 +485,7 @@ impl Deck {
         if let Some((p, at)) = pending {
             return Err(Fail::at(at, format!("element line \"{p}\" ends with a comma but no line goes on")));
         }
+        nest.finish()?;
         if !seen_node {
             return Err(Fail::file("no *NODE keyword: not an Abaqus input with a mesh"));
         }
@@ -459,22 +517,24 @@ impl Deck {
                 }
                 Block::Element { ty, type_name, elset, count }
             }
-            "ELSET" => Block::Elset { name: param(params, "ELSET").ok_or_else(|| Fail::at(i, "*ELSET without ELSET="))?.to_string(), generate },
-            "NSET" => Block::Nset { name: param(params, "NSET").ok_or_else(|| Fail::at(i, "*NSET without NSET="))?.to_string(), generate },
+            "ELSET" => {
+                let name = param(params, "ELSET").ok_or_else(|| Fail::at(i, "*ELSET without ELSET="))?.to_string();
+                Block::Elset { name, generate, instance: self.instance_param(params, i)? }
+            }
+            "NSET" => {
+                let name = param(params, "NSET").ok_or_else(|| Fail::at(i, "*NSET without NSET="))?.to_string();
+                Block::Nset { name, generate, instance: self.instance_param(params, i)? }
+            }
             "SURFACE" => {
                 let sname = param(params, "NAME").ok_or_else(|| Fail::at(i, "*SURFACE without NAME="))?.to_string();
-                if param(params, "TYPE").is_none_or(|t| t.eq_ignore_ascii_case("ELEMENT")) {
-                    self.surfaces.push(Surface { name: sname, items: Vec::new() });
-                    Block::Surface(self.surfaces.len() - 1)
-                } else {
-                    Block::Skip
+                let ty = param(params, "TYPE").map(str::to_ascii_uppercase);
+                match ty.as_deref() {
+                    None | Some("ELEMENT") | Some("NODE") => {
+                        self.surfaces.push(Surface { name: sname, node: ty.as_deref() == Some("NODE"), items: Vec::new() });
+                        Block::Surface(self.surfaces.len() - 1)
+                    }
+                    _ => Block::Skip,
                 }
-            }
-            "PART" | "INSTANCE" | "ASSEMBLY" => {
-                return Err(Fail::at(
-                    i,
-                    format!("*{name}: parts, instances and assemblies are not read; flatten the assembly (Abaqus/CAE: Model > Edit Attributes, tick \"Do not use parts and assemblies in input files\", then Write Input) or give a *PART-free input"),
-                ))
             }
             _ => Block::Skip,
         })
@@ -545,7 +605,11 @@ impl Deck {
             let n = body.iter().filter(|&&e| self.elems[e].ty == Ty::Solid).count();
             return Err(Fail::at(
                 el.line,
-                format!("{what} holds {n} solid elements of a type not read (element {}: {}); supported: {ABAQUS_SUPPORTED}", el.label, el.type_name),
+                format!(
+                    "{what} holds {n} solid elements of a type not read (element {}: {}); supported: {ABAQUS_SUPPORTED}",
+                    self.show(el.label),
+                    el.type_name
+                ),
             ));
         }
         let cells_at: Vec<usize> = body.into_iter().filter(|&e| matches!(self.elems[e].ty, Ty::Cell(_))).collect();
@@ -556,7 +620,7 @@ impl Deck {
         for &e in &cells_at {
             let el = &self.elems[e];
             if let Some(t) = el.nodes.iter().find(|t| !index.contains_key(t)) {
-                return Err(Fail::at(el.line, format!("element {} refers to node {t}, which no *NODE defines", el.label)));
+                return Err(Fail::at(el.line, format!("element {} refers to node {}, which no *NODE defines", self.show(el.label), self.show(*t))));
             }
         }
         let coords: Vec<[f64; 3]> = self.nodes.iter().map(|(_, p)| *p).collect();
@@ -575,7 +639,7 @@ impl Deck {
         let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
         for ((h, &(label, kind, _)), &e) in file_nodes.iter().zip(&file_cells).zip(&cells_at) {
             let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
-            orient(&mut cell, &nodes).map_err(|why| Fail::at(self.elems[e].line, format!("{} {label} {why}", singular(kind))))?;
+            orient(&mut cell, &nodes).map_err(|why| Fail::at(self.elems[e].line, format!("{} {} {why}", singular(kind), self.show(label))))?;
             cells.push(cell);
         }
         let cell_of: HashMap<u64, usize> = file_cells.iter().enumerate().map(|(c, (label, _, _))| (*label, c)).collect();
@@ -619,11 +683,15 @@ impl Deck {
             }
         };
         for s in &self.surfaces {
+            if s.node {
+                add(&s.name, self.node_surface(s, cells, &boundary, to_local)?);
+                continue;
+            }
             let mut list = Vec::new();
             for item in &s.items {
-                let labels: Vec<u64> = match item.what.parse::<u64>() {
-                    Ok(l) => vec![l],
-                    Err(_) => self
+                let labels: Vec<u64> = match assembly::resolve(&item.what, None, &self.instances) {
+                    Some(l) => vec![l],
+                    None => self
                         .elsets
                         .get(&item.what)
                         .ok_or_else(|| Fail::at(item.line, format!("*SURFACE {} names element set \"{}\", which is not defined", s.name, item.what)))?
@@ -634,7 +702,7 @@ impl Deck {
                     let e = *self
                         .elem_index
                         .get(&l)
-                        .ok_or_else(|| Fail::at(item.line, format!("*SURFACE {} names element {l}, which no *ELEMENT defines", s.name)))?;
+                        .ok_or_else(|| Fail::at(item.line, format!("*SURFACE {} names element {}, which no *ELEMENT defines", s.name, self.show(l))))?;
                     let Some(&c) = cell_of.get(&l) else { continue };
                     let el = &self.elems[e];
                     let Ty::Cell(kind) = el.ty else { continue };
@@ -642,7 +710,10 @@ impl Deck {
                         Some(f) => {
                             let table = abaqus_faces(kind);
                             let corners = table.get(f - 1).ok_or_else(|| {
-                                Fail::at(item.line, format!("*SURFACE {}: element {l} ({}) has faces S1 … S{}, not S{f}", s.name, singular(kind), table.len()))
+                                Fail::at(
+                                    item.line,
+                                    format!("*SURFACE {}: element {} ({}) has faces S1 … S{}, not S{f}", s.name, self.show(l), singular(kind), table.len()),
+                                )
                             })?;
                             let loc: Option<Vec<usize>> = corners.iter().map(|&k| to_local(&el.nodes[k])).collect();
                             if let Some(q) = loc.and_then(|loc| find_boundary_facet(&boundary, &loc)) {
@@ -696,7 +767,8 @@ fn abaqus_faces(kind: CellKind) -> &'static [&'static [usize]] {
 
 /// The labels of one `*ELSET`/`*NSET` data line: labels and set names, or `first, last, step`
 /// under `GENERATE`.
-fn set_line(t: &str, generate: bool, sets: &Sets, i: usize) -> std::result::Result<Vec<u64>, Fail> {
+fn set_line(t: &str, generate: bool, sets: &Sets, instance: Option<usize>, names: &[String], i: usize) -> std::result::Result<Vec<u64>, Fail> {
+    let shift = |l: u64| instance.map_or(l, |k| assembly::shifted(k, l));
     if generate {
         let v: Vec<u64> = fields(t).map(|f| int(f, "GENERATE bound", i)).collect::<std::result::Result<_, _>>()?;
         let (a, b, s) = match v[..] {
@@ -707,13 +779,17 @@ fn set_line(t: &str, generate: bool, sets: &Sets, i: usize) -> std::result::Resu
         if s == 0 || b < a || (b - a) / s >= MAX_GENERATE {
             return Err(Fail::at(i, format!("GENERATE {a}, {b}, {s}: needs first ≤ last, a positive step and at most {MAX_GENERATE} labels")));
         }
-        return Ok((a..=b).step_by(s as usize).collect());
+        return Ok((a..=b).step_by(s as usize).map(shift).collect());
     }
     let mut out = Vec::new();
     for f in fields(t) {
-        match f.parse::<u64>() {
-            Ok(l) => out.push(l),
-            Err(_) => out.extend(&sets.get(f).ok_or_else(|| Fail::at(i, format!("set item \"{f}\" is neither a number nor a set defined before")))?.labels),
+        match assembly::resolve(f, instance, names) {
+            Some(l) => out.push(l),
+            None => {
+                let name = instance.map_or_else(|| f.to_string(), |k| format!("{}.{f}", names[k - 1]));
+                let set = sets.get(&name).ok_or_else(|| Fail::at(i, format!("set item \"{f}\" is neither a number nor a set defined before")))?;
+                out.extend(&set.labels);
+            }
         }
     }
     Ok(out)
@@ -765,6 +841,48 @@ mod tests {
         assert_eq!(files(&main).len(), 2);
     }
 
+    #[test]
+    fn node_surfaces_are_the_boundary_facets_on_their_nodes() {
+        let d = tmp("nodesurf");
+        let text = format!("{TWO_HEX}*NSET, NSET=topn\n9, 10, 11, 12\n*SURFACE, TYPE=NODE, NAME=ntop\ntopn, 1.0\n*SURFACE, TYPE=NODE, NAME=upper_nodes\n5\n6\n7\n8, 2.5\ntopn\n");
+        let g = read(&write(&d, "n.inp", &text), None).unwrap();
+        let face = |n: &str| g.faces.iter().find(|(f, _)| f == n).map(|(_, q)| q.clone()).unwrap_or_else(|| panic!("no face {n}"));
+        assert_eq!(face("ntop").iter().map(|q| q.key()).collect::<Vec<_>>(), face("top").iter().map(|q| q.key()).collect::<Vec<_>>());
+        // nodes 5…12: the top and the four sides of the upper hexahedron (z = 1 is inside)
+        let upper = face("upper_nodes");
+        assert_eq!(upper.len(), 5);
+        assert!(upper.iter().all(|q| q.nodes().iter().all(|&v| g.nodes[v][2] >= 1.0)));
+        let e = err(&text.replace("topn, 1.0", "nowhere, 1.0"));
+        assert!(e.contains("nowhere") && e.contains("line 37"), "{e}");
+    }
+
+    /// A unit cube as a part, placed twice: translated by (1, 0, 0) then turned 90° about z,
+    /// and translated by (0, 0, 5).
+    const CUBE_PARTS: &str = "*Part, name=cube\n*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n8, 0, 1, 1\n*Element, type=C3D8, elset=e\n1, 1, 2, 3, 4, 5, 6, 7, 8\n*Nset, nset=base\n1, 2, 3, 4\n*Surface, type=NODE, name=bottom\nbase\n*End Part\n*Assembly, name=A\n*Instance, name=c, part=cube\n1., 0., 0.\n0., 0., 0., 0., 0., 1., 90.\n*End Instance\n*Instance, name=d, part=cube\n0., 0., 5.\n*End Instance\n*Elset, elset=_t, internal, instance=d\n1\n*Surface, type=ELEMENT, name=top\nc.e, S2\n_t, S2\n*End Assembly\n";
+
+    #[test]
+    fn instances_place_moved_copies_of_their_part() {
+        let d = tmp("parts");
+        let path = write(&d, "p.inp", CUBE_PARTS);
+        let c = read(&path, Some("c")).unwrap();
+        // node 2 (1, 0, 0): translated to (2, 0, 0), turned to (0, 2, 0); node 7 (1, 1, 1) → (2, 1, 1) → (-1, 2, 1)
+        for (v, want) in [(1, [0.0, 2.0, 0.0]), (6, [-1.0, 2.0, 1.0])] {
+            assert!((0..3).all(|k| (c.nodes[v][k] - want[k]).abs() < 1e-14), "{:?}", c.nodes[v]);
+        }
+        let face = |g: &BodyGeometry, n: &str| g.faces.iter().find(|(f, _)| f == n).map(|(_, q)| q.clone()).unwrap_or_else(|| panic!("no face {n}"));
+        assert!(face(&c, "c.bottom")[0].nodes().iter().all(|&v| c.nodes[v][2].abs() < 1e-14));
+        assert!(face(&c, "top")[0].nodes().iter().all(|&v| (c.nodes[v][2] - 1.0).abs() < 1e-14));
+        let dd = read(&path, Some("d.e")).unwrap();
+        assert_eq!(face(&dd, "top").len(), 1);
+        assert!(face(&dd, "top")[0].nodes().iter().all(|&v| dd.nodes[v][2] == 6.0));
+        let all = read(&path, None).unwrap();
+        assert_eq!((all.nodes.len(), all.cells.len()), (16, 2));
+        let e = err(&CUBE_PARTS.replace("_t, S2", "d.9, S2"));
+        assert!(e.contains("element d.9") && e.contains("line 30"), "{e}");
+        let e = err(&CUBE_PARTS.replace("0., 0., 0., 0., 0., 1., 90.", "1., 1., 1., 1., 1., 1., 90."));
+        assert!(e.contains("line 21") && e.contains("axis"), "{e}");
+    }
+
     fn err(text: &str) -> String {
         let d = tmp("err");
         read(&write(&d, "bad.inp", text), None).unwrap_err().to_string()
@@ -785,7 +903,7 @@ mod tests {
         let e = err(&TWO_HEX.replace("C3D8R", "C3D20"));
         assert!(e.contains("C3D20") && e.contains("line 18"), "{e}");
         let e = err("*PART, NAME=p\n*NODE\n1, 0, 0, 0\n");
-        assert!(e.contains("line 1") && e.contains("flatten"), "{e}");
+        assert!(e.contains("line 1") && e.contains("*END PART"), "{e}");
         assert!(!e.contains('\n'));
     }
 }
