@@ -149,7 +149,7 @@ impl Mesh {
 
 /// How many of `cells` are of each type (in [`CellKind::ALL`] order, absent ones left out).
 pub fn cell_counts(cells: &[Cell]) -> Vec<(CellKind, usize)> {
-    let mut n = [0usize; 4];
+    let mut n = [0usize; CellKind::COUNT];
     for c in cells {
         n[c.kind.code()] += 1;
     }
