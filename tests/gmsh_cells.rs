@@ -181,7 +181,11 @@ fn small_tetrahedral_cube_reads() {
 fn seed_on_tetrahedra_writes_results_that_read_back() {
     let dir = tmpdir("seed-tet");
     for (cells, n, kind, count, topology, dataset) in
-        [("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"), ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10")]
+        [
+        ("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"),
+        ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10"),
+        ("hex20", "3", CellKind::Hex20, 16, "Hexahedron_20", "hexahedra20"),
+    ]
     {
         let out = dir.join(format!("{cells}.h5"));
         let c = format!("mesh.cells=\"{cells}\"");

@@ -7,8 +7,8 @@
 use super::element::{hex8_center_stress, hex8_stiffness, hex_min_jacobian};
 pub use super::facet::{facet_area_inside, facet_area_vector, facet_centre, facet_nodal_areas, facet_normal_area, facet_point, facet_rule, facet_shape};
 use super::material::Lame;
-use super::tet::{tet10_min_jacobian, tet10_stiffness, tet10_strain, tet4_gradients, tet4_stiffness, tet4_strain};
 use super::quadratic::Quadratic;
+use super::tet::{tet10_min_jacobian, tet10_stiffness, tet10_strain, tet4_gradients, tet4_stiffness, tet4_strain};
 use super::wedge::{wedge6_min_jacobian, wedge6_stiffness, wedge6_strain};
 use crate::mesh::CellKind;
 

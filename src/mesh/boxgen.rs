@@ -122,7 +122,10 @@ fn quadratic_hexes(min: [f64; 3], max: [f64; 3], n: [usize; 3], kind: CellKind) 
     for k in 0..n[2] - 1 {
         for j in 0..n[1] - 1 {
             for i in 0..n[0] - 1 {
-                let v: Vec<usize> = refs[..kind.len()].iter().map(|r| id(2 * i + (r[0] + 1.0) as usize, 2 * j + (r[1] + 1.0) as usize, 2 * k + (r[2] + 1.0) as usize)).collect();
+                let v: Vec<usize> = refs[..kind.len()]
+                    .iter()
+                    .map(|r| id(2 * i + (r[0] + 1.0) as usize, 2 * j + (r[1] + 1.0) as usize, 2 * k + (r[2] + 1.0) as usize))
+                    .collect();
                 cells.push(Cell::new(kind, &v));
             }
         }

@@ -94,8 +94,7 @@ const WEDGE15_FACES: [&[usize]; 5] =
 
 impl CellKind {
     /// Every cell type.
-    pub const ALL: [CellKind; 7] =
-        [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15];
+    pub const ALL: [CellKind; 7] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15];
     /// The number of cell types (the length of per-type count arrays indexed by [`Self::code`]).
     pub const COUNT: usize = 7;
 

@@ -819,7 +819,9 @@ fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Opt
 pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
     let p = cell.coords(x);
     let j: Vec<f64> = match cell.kind {
-        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => corner_jacobians(p.get(..8).and_then(|c| c.try_into().ok()).ok_or("has a wrong node count")?).to_vec(),
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => {
+            corner_jacobians(p.get(..8).and_then(|c| c.try_into().ok()).ok_or("has a wrong node count")?).to_vec()
+        }
         CellKind::Tet4 | CellKind::Tet10 => vec![scaled_triple(p[0], p[1], p[2], p[3])],
         CellKind::Wedge6 | CellKind::Wedge15 => wedge_corner_jacobians(&p),
     };
