@@ -195,9 +195,10 @@ fn converges_at_the_rates_of_trilinear_elements() {
 // Tetrahedra (tet4, tet10) and wedges: convergence on a manufactured solution with body force,
 // patch tests on distorted meshes, rigid modes of a free body.
 
+use tresca_feti::fem::quadratic::Quadratic;
 use tresca_feti::fem::tet::{tet10_gradients, tet10_shape, tet4_gradients, tet4_shape, TET10_EDGES};
 use tresca_feti::fem::wedge::{wedge6_gradients, wedge6_shape};
-use tresca_feti::fem::quadratic::Quadratic;
+use tresca_feti::mesh::WEDGE15_EDGES;
 use tresca_feti::mesh::{BodyGeometry, Cell, CellKind};
 
 /// Gauss–Legendre points and weights on [0, 1].
@@ -302,6 +303,7 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
                 .collect();
             BodyGeometry { nodes: hex.nodes, cells, faces: Vec::new() }
         }
+        CellKind::Wedge15 => wedge15_body(n),
         k => boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], k).unwrap(),
     };
     let h = 1.0 / (n - 1) as f64;
@@ -329,6 +331,37 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
     let mut m = Mesh::default();
     m.try_push_body("cube", g).unwrap();
     m
+}
+
+/// The unit cube's hex27 box with every hexahedron cut into the two wedge15 cells on the
+/// hex corners (0,1,2,4,5,6) and (0,2,3,4,6,7): each wedge node is the hex27 node at the
+/// middle of its corners; the hex27 nodes no wedge uses (cell centres) are left out.
+fn wedge15_body(n: usize) -> BodyGeometry {
+    let hex = boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], CellKind::Hex27).unwrap();
+    let r = tresca_feti::fem::quadratic::hex27_ref();
+    let at = |p: [f64; 3]| r.iter().position(|q| *q == p).expect("a hex27 lattice point");
+    let mid = |a: usize, b: usize| at(std::array::from_fn(|k| 0.5 * (r[a][k] + r[b][k])));
+    let mut cells = Vec::new();
+    for h in &hex.cells {
+        let c = h.nodes();
+        for w in [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]] {
+            let mut v: Vec<usize> = w.iter().map(|&l| c[l]).collect();
+            v.extend(WEDGE15_EDGES.iter().map(|&[a, b]| c[mid(w[a], w[b])]));
+            cells.push(Cell::new(CellKind::Wedge15, &v));
+        }
+    }
+    let mut new = vec![usize::MAX; hex.nodes.len()];
+    let mut nodes = Vec::new();
+    for c in &cells {
+        for &v in c.nodes() {
+            if new[v] == usize::MAX {
+                new[v] = nodes.len();
+                nodes.push(hex.nodes[v]);
+            }
+        }
+    }
+    let cells = cells.iter().map(|c| c.map(|v| new[v])).collect();
+    BodyGeometry { nodes, cells, faces: Vec::new() }
 }
 
 /// Dirichlet constraints u = `exact` at every node on the cube's boundary.
@@ -531,11 +564,11 @@ fn tet10_converges_at_rates_three_and_two() {
     }
 }
 
-/// Hex20 and hex27 boxes (the generator's, on the grid of 2n − 1 nodes per direction):
-/// quadratic elements, L² rate 3 and H¹ rate 2.
+/// Hex20 and hex27 boxes (the generator's, on the grid of 2n − 1 nodes per direction) and
+/// wedge15 (each hex27 cut in two): quadratic elements, L² rate 3 and H¹ rate 2.
 #[test]
-fn hex20_and_hex27_converge_at_rates_three_and_two() {
-    for kind in [CellKind::Hex20, CellKind::Hex27] {
+fn hex20_hex27_and_wedge15_converge_at_rates_three_and_two() {
+    for kind in [CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15] {
         let rates = convergence(kind, &[3, 5, 9]);
         for (rl2, rh1) in &rates {
             assert!(*rl2 >= 2.9 && *rl2 <= 3.2, "{kind:?} L2 rate {rl2} (all: {rates:?})");
@@ -649,7 +682,12 @@ fn uniform_traction_on_quadratic_quadrilaterals_gives_consistent_nodal_loads() {
                 _ => centre.expect("a quad9 has a centre node"),
             };
             for c in 0..3 {
-                assert!((loads[3 * v + c] - share * total[c]).abs() < 1e-12, "{kind:?} node {x:?} component {c}: {} against {}", loads[3 * v + c], share * total[c]);
+                assert!(
+                    (loads[3 * v + c] - share * total[c]).abs() < 1e-12,
+                    "{kind:?} node {x:?} component {c}: {} against {}",
+                    loads[3 * v + c],
+                    share * total[c]
+                );
             }
             seen += 1;
         }

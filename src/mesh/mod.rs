@@ -16,7 +16,7 @@ use std::ops::Range;
 
 use crate::error::{Error, Result};
 
-pub use cell::{Cell, CellKind, Facet, FacetKind, MAX_CELL_DOFS, MAX_CELL_NODES};
+pub use cell::{Cell, CellKind, Facet, FacetKind, HEX20_EDGES, HEX27_FACES, MAX_CELL_DOFS, MAX_CELL_NODES, WEDGE15_EDGES};
 
 /// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
 /// (instead of the allocator's abort).
