@@ -100,7 +100,7 @@ pub struct MeshSize {
     /// Cells (volume elements) of all bodies.
     pub elements: usize,
     /// Cells of each type, in [`crate::mesh::CellKind::ALL`] order.
-    pub by_kind: [usize; 4],
+    pub by_kind: [usize; crate::mesh::CellKind::COUNT],
 }
 
 impl MeshSize {
@@ -245,6 +245,8 @@ pub fn cell_kind(c: crate::scene::BoxCells) -> crate::mesh::CellKind {
         BoxCells::Hex8 => CellKind::Hex8,
         BoxCells::Tet4 => CellKind::Tet4,
         BoxCells::Tet10 => CellKind::Tet10,
+        BoxCells::Hex20 => CellKind::Hex20,
+        BoxCells::Hex27 => CellKind::Hex27,
     }
 }
 
@@ -281,7 +283,7 @@ pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>) -> Re
     check_parts(scene, &mesh)?;
     let floating = floating_groups(&mesh, &groups, &buckets, pairs.as_ref(), contact_active)?;
     times.push(("hold buckets", clock.elapsed().as_secs_f64()));
-    let mut by_kind = [0; 4];
+    let mut by_kind = [0; crate::mesh::CellKind::COUNT];
     for (k, n) in mesh.cell_counts() {
         by_kind[k.code()] = n;
     }

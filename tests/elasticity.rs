@@ -195,8 +195,10 @@ fn converges_at_the_rates_of_trilinear_elements() {
 // Tetrahedra (tet4, tet10) and wedges: convergence on a manufactured solution with body force,
 // patch tests on distorted meshes, rigid modes of a free body.
 
+use tresca_feti::fem::quadratic::Quadratic;
 use tresca_feti::fem::tet::{tet10_gradients, tet10_shape, tet4_gradients, tet4_shape, TET10_EDGES};
 use tresca_feti::fem::wedge::{wedge6_gradients, wedge6_shape};
+use tresca_feti::mesh::WEDGE15_EDGES;
 use tresca_feti::mesh::{BodyGeometry, Cell, CellKind};
 
 /// Gauss–Legendre points and weights on [0, 1].
@@ -226,7 +228,8 @@ fn fine_rule(kind: CellKind) -> Vec<([f64; 3], f64)> {
             for &(w, ww) in &g {
                 match kind {
                     CellKind::Tet4 | CellKind::Tet10 => r.push(([u, (1.0 - u) * v, (1.0 - u) * (1.0 - v) * w], wu * wv * ww * (1.0 - u).powi(2) * (1.0 - v))),
-                    CellKind::Wedge6 => r.push(([u, (1.0 - u) * v, 2.0 * w - 1.0], 2.0 * wu * wv * ww * (1.0 - u))),
+                    CellKind::Wedge6 | CellKind::Wedge15 => r.push(([u, (1.0 - u) * v, 2.0 * w - 1.0], 2.0 * wu * wv * ww * (1.0 - u))),
+                    CellKind::Hex20 | CellKind::Hex27 => r.push(([2.0 * u - 1.0, 2.0 * v - 1.0, 2.0 * w - 1.0], 8.0 * wu * wv * ww)),
                     CellKind::Hex8 => unreachable!(),
                 }
             }
@@ -235,7 +238,8 @@ fn fine_rule(kind: CellKind) -> Vec<([f64; 3], f64)> {
     r
 }
 
-/// Shape functions, physical gradients and det J of a tet4, tet10 or wedge6 cell at `xi`.
+/// Shape functions, physical gradients and det J of a tet4, tet10, wedge6, hex20, hex27 or
+/// wedge15 cell at `xi`.
 fn shape_at(kind: CellKind, x: &[[f64; 3]], xi: [f64; 3]) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
     match kind {
         CellKind::Tet4 => {
@@ -249,6 +253,15 @@ fn shape_at(kind: CellKind, x: &[[f64; 3]], xi: [f64; 3]) -> (Vec<f64>, Vec<[f64
         CellKind::Wedge6 => {
             let (g, det) = wedge6_gradients(x.try_into().unwrap(), xi);
             (wedge6_shape(xi).to_vec(), g.to_vec(), det)
+        }
+        CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => {
+            let q = match kind {
+                CellKind::Hex20 => Quadratic::Hex20,
+                CellKind::Hex27 => Quadratic::Hex27,
+                _ => Quadratic::Wedge15,
+            };
+            let (g, det) = q.gradients(x, xi);
+            (q.shape(xi).0, g, det)
         }
         CellKind::Hex8 => unreachable!(),
     }
@@ -290,6 +303,7 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
                 .collect();
             BodyGeometry { nodes: hex.nodes, cells, faces: Vec::new() }
         }
+        CellKind::Wedge15 => wedge15_body(n),
         k => boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], k).unwrap(),
     };
     let h = 1.0 / (n - 1) as f64;
@@ -317,6 +331,37 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
     let mut m = Mesh::default();
     m.try_push_body("cube", g).unwrap();
     m
+}
+
+/// The unit cube's hex27 box with every hexahedron cut into the two wedge15 cells on the
+/// hex corners (0,1,2,4,5,6) and (0,2,3,4,6,7): each wedge node is the hex27 node at the
+/// middle of its corners; the hex27 nodes no wedge uses (cell centres) are left out.
+fn wedge15_body(n: usize) -> BodyGeometry {
+    let hex = boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], CellKind::Hex27).unwrap();
+    let r = tresca_feti::fem::quadratic::hex27_ref();
+    let at = |p: [f64; 3]| r.iter().position(|q| *q == p).expect("a hex27 lattice point");
+    let mid = |a: usize, b: usize| at(std::array::from_fn(|k| 0.5 * (r[a][k] + r[b][k])));
+    let mut cells = Vec::new();
+    for h in &hex.cells {
+        let c = h.nodes();
+        for w in [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]] {
+            let mut v: Vec<usize> = w.iter().map(|&l| c[l]).collect();
+            v.extend(WEDGE15_EDGES.iter().map(|&[a, b]| c[mid(w[a], w[b])]));
+            cells.push(Cell::new(CellKind::Wedge15, &v));
+        }
+    }
+    let mut new = vec![usize::MAX; hex.nodes.len()];
+    let mut nodes = Vec::new();
+    for c in &cells {
+        for &v in c.nodes() {
+            if new[v] == usize::MAX {
+                new[v] = nodes.len();
+                nodes.push(hex.nodes[v]);
+            }
+        }
+    }
+    let cells = cells.iter().map(|c| c.map(|v| new[v])).collect();
+    BodyGeometry { nodes, cells, faces: Vec::new() }
 }
 
 /// Dirichlet constraints u = `exact` at every node on the cube's boundary.
@@ -519,6 +564,19 @@ fn tet10_converges_at_rates_three_and_two() {
     }
 }
 
+/// Hex20 and hex27 boxes (the generator's, on the grid of 2n − 1 nodes per direction) and
+/// wedge15 (each hex27 cut in two): quadratic elements, L² rate 3 and H¹ rate 2.
+#[test]
+fn hex20_hex27_and_wedge15_converge_at_rates_three_and_two() {
+    for kind in [CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15] {
+        let rates = convergence(kind, &[3, 5, 9]);
+        for (rl2, rh1) in &rates {
+            assert!(*rl2 >= 2.9 && *rl2 <= 3.2, "{kind:?} L2 rate {rl2} (all: {rates:?})");
+            assert!(*rh1 >= 1.9 && *rh1 <= 2.1, "{kind:?} H1 rate {rh1} (all: {rates:?})");
+        }
+    }
+}
+
 #[test]
 fn wedge6_converges_at_rates_two_and_one() {
     let rates = convergence(CellKind::Wedge6, &[5, 9, 17]);
@@ -594,5 +652,45 @@ fn free_bodies_have_exactly_six_rigid_modes() {
         assert_eq!(zero, 6, "{kind:?}: {zero} zero eigenvalues");
         assert!(sorted[0] > -1e-11 * top, "{kind:?}: negative eigenvalue {}", sorted[0]);
         assert!(sorted[6] > 1e-4 * top, "{kind:?}: the seventh eigenvalue {:e} is nearly zero", sorted[6] / top);
+    }
+}
+
+/// A uniform traction on the top face of one hex20 (quad8 facet) puts −1/12 of the total
+/// force on each corner and 1/3 on each edge node; on one hex27 (quad9 facet) 1/36 on the
+/// corners, 1/9 on the edge nodes and 4/9 on the centre: the consistent loads ∫ N_a dA.
+#[test]
+fn uniform_traction_on_quadratic_quadrilaterals_gives_consistent_nodal_loads() {
+    let p = [0.0, 1.5, -5.0];
+    let total = [0.0, 6.0 * 1.5, -30.0];
+    for (kind, corner, edge, centre) in [(CellKind::Hex20, -1.0 / 12.0, 1.0 / 3.0, None), (CellKind::Hex27, 1.0 / 36.0, 1.0 / 9.0, Some(4.0 / 9.0))] {
+        let g = boxgen::try_generate_cells([0.0; 3], [2.0, 3.0, 1.0], [2; 3], kind).unwrap();
+        let mut mesh = Mesh::default();
+        mesh.try_push_body("block", g).unwrap();
+        let face = mesh.face("block.zmax").unwrap();
+        let mut loads = vec![0.0; 3 * mesh.nodes.len()];
+        add_traction(&mesh, face, p, 0, &mut loads);
+        let mut seen = 0;
+        for (v, x) in mesh.nodes.iter().enumerate() {
+            if (x[2] - 1.0).abs() > 1e-12 {
+                assert!(loads[3 * v..3 * v + 3].iter().all(|&f| f == 0.0), "{kind:?}: load off the face at node {v}");
+                continue;
+            }
+            let mids = [x[0] == 1.0, x[1] == 1.5].iter().filter(|&&m| m).count();
+            let share = match mids {
+                0 => corner,
+                1 => edge,
+                _ => centre.expect("a quad9 has a centre node"),
+            };
+            for c in 0..3 {
+                assert!(
+                    (loads[3 * v + c] - share * total[c]).abs() < 1e-12,
+                    "{kind:?} node {x:?} component {c}: {} against {}",
+                    loads[3 * v + c],
+                    share * total[c]
+                );
+            }
+            seen += 1;
+        }
+        assert_eq!(seen, kind.faces()[1].len(), "{kind:?}: nodes on the top face");
     }
 }

@@ -57,6 +57,24 @@ fn check_cells(g: &BodyGeometry, what: &str) {
                 assert!((0..3).all(|d| (x[4 + k][d] - mid[d]).abs() < 1e-12), "{what}: cell {e} edge node {} not on ({a},{b})", 4 + k);
             }
         }
+        // quadratic hexahedra and wedges: each edge (and hex27 face, centre) node where the
+        // cell's own map of the straight-edged fixture puts it: midway between its corners
+        let mids: Vec<(usize, Vec<usize>)> = match c.kind {
+            CellKind::Hex20 | CellKind::Hex27 => {
+                let mut m: Vec<(usize, Vec<usize>)> = tresca_feti::mesh::HEX20_EDGES.iter().enumerate().map(|(k, e)| (8 + k, e.to_vec())).collect();
+                if c.kind == CellKind::Hex27 {
+                    m.extend(tresca_feti::mesh::HEX27_FACES.iter().enumerate().map(|(k, f)| (20 + k, f.to_vec())));
+                    m.push((26, (0..8).collect()));
+                }
+                m
+            }
+            CellKind::Wedge15 => tresca_feti::mesh::WEDGE15_EDGES.iter().enumerate().map(|(k, e)| (6 + k, e.to_vec())).collect(),
+            _ => vec![],
+        };
+        for (node, corners) in mids {
+            let mid: [f64; 3] = std::array::from_fn(|d| corners.iter().map(|&a| x[a][d]).sum::<f64>() / corners.len() as f64);
+            assert!((0..3).all(|d| (x[node][d] - mid[d]).abs() < 1e-12), "{what}: cell {e} node {node} not amid {corners:?}");
+        }
         c.nodes().iter().for_each(|&v| used[v] = true);
     }
     assert!(used.iter().all(|&u| u), "{what}: a node no cell uses");
@@ -174,15 +192,36 @@ fn small_tetrahedral_cube_reads() {
     check_face(&g, "top", top.len(), &[FacetKind::Tri3], 1.0, Z);
 }
 
+/// The quadratic hexahedra and wedges of `mesh/make_quadratic_fixtures.py` (Gmsh types 17,
+/// 12, 18 and their 8-/9-node quadrangle and 6-node triangle faces): read in Gmsh's node
+/// order, every node where its cell's map puts it, the top face outward and of area 1 (½ for
+/// the prism).
+#[test]
+fn quadratic_hexahedra_and_wedges_are_read() {
+    const Z: [f64; 3] = [0.0, 0.0, 1.0];
+    for (file, kind, cells, facet, n, area) in [
+        ("cube_hex20.msh", CellKind::Hex20, 8, FacetKind::Quad8, 4, 1.0),
+        ("cube_hex27.msh", CellKind::Hex27, 8, FacetKind::Quad9, 4, 1.0),
+        ("prism_wedge15.msh", CellKind::Wedge15, 12, FacetKind::Tri6, 6, 0.5),
+    ] {
+        let g = gmsh::read(&mesh_file(file), Some("body")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(counts(&g), [(kind, cells)], "{file}");
+        check_cells(&g, file);
+        check_face(&g, "top", n, &[facet], area, Z);
+    }
+}
+
 /// The seed scene on tetrahedral box meshes (`mesh.cells`): the result file holds the cells as
 /// generated (`/mesh/tetrahedra`, `/mesh/tetrahedra10`), checked against memory by the run
 /// itself (`output.verify`), and the XDMF sidecar names their topology.
 #[test]
 fn seed_on_tetrahedra_writes_results_that_read_back() {
     let dir = tmpdir("seed-tet");
-    for (cells, n, kind, count, topology, dataset) in
-        [("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"), ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10")]
-    {
+    for (cells, n, kind, count, topology, dataset) in [
+        ("tet4", "5", CellKind::Tet4, 768, "Tetrahedron", "tetrahedra"),
+        ("tet10", "3", CellKind::Tet10, 96, "Tetrahedron_10", "tetrahedra10"),
+        ("hex20", "3", CellKind::Hex20, 16, "Hexahedron_20", "hexahedra20"),
+    ] {
         let out = dir.join(format!("{cells}.h5"));
         let c = format!("mesh.cells=\"{cells}\"");
         let m = format!("mesh.n={n}");

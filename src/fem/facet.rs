@@ -1,4 +1,4 @@
-//! Reference facets, mesh-free: the tri3, quad4, tri6 and quad8 shape functions on their
+//! Reference facets, mesh-free: the tri3, quad4, tri6, quad8 and quad9 shape functions on their
 //! reference domains, the facet quadrature rules, the facet maps' area vectors and the
 //! integrals built on them (consistent nodal weights, area-weighted normal, the area inside a
 //! region), plus the small `[f64; 3]` algebra they and the contact code share. Used by the
@@ -7,7 +7,7 @@
 //! facet's type ([`FacetKind`]).
 //!
 //! Node order (corners first, right-hand rule = outward normal): tri6's edge nodes (0,1),
-//! (1,2), (2,0); quad8's (0,1), (1,2), (2,3), (3,0). Triangles live on {ξ, η ≥ 0, ξ + η ≤ 1},
+//! (1,2), (2,0); quad8's (0,1), (1,2), (2,3), (3,0), quad9's the same and its centre. Triangles live on {ξ, η ≥ 0, ξ + η ≤ 1},
 //! quadrilaterals on [−1, 1]².
 //!
 //! **Two rule families.** [`facet_rule`] (triangles Dunavant's 6 points, degree 4;
@@ -19,8 +19,8 @@
 
 use crate::mesh::FacetKind;
 
-/// The most nodes of a facet (quad8).
-pub const MAX_NODES: usize = 8;
+/// The most nodes of a facet (quad9).
+pub const MAX_NODES: usize = 9;
 
 type V2 = [f64; 2];
 type V3 = [f64; 3];
@@ -64,18 +64,19 @@ pub fn axpy(y: &mut V3, s: f64, x: V3) {
 // ---------------------------------------------------------------------------------------------
 // reference facets
 
-/// The facet type with `nodes` nodes (3 tri3, 4 quad4, 6 tri6, 8 quad8).
+/// The facet type with `nodes` nodes (3 tri3, 4 quad4, 6 tri6, 8 quad8, 9 quad9).
 pub fn kind_of(nodes: usize) -> Option<FacetKind> {
     match nodes {
         3 => Some(FacetKind::Tri3),
         4 => Some(FacetKind::Quad4),
         6 => Some(FacetKind::Tri6),
         8 => Some(FacetKind::Quad8),
+        9 => Some(FacetKind::Quad9),
         _ => None,
     }
 }
 
-/// Triangle (tri3, tri6) or quadrilateral (quad4, quad8).
+/// Triangle (tri3, tri6) or quadrilateral (quad4, quad8, quad9).
 pub fn is_tri(kind: FacetKind) -> bool {
     matches!(kind, FacetKind::Tri3 | FacetKind::Tri6)
 }
@@ -85,7 +86,7 @@ pub fn edges(kind: FacetKind) -> &'static [(usize, usize, usize)] {
     match kind {
         FacetKind::Tri3 | FacetKind::Quad4 => &[],
         FacetKind::Tri6 => &[(3, 0, 1), (4, 1, 2), (5, 2, 0)],
-        FacetKind::Quad8 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
+        FacetKind::Quad8 | FacetKind::Quad9 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
     }
 }
 
@@ -107,13 +108,15 @@ pub struct Shape {
 
 /// The shape functions at `xi`: tri3 λ, tri6 corners λ(2λ − 1) and edges 4λ_aλ_b with
 /// λ = (1 − ξ − η, ξ, η); quad4 bilinear; quad8 serendipity (corners as [`QUAD_REF`], then the
-/// edge midpoints in the order of [`edges`]).
+/// edge midpoints in the order of [`edges`]); quad9 the biquadratic Lagrange products (corners,
+/// edge midpoints, centre).
 pub fn shape(kind: FacetKind, xi: V2) -> Shape {
     let mut s = Shape { phi: [0.0; MAX_NODES], dphi: [[0.0; 2]; MAX_NODES] };
     match kind {
         FacetKind::Tri3 | FacetKind::Tri6 => tri_shape(kind, xi, &mut s),
         FacetKind::Quad4 => quad4_shape(xi, &mut s),
         FacetKind::Quad8 => quad8_shape(xi, &mut s),
+        FacetKind::Quad9 => quad9_shape(xi, &mut s),
     }
     s
 }
@@ -159,6 +162,29 @@ fn quad8_shape([r, t]: V2, s: &mut Shape) {
             s.phi[e] = 0.5 * (1.0 + re * r) * (1.0 - t * t);
             s.dphi[e] = [0.5 * re * (1.0 - t * t), -t * (1.0 + re * r)];
         }
+    }
+}
+
+/// The 9-node Lagrange quad: products of the 1D quadratics on {−1, 0, 1}.
+fn quad9_shape([r, t]: V2, s: &mut Shape) {
+    let l = |a: f64, x: f64| -> (f64, f64) {
+        if a < 0.0 {
+            (0.5 * x * (x - 1.0), x - 0.5)
+        } else if a > 0.0 {
+            (0.5 * x * (x + 1.0), x + 0.5)
+        } else {
+            (1.0 - x * x, -2.0 * x)
+        }
+    };
+    let mut nodes = [[0.0; 2]; 9];
+    nodes[..4].copy_from_slice(&QUAD_REF);
+    for &(e, a, b) in edges(FacetKind::Quad9) {
+        nodes[e] = [0.5 * (QUAD_REF[a][0] + QUAD_REF[b][0]), 0.5 * (QUAD_REF[a][1] + QUAD_REF[b][1])];
+    }
+    for (a, [ra, ta]) in nodes.into_iter().enumerate() {
+        let ((p, dp), (q, dq)) = (l(ra, r), l(ta, t));
+        s.phi[a] = p * q;
+        s.dphi[a] = [dp * q, p * dq];
     }
 }
 
@@ -234,7 +260,7 @@ pub fn facet_rule(kind: FacetKind) -> Vec<(V2, f64)> {
             }
             v
         }
-        FacetKind::Quad4 | FacetKind::Quad8 => {
+        FacetKind::Quad4 | FacetKind::Quad8 | FacetKind::Quad9 => {
             let g = gauss3();
             g.iter().flat_map(|&(t, wt)| g.iter().map(move |&(s, ws)| ([s, t], ws * wt))).collect()
         }
@@ -304,7 +330,7 @@ pub fn facet_area_inside(kind: FacetKind, x: &[[f64; 3]], inside: impl Fn([f64; 
     // a part: its corners (3 or 4) in the reference domain
     let mut stack: Vec<(Vec<[f64; 2]>, usize)> = match kind {
         FacetKind::Tri3 | FacetKind::Tri6 => vec![(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 0)],
-        FacetKind::Quad4 | FacetKind::Quad8 => vec![(vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]], 0)],
+        FacetKind::Quad4 | FacetKind::Quad8 | FacetKind::Quad9 => vec![(vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]], 0)],
     };
     let mut area = 0.0;
     while let Some((p, depth)) = stack.pop() {
@@ -374,11 +400,12 @@ mod tests {
     /// the nodes; nodal weights sum to the area and match the closed forms.
     #[test]
     fn facet_shapes_and_weights() {
-        let nodes: [(FacetKind, Vec<[f64; 2]>); 4] = [
+        let nodes: [(FacetKind, Vec<[f64; 2]>); 5] = [
             (FacetKind::Tri3, vec![[0., 0.], [1., 0.], [0., 1.]]),
             (FacetKind::Tri6, vec![[0., 0.], [1., 0.], [0., 1.], [0.5, 0.], [0.5, 0.5], [0., 0.5]]),
             (FacetKind::Quad4, vec![[-1., -1.], [1., -1.], [1., 1.], [-1., 1.]]),
             (FacetKind::Quad8, vec![[-1., -1.], [1., -1.], [1., 1.], [-1., 1.], [0., -1.], [1., 0.], [0., 1.], [-1., 0.]]),
+            (FacetKind::Quad9, vec![[-1., -1.], [1., -1.], [1., 1.], [-1., 1.], [0., -1.], [1., 0.], [0., 1.], [-1., 0.], [0., 0.]]),
         ];
         for (kind, r) in &nodes {
             for (a, p) in r.iter().enumerate() {
@@ -411,6 +438,11 @@ mod tests {
                 FacetKind::Tri6 => assert!(w[..3].iter().all(|v| v.abs() < 1e-14) && w[3..].iter().all(|v| (v - 1.0).abs() < 1e-14)),
                 FacetKind::Quad8 => assert!(w[..4].iter().all(|v| (v + 2.0).abs() < 1e-13) && w[4..].iter().all(|v| (v - 8.0).abs() < 1e-13)),
                 FacetKind::Quad4 => assert!(w.iter().all(|v| (v - 6.0).abs() < 1e-14)),
+                // 1/36, 4/36 and 16/36 of the area
+                FacetKind::Quad9 => {
+                    assert!(w[..4].iter().all(|v| (v - 2.0 / 3.0).abs() < 1e-13) && w[4..8].iter().all(|v| (v - 8.0 / 3.0).abs() < 1e-13));
+                    assert!((w[8] - 32.0 / 3.0).abs() < 1e-13);
+                }
             }
         }
     }

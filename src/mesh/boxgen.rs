@@ -98,15 +98,55 @@ pub fn try_generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> Result<BodyG
 }
 
 /// The box of [`try_generate`] meshed with cells of type `kind`: hexahedra as there; tet4 and
-/// tet10 cut each hexahedron into six tetrahedra (tet10: a node at the middle of every edge).
-/// Wedges are not generated.
+/// tet10 cut each hexahedron into six tetrahedra (tet10: a node at the middle of every edge);
+/// hex20 and hex27 the same hexahedra with a node at the middle of every edge (hex27 also of
+/// every face and cell: the grid of 2n − 1 nodes per direction). Wedges are not generated.
 pub fn try_generate_cells(min: [f64; 3], max: [f64; 3], n: [usize; 3], kind: CellKind) -> Result<BodyGeometry> {
     let hex = try_generate(min, max, n)?;
     match kind {
         CellKind::Hex8 => Ok(hex),
         CellKind::Tet4 | CellKind::Tet10 => Ok(tetrahedralize(hex, min, max, kind == CellKind::Tet10)),
-        CellKind::Wedge6 => panic!("the box generator makes no wedges"),
+        CellKind::Hex20 | CellKind::Hex27 => Ok(quadratic_hexes(min, max, n, kind)?),
+        CellKind::Wedge6 | CellKind::Wedge15 => panic!("the box generator makes no wedges"),
     }
+}
+
+/// The hexahedra of the grid of 2n − 1 nodes per direction, each on 3 × 3 × 3 of its nodes
+/// (hex20: the corners and edge midpoints, the grid's unused face and cell centres left out).
+fn quadratic_hexes(min: [f64; 3], max: [f64; 3], n: [usize; 3], kind: CellKind) -> Result<BodyGeometry> {
+    let fine = try_generate(min, max, n.map(|v| 2 * v - 1))?;
+    let m = n.map(|v| 2 * v - 1);
+    let id = |i: usize, j: usize, k: usize| i + m[0] * (j + m[1] * k);
+    let refs = crate::fem::quadratic::hex27_ref();
+    let mut cells = Vec::with_capacity(fine.cells.len() / 8);
+    for k in 0..n[2] - 1 {
+        for j in 0..n[1] - 1 {
+            for i in 0..n[0] - 1 {
+                let v: Vec<usize> = refs[..kind.len()]
+                    .iter()
+                    .map(|r| id(2 * i + (r[0] + 1.0) as usize, 2 * j + (r[1] + 1.0) as usize, 2 * k + (r[2] + 1.0) as usize))
+                    .collect();
+                cells.push(Cell::new(kind, &v));
+            }
+        }
+    }
+    // keep the nodes the cells use, in grid order
+    let mut new = vec![usize::MAX; fine.nodes.len()];
+    for c in &cells {
+        for &v in c.nodes() {
+            new[v] = 0;
+        }
+    }
+    let mut nodes = Vec::with_capacity(fine.nodes.len());
+    for (v, slot) in new.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = nodes.len();
+            nodes.push(fine.nodes[v]);
+        }
+    }
+    let cells: Vec<Cell> = cells.iter().map(|c| c.map(|v| new[v])).collect();
+    let faces = side_faces(&nodes, &cells, min, max);
+    Ok(BodyGeometry { nodes, cells, faces })
 }
 
 /// The six Kuhn tetrahedra of a hexahedron (local corners 0…7 in hex8 order): the paths

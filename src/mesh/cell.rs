@@ -1,22 +1,39 @@
-//! Cell and facet types of a mixed mesh: hex8, tet4, tet10 and wedge6 cells, their outward
-//! faces, and the boundary facets (tri3, quad4, tri6) they make.
+//! Cell and facet types of a mixed mesh: hex8, hex20, hex27, tet4, tet10, wedge6 and wedge15
+//! cells, their outward faces, and the boundary facets (tri3, quad4, tri6, quad8, quad9) they
+//! make.
 //!
 //! Node orders are Gmsh's (= VTK's for the linear types): hex8 bottom 0-1-2-3 counter-clockwise
 //! seen from above, top 4-5-6-7 above it; tet4 corners 0-3 with (x₁−x₀, x₂−x₀, x₃−x₀)
 //! right-handed; tet10 then its edge nodes 4:(0,1) 5:(1,2) 6:(2,0) 7:(3,0) 8:(3,2) 9:(3,1);
 //! wedge6 bottom triangle 0-1-2 counter-clockwise seen from above, top 3-4-5 (3 above 0).
+//! Hex20 (Gmsh type 17) then its edge nodes 8:(0,1) 9:(0,3) 10:(0,4) 11:(1,2) 12:(1,5)
+//! 13:(2,3) 14:(2,6) 15:(3,7) 16:(4,5) 17:(4,7) 18:(5,6) 19:(6,7) ([`HEX20_EDGES`]; VTK's
+//! order differs); hex27 (type 12) then the face centres 20:(0,1,2,3) 21:(0,1,5,4)
+//! 22:(0,3,7,4) 23:(1,2,6,5) 24:(2,3,7,6) 25:(4,5,6,7) and the centre 26; wedge15 (type 18)
+//! the wedge6's corners, then 6:(0,1) 7:(0,2) 8:(0,3) 9:(1,2) 10:(1,4) 11:(2,5) 12:(3,4)
+//! 13:(3,5) 14:(4,5) ([`WEDGE15_EDGES`]).
 //! A facet lists its corners first (right-hand rule = outward normal of its cell), then for
-//! tri6 the edge nodes (0,1), (1,2), (2,0).
+//! tri6 the edge nodes (0,1), (1,2), (2,0); for quad8 (0,1), (1,2), (2,3), (3,0); quad9 adds
+//! its centre.
 
 /// The corner pairs of the tet10's edge nodes 4…9 (Gmsh's order).
 pub const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [3, 0], [3, 2], [3, 1]];
 
-/// The most nodes a cell has (tet10).
-pub const MAX_CELL_NODES: usize = 10;
+/// The corner pairs of the hex20's (and hex27's) edge nodes 8…19 (Gmsh's order).
+pub const HEX20_EDGES: [[usize; 2]; 12] = [[0, 1], [0, 3], [0, 4], [1, 2], [1, 5], [2, 3], [2, 6], [3, 7], [4, 5], [4, 7], [5, 6], [6, 7]];
+
+/// The corners of the hex27's face-centre nodes 20…25 (Gmsh's order).
+pub const HEX27_FACES: [[usize; 4]; 6] = [[0, 1, 2, 3], [0, 1, 5, 4], [0, 3, 7, 4], [1, 2, 6, 5], [2, 3, 7, 6], [4, 5, 6, 7]];
+
+/// The corner pairs of the wedge15's edge nodes 6…14 (Gmsh's order).
+pub const WEDGE15_EDGES: [[usize; 2]; 9] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 4], [2, 5], [3, 4], [3, 5], [4, 5]];
+
+/// The most nodes a cell has (hex27).
+pub const MAX_CELL_NODES: usize = 27;
 /// The most DOFs a cell has.
 pub const MAX_CELL_DOFS: usize = 3 * MAX_CELL_NODES;
-/// The most nodes a facet has (quad8).
-pub const MAX_FACET_NODES: usize = 8;
+/// The most nodes a facet has (quad9).
+pub const MAX_FACET_NODES: usize = 9;
 
 /// The type of a volume cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -29,6 +46,12 @@ pub enum CellKind {
     Tet10,
     /// 6-node wedge (triangular prism).
     Wedge6,
+    /// 20-node hexahedron (quadratic serendipity).
+    Hex20,
+    /// 27-node hexahedron (triquadratic Lagrange).
+    Hex27,
+    /// 15-node wedge (quadratic serendipity prism).
+    Wedge15,
 }
 
 /// The type of a surface facet.
@@ -42,16 +65,38 @@ pub enum FacetKind {
     Tri6,
     /// 8-node quadrilateral (serendipity).
     Quad8,
+    /// 9-node quadrilateral (biquadratic Lagrange).
+    Quad9,
 }
 
 const HEX8_FACES: [&[usize]; 6] = [&[0, 3, 2, 1], &[4, 5, 6, 7], &[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[3, 0, 4, 7]];
 const TET4_FACES: [&[usize]; 4] = [&[0, 2, 1], &[0, 1, 3], &[0, 3, 2], &[1, 2, 3]];
 const TET10_FACES: [&[usize]; 4] = [&[0, 2, 1, 6, 5, 4], &[0, 1, 3, 4, 9, 7], &[0, 3, 2, 7, 8, 6], &[1, 2, 3, 5, 8, 9]];
 const WEDGE6_FACES: [&[usize]; 5] = [&[0, 2, 1], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]];
+const HEX20_FACES: [&[usize]; 6] = [
+    &[0, 3, 2, 1, 9, 13, 11, 8],
+    &[4, 5, 6, 7, 16, 18, 19, 17],
+    &[0, 1, 5, 4, 8, 12, 16, 10],
+    &[1, 2, 6, 5, 11, 14, 18, 12],
+    &[2, 3, 7, 6, 13, 15, 19, 14],
+    &[3, 0, 4, 7, 9, 10, 17, 15],
+];
+const HEX27_FACES_LOCAL: [&[usize]; 6] = [
+    &[0, 3, 2, 1, 9, 13, 11, 8, 20],
+    &[4, 5, 6, 7, 16, 18, 19, 17, 25],
+    &[0, 1, 5, 4, 8, 12, 16, 10, 21],
+    &[1, 2, 6, 5, 11, 14, 18, 12, 23],
+    &[2, 3, 7, 6, 13, 15, 19, 14, 24],
+    &[3, 0, 4, 7, 9, 10, 17, 15, 22],
+];
+const WEDGE15_FACES: [&[usize]; 5] =
+    [&[0, 2, 1, 7, 9, 6], &[3, 4, 5, 12, 14, 13], &[0, 1, 4, 3, 6, 10, 12, 8], &[1, 2, 5, 4, 9, 11, 14, 10], &[2, 0, 3, 5, 7, 8, 13, 11]];
 
 impl CellKind {
     /// Every cell type.
-    pub const ALL: [CellKind; 4] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6];
+    pub const ALL: [CellKind; 7] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15];
+    /// The number of cell types (the length of per-type count arrays indexed by [`Self::code`]).
+    pub const COUNT: usize = 7;
 
     /// Number of nodes.
     #[allow(clippy::len_without_is_empty)]
@@ -61,6 +106,9 @@ impl CellKind {
             CellKind::Tet4 => 4,
             CellKind::Tet10 => 10,
             CellKind::Wedge6 => 6,
+            CellKind::Hex20 => 20,
+            CellKind::Hex27 => 27,
+            CellKind::Wedge15 => 15,
         }
     }
 
@@ -68,6 +116,8 @@ impl CellKind {
     pub const fn corners(self) -> usize {
         match self {
             CellKind::Tet10 => 4,
+            CellKind::Hex20 | CellKind::Hex27 => 8,
+            CellKind::Wedge15 => 6,
             k => k.len(),
         }
     }
@@ -79,13 +129,18 @@ impl CellKind {
             CellKind::Tet4 => &TET4_FACES,
             CellKind::Tet10 => &TET10_FACES,
             CellKind::Wedge6 => &WEDGE6_FACES,
+            CellKind::Hex20 => &HEX20_FACES,
+            CellKind::Hex27 => &HEX27_FACES_LOCAL,
+            CellKind::Wedge15 => &WEDGE15_FACES,
         }
     }
 
     /// The facet type of a face with `n` nodes of this cell.
     pub fn facet_kind(self, n: usize) -> FacetKind {
         match (self, n) {
-            (CellKind::Tet10, _) => FacetKind::Tri6,
+            (CellKind::Tet10, _) | (CellKind::Wedge15, 6) => FacetKind::Tri6,
+            (CellKind::Hex20, _) | (CellKind::Wedge15, _) => FacetKind::Quad8,
+            (CellKind::Hex27, _) => FacetKind::Quad9,
             (_, 3) => FacetKind::Tri3,
             _ => FacetKind::Quad4,
         }
@@ -98,6 +153,9 @@ impl CellKind {
             CellKind::Tet4 => "4-node tetrahedra",
             CellKind::Tet10 => "10-node tetrahedra",
             CellKind::Wedge6 => "wedges",
+            CellKind::Hex20 => "20-node hexahedra",
+            CellKind::Hex27 => "27-node hexahedra",
+            CellKind::Wedge15 => "15-node wedges",
         }
     }
 
@@ -108,6 +166,9 @@ impl CellKind {
             CellKind::Tet4 => "Tetrahedron",
             CellKind::Tet10 => "Tetrahedron_10",
             CellKind::Wedge6 => "Wedge",
+            CellKind::Hex20 => "Hexahedron_20",
+            CellKind::Hex27 => "Hexahedron_27",
+            CellKind::Wedge15 => "Wedge_15",
         }
     }
 
@@ -118,6 +179,9 @@ impl CellKind {
             CellKind::Tet4 => 6,
             CellKind::Tet10 => 38,
             CellKind::Wedge6 => 8,
+            CellKind::Hex20 => 48,
+            CellKind::Hex27 => 50,
+            CellKind::Wedge15 => 40,
         }
     }
 
@@ -136,6 +200,7 @@ impl FacetKind {
             FacetKind::Quad4 => 4,
             FacetKind::Tri6 => 6,
             FacetKind::Quad8 => 8,
+            FacetKind::Quad9 => 9,
         }
     }
 
@@ -143,7 +208,7 @@ impl FacetKind {
     pub const fn corners(self) -> usize {
         match self {
             FacetKind::Tri3 | FacetKind::Tri6 => 3,
-            FacetKind::Quad4 | FacetKind::Quad8 => 4,
+            FacetKind::Quad4 | FacetKind::Quad8 | FacetKind::Quad9 => 4,
         }
     }
 
@@ -154,6 +219,7 @@ impl FacetKind {
             FacetKind::Quad4 => "quadrilaterals",
             FacetKind::Tri6 => "6-node triangles",
             FacetKind::Quad8 => "8-node quadrilaterals",
+            FacetKind::Quad9 => "9-node quadrilaterals",
         }
     }
 }
@@ -303,7 +369,29 @@ mod tests {
             tet10.push(mid(tet4[a], tet4[b]));
         }
         let wedge: Vec<[f64; 3]> = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 0., 1.], [0., 1., 1.]];
-        for (kind, x) in [(CellKind::Hex8, hex), (CellKind::Tet4, tet4), (CellKind::Tet10, tet10), (CellKind::Wedge6, wedge)] {
+        let mut hex20 = hex.clone();
+        for [a, b] in HEX20_EDGES {
+            hex20.push(mid(hex[a], hex[b]));
+        }
+        let mut hex27 = hex20.clone();
+        for [a, _, c, _] in HEX27_FACES {
+            hex27.push(mid(hex[a], hex[c]));
+        }
+        hex27.push([0.5; 3]);
+        let mut wedge15 = wedge.clone();
+        for [a, b] in WEDGE15_EDGES {
+            wedge15.push(mid(wedge[a], wedge[b]));
+        }
+        let all = [
+            (CellKind::Hex8, hex),
+            (CellKind::Tet4, tet4),
+            (CellKind::Tet10, tet10),
+            (CellKind::Wedge6, wedge),
+            (CellKind::Hex20, hex20),
+            (CellKind::Hex27, hex27),
+            (CellKind::Wedge15, wedge15),
+        ];
+        for (kind, x) in all {
             let n = x.len() as f64;
             let c = x.iter().fold([0.0; 3], |s, p| [s[0] + p[0] / n, s[1] + p[1] / n, s[2] + p[2] / n]);
             let cell = Cell::new(kind, &(0..kind.len()).collect::<Vec<_>>());
@@ -312,10 +400,15 @@ mod tests {
                 let p = fc.nodes();
                 let nrm = cross(sub(x[p[1]], x[p[0]]), sub(x[p[2]], x[p[0]]));
                 assert!(dot(nrm, sub(x[p[0]], c)) > 0.0, "{kind:?} face {f} points inward");
-                if fc.kind == FacetKind::Tri6 {
-                    for (e, [a, b]) in [[0, 1], [1, 2], [2, 0]].into_iter().enumerate() {
-                        assert_eq!(x[p[3 + e]], mid(x[p[a]], x[p[b]]), "{kind:?} face {f} edge node {e}");
+                let nc = fc.kind.corners();
+                if fc.kind.len() > nc {
+                    for e in 0..nc {
+                        let (a, b) = (e, (e + 1) % nc);
+                        assert_eq!(x[p[nc + e]], mid(x[p[a]], x[p[b]]), "{kind:?} face {f} edge node {e}");
                     }
+                }
+                if fc.kind == FacetKind::Quad9 {
+                    assert_eq!(x[p[8]], mid(x[p[0]], x[p[2]]), "{kind:?} face {f} centre");
                 }
             }
         }

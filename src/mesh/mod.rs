@@ -17,7 +17,7 @@ use std::ops::Range;
 
 use crate::error::{Error, Result};
 
-pub use cell::{Cell, CellKind, Facet, FacetKind, MAX_CELL_DOFS, MAX_CELL_NODES};
+pub use cell::{Cell, CellKind, Facet, FacetKind, HEX20_EDGES, HEX27_FACES, MAX_CELL_DOFS, MAX_CELL_NODES, WEDGE15_EDGES};
 
 /// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
 /// (instead of the allocator's abort).
@@ -150,7 +150,7 @@ impl Mesh {
 
 /// How many of `cells` are of each type (in [`CellKind::ALL`] order, absent ones left out).
 pub fn cell_counts(cells: &[Cell]) -> Vec<(CellKind, usize)> {
-    let mut n = [0usize; 4];
+    let mut n = [0usize; CellKind::COUNT];
     for c in cells {
         n[c.kind.code()] += 1;
     }

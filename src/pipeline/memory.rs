@@ -171,7 +171,13 @@ pub fn box_counts(n: [usize; 3], kind: CellKind) -> (f64, f64, f64) {
     let squares = 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]);
     let grid = n[0] * n[1] * n[2];
     match kind {
-        CellKind::Hex8 | CellKind::Wedge6 => (grid, hexes, squares),
+        CellKind::Hex8 | CellKind::Wedge6 | CellKind::Wedge15 => (grid, hexes, squares),
+        CellKind::Hex20 | CellKind::Hex27 => {
+            // the grid of 2n − 1 nodes per direction; hex20 without its face and cell centres
+            let fine = (2.0 * n[0] - 1.0) * (2.0 * n[1] - 1.0) * (2.0 * n[2] - 1.0);
+            let centres = hexes + e[0] * e[1] * n[2] + e[0] * n[1] * e[2] + n[0] * e[1] * e[2];
+            (if kind == CellKind::Hex27 { fine } else { fine - centres }, hexes, squares)
+        }
         CellKind::Tet4 => (grid, 6.0 * hexes, 2.0 * squares),
         CellKind::Tet10 => {
             let axis = e[0] * n[1] * n[2] + n[0] * e[1] * n[2] + n[0] * n[1] * e[2];
@@ -567,12 +573,12 @@ mod tests {
     #[test]
     fn box_counts_match_the_generated_mesh_for_every_cell_type() {
         for n in [[2, 2, 2], [4, 3, 5], [6, 6, 6]] {
-            for kind in [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10] {
+            for kind in [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Hex20, CellKind::Hex27] {
                 let g = crate::mesh::boxgen::try_generate_cells([0.0; 3], [1.0, 2.0, 3.0], n, kind).unwrap();
                 let facets: usize = g.faces.iter().map(|f| f.1.len()).sum();
                 let counted = (g.nodes.len() as f64, g.cells.len() as f64, facets as f64);
                 assert_eq!(box_counts(n, kind), counted, "{kind:?} {n:?}");
-                assert_eq!(tetrahedralize_bytes(n, kind) == 0.0, kind == CellKind::Hex8);
+                assert_eq!(tetrahedralize_bytes(n, kind) == 0.0, !matches!(kind, CellKind::Tet4 | CellKind::Tet10));
             }
         }
         // N = 41: ≈ 7.7 nodes per grid node with tet10, six cells per hexahedron

@@ -29,6 +29,10 @@ pub enum BoxCells {
     Tet4,
     /// `tet10`: each hexahedron cut into six 10-node tetrahedra.
     Tet10,
+    /// `hex20`: 20-node (serendipity) hexahedra.
+    Hex20,
+    /// `hex27`: 27-node (triquadratic) hexahedra.
+    Hex27,
 }
 
 impl BoxCells {

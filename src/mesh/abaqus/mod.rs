@@ -759,9 +759,9 @@ fn abaqus_faces(kind: CellKind) -> &'static [&'static [usize]] {
     const TET: [&[usize]; 4] = [&[0, 1, 2], &[0, 3, 1], &[1, 3, 2], &[2, 3, 0]];
     const WEDGE: [&[usize]; 5] = [&[0, 1, 2], &[3, 5, 4], &[0, 3, 4, 1], &[1, 4, 5, 2], &[2, 5, 3, 0]];
     match kind {
-        CellKind::Hex8 => &HEX,
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
-        CellKind::Wedge6 => &WEDGE,
+        CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
     }
 }
 

@@ -714,7 +714,7 @@ fn named_faces(
 }
 
 /// The volume element types read, for messages.
-pub(super) const SUPPORTED: &str = "Hex8, Tet4, Tet10, Pri6 (wedge)";
+pub(super) const SUPPORTED: &str = "Hex8, Hex20, Hex27, Tet4, Tet10, Pri6 (wedge), Pri15";
 
 /// The cell type of a Gmsh volume element type, if it is one this reader takes.
 fn cell_kind(t: ElementType) -> Option<CellKind> {
@@ -723,18 +723,22 @@ fn cell_kind(t: ElementType) -> Option<CellKind> {
         ElementType::Tet4 => Some(CellKind::Tet4),
         ElementType::Tet10 => Some(CellKind::Tet10),
         ElementType::Pri6 => Some(CellKind::Wedge6),
+        ElementType::Hex20 => Some(CellKind::Hex20),
+        ElementType::Hex27 => Some(CellKind::Hex27),
+        ElementType::Pri15 => Some(CellKind::Wedge15),
         _ => None,
     }
 }
 
 /// The corners and the name (in messages) of a Gmsh surface element type that can name a
-/// face: 3-, 4-, 6- and 8-node triangles and quadrangles.
+/// face: 3-, 4-, 6-, 8- and 9-node triangles and quadrangles.
 fn surface_kind(t: ElementType) -> Option<(usize, &'static str)> {
     match t {
         ElementType::Tri3 => Some((3, "triangle")),
         ElementType::Qua4 => Some((4, "quadrangle")),
         ElementType::Tri6 => Some((3, "6-node triangle")),
         ElementType::Qua8 => Some((4, "8-node quadrangle")),
+        ElementType::Qua9 => Some((4, "9-node quadrangle")),
         _ => None,
     }
 }
@@ -746,6 +750,9 @@ pub(super) fn singular(kind: CellKind) -> &'static str {
         CellKind::Tet4 => "tetrahedron",
         CellKind::Tet10 => "10-node tetrahedron",
         CellKind::Wedge6 => "wedge",
+        CellKind::Hex20 => "20-node hexahedron",
+        CellKind::Hex27 => "27-node hexahedron",
+        CellKind::Wedge15 => "15-node wedge",
     }
 }
 
@@ -756,6 +763,9 @@ fn plural(kind: CellKind) -> &'static str {
         CellKind::Tet4 => "tetrahedra",
         CellKind::Tet10 => "10-node tetrahedra",
         CellKind::Wedge6 => "wedges",
+        CellKind::Hex20 => "20-node hexahedra",
+        CellKind::Hex27 => "27-node hexahedra",
+        CellKind::Wedge15 => "15-node wedges",
     }
 }
 
@@ -765,9 +775,9 @@ fn edges(kind: CellKind) -> &'static [[usize; 2]] {
     const TET: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
     const WEDGE: [[usize; 2]; 9] = [[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]];
     match kind {
-        CellKind::Hex8 => &HEX,
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
-        CellKind::Wedge6 => &WEDGE,
+        CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
     }
 }
 
@@ -838,9 +848,11 @@ fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Opt
 pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
     let p = cell.coords(x);
     let j: Vec<f64> = match cell.kind {
-        CellKind::Hex8 => corner_jacobians(p.as_slice().try_into().map_err(|_| "has a wrong node count")?).to_vec(),
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => {
+            corner_jacobians(p.get(..8).and_then(|c| c.try_into().ok()).ok_or("has a wrong node count")?).to_vec()
+        }
         CellKind::Tet4 | CellKind::Tet10 => vec![scaled_triple(p[0], p[1], p[2], p[3])],
-        CellKind::Wedge6 => wedge_corner_jacobians(&p),
+        CellKind::Wedge6 | CellKind::Wedge15 => wedge_corner_jacobians(&p),
     };
     if j.iter().any(|&d| d <= 0.0) {
         if !j.iter().all(|&d| d < 0.0) {
@@ -849,11 +861,16 @@ pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
                 _ => "is degenerate or twisted (its corner Jacobians do not share one sign)".into(),
             });
         }
+        // the mirror ξ ↔ η: corners 1 ↔ 3 (hexahedra) or 1 ↔ 2 (wedges), with their edge and
+        // face nodes
         let swaps: &[(usize, usize)] = match cell.kind {
             CellKind::Hex8 => &[(1, 3), (5, 7)],
             CellKind::Tet4 => &[(1, 2)],
             CellKind::Tet10 => &[(1, 2), (4, 6), (8, 9)],
             CellKind::Wedge6 => &[(1, 2), (4, 5)],
+            CellKind::Hex20 => &[(1, 3), (5, 7), (8, 9), (11, 13), (12, 15), (16, 17), (18, 19)],
+            CellKind::Hex27 => &[(1, 3), (5, 7), (8, 9), (11, 13), (12, 15), (16, 17), (18, 19), (21, 22), (23, 24)],
+            CellKind::Wedge15 => &[(1, 2), (4, 5), (6, 7), (10, 11), (12, 13)],
         };
         let v = cell.nodes_mut();
         for &(a, b) in swaps {

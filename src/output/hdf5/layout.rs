@@ -19,6 +19,9 @@ const HEXAHEDRA: &str = "hexahedra";
 pub(super) const TETRAHEDRA: &str = "tetrahedra";
 const TETRAHEDRA10: &str = "tetrahedra10";
 const WEDGES: &str = "wedges";
+const HEXAHEDRA20: &str = "hexahedra20";
+const HEXAHEDRA27: &str = "hexahedra27";
+const WEDGES15: &str = "wedges15";
 pub(super) const MIXED: &str = "mixed";
 pub(super) const CENTER_ATTR: &str = "center";
 
@@ -45,7 +48,7 @@ pub enum CellLayout {
 
 impl CellLayout {
     /// From the number of cells of each type ([`CellKind::ALL`] order).
-    fn from_counts(n: [usize; 4]) -> Self {
+    fn from_counts(n: [usize; CellKind::COUNT]) -> Self {
         let kinds: Vec<CellKind> = CellKind::ALL.iter().zip(n).filter(|(_, c)| *c > 0).map(|(&k, _)| k).collect();
         match kinds.as_slice() {
             [] => CellLayout::Uniform(CellKind::Hex8),
@@ -56,7 +59,7 @@ impl CellLayout {
 
     /// The layout of the whole mesh `cells`.
     pub fn of_cells(cells: &[Cell]) -> Self {
-        let mut n = [0usize; 4];
+        let mut n = [0usize; CellKind::COUNT];
         for c in cells {
             n[c.kind.code()] += 1;
         }
@@ -70,13 +73,16 @@ impl CellLayout {
             CellLayout::Uniform(CellKind::Tet4) => TETRAHEDRA,
             CellLayout::Uniform(CellKind::Tet10) => TETRAHEDRA10,
             CellLayout::Uniform(CellKind::Wedge6) => WEDGES,
+            CellLayout::Uniform(CellKind::Hex20) => HEXAHEDRA20,
+            CellLayout::Uniform(CellKind::Hex27) => HEXAHEDRA27,
+            CellLayout::Uniform(CellKind::Wedge15) => WEDGES15,
             CellLayout::Mixed { .. } => MIXED,
         }
     }
 }
 
 /// The cell datasets [`read`](fn@super::read) knows, one of which a file holds.
-pub(super) const CELL_DATASETS: [&str; 5] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, MIXED];
+pub(super) const CELL_DATASETS: [&str; 8] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, HEXAHEDRA20, HEXAHEDRA27, WEDGES15, MIXED];
 
 /// The layout of the cells of `data` over all ranks: that of `data.cells` where they are the
 /// whole mesh; where the mesh is distributed, that of the rows the ranks hold (their cell types
@@ -88,16 +94,16 @@ pub fn cell_layout<C: Comm>(comm: &C, data: &OutputData) -> Result<CellLayout> {
     let ids: Vec<i64> = data.cells.iter().map(|c| c.kind.xdmf_id() as i64).collect();
     let mine = gather_block(comm, m.cells, 1, &m.cell_rows, &ids);
     // cells of each type in this rank's block, then the rows of it no rank holds (id 0)
-    let mut n = [0u64; 5];
+    let mut n = [0u64; CellKind::COUNT + 1];
     for &id in &mine {
         match kind_of_id(id) {
             Some(k) => n[k.code()] += 1,
-            None => n[4] += 1,
+            None => n[CellKind::COUNT] += 1,
         }
     }
     comm.sum_u64(&mut n);
-    if n[4] > 0 {
-        return Err(Error::output(String::new(), format!("distributed mesh: {} of the {} cell rows are held by no rank", n[4], m.cells)));
+    if n[CellKind::COUNT] > 0 {
+        return Err(Error::output(String::new(), format!("distributed mesh: {} of the {} cell rows are held by no rank", n[CellKind::COUNT], m.cells)));
     }
     Ok(CellLayout::from_counts(std::array::from_fn(|k| n[k] as usize)))
 }
@@ -107,14 +113,21 @@ pub(super) fn kind_of_id(id: i64) -> Option<CellKind> {
     CellKind::ALL.into_iter().find(|k| k.xdmf_id() as i64 == id)
 }
 
-/// The position in our node order of each node in the file's (XDMF's = VTK's) order: the same
-/// but for a 10-node tetrahedron, whose edge nodes (3,2) and (3,1) come the other way round
-/// there ((1,3) before (2,3)). An involution: it maps back as well.
+/// The position in our (Gmsh's) node order of each node in the file's (XDMF's = VTK's)
+/// order: the same but for a 10-node tetrahedron, whose edge nodes (3,2) and (3,1) come the
+/// other way round there ((1,3) before (2,3)); a 20/27-node hexahedron, whose edge nodes VTK
+/// lists bottom ring, top ring, then the vertical edges (and a 27's face centres x−, x+, y−,
+/// y+, z−, z+); a 15-node wedge, whose edge nodes VTK lists bottom ring, top ring, vertical.
 pub(super) fn file_order(kind: CellKind) -> &'static [usize] {
     const TET10: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
-    const IDENTITY: [usize; MAX_CELL_NODES] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+    const HEX27: [usize; 27] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15, 22, 23, 21, 24, 20, 25, 26];
+    const WEDGE15: [usize; 15] = [0, 1, 2, 3, 4, 5, 6, 9, 7, 12, 14, 13, 8, 10, 11];
+    const IDENTITY: [usize; MAX_CELL_NODES] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26];
     match kind {
         CellKind::Tet10 => &TET10,
+        CellKind::Hex20 => &HEX27[..20],
+        CellKind::Hex27 => &HEX27,
+        CellKind::Wedge15 => &WEDGE15,
         k => &IDENTITY[..k.len()],
     }
 }

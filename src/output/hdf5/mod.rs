@@ -12,6 +12,9 @@
 //! | `/mesh/tetrahedra` | i64 | ncells × 4 (tet4 cells only) |
 //! | `/mesh/tetrahedra10` | i64 | ncells × 10 (tet10 cells only) |
 //! | `/mesh/wedges` | i64 | ncells × 6 (wedge6 cells only) |
+//! | `/mesh/hexahedra20` | i64 | ncells × 20 (hex20 cells only, VTK's node order) |
+//! | `/mesh/hexahedra27` | i64 | ncells × 27 (hex27 cells only, VTK's node order) |
+//! | `/mesh/wedges15` | i64 | ncells × 15 (wedge15 cells only, VTK's node order) |
 //! | `/mesh/mixed` | i64 | Σ (1 + nodes of the cell) (cells of several types) |
 //! | `/fields/<name>` | f64 or i32 | `len` (ncomp = 1) or `len × ncomp` |
 //! | `/steps/<NNNN>/<name>` | f64 or i32 | as `/fields/<name>` |
