@@ -9,6 +9,7 @@
 //! rename that fails takes back the ones before it, so a failed run leaves neither a result
 //! file nor a temporary one behind.
 
+pub(crate) mod checkpoint;
 pub(crate) mod guard;
 pub mod hdf5;
 pub mod tmpfiles;

@@ -13,6 +13,7 @@
 
 pub(crate) mod accuracy;
 mod check;
+mod checkpoint;
 pub(crate) mod finish;
 pub mod memory;
 pub(crate) mod monitor;
@@ -450,8 +451,26 @@ pub struct ContactOutcome {
 
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
+    run_solve_from(comm, scene_path, overrides, out, quiet, None)
+}
+
+/// [`run_solve`], continued from checkpoint `resume` where given (`solve --resume`): it is read
+/// and checked against the scene, its mesh files and the program before the solve; a refusal
+/// writes nothing.
+pub fn run_solve_from<C: Comm>(
+    comm: &C,
+    scene_path: &std::path::Path,
+    overrides: &[String],
+    out: Option<PathBuf>,
+    quiet: bool,
+    resume: Option<&std::path::Path>,
+) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
-    let Prepared { ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
+    let Prepared { mut ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
+    if let Some(p) = resume {
+        let c = comm.agree(output::checkpoint::Digest::of(&ls).and_then(|d| output::checkpoint::read(p, &d)))?;
+        ls.resume = Some(std::sync::Arc::new(c));
+    }
     memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
     let (sol, outcome) = match &model.pairs {
         _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),

@@ -107,6 +107,11 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         (Verdict::new(self.comm, &pieces, kkt.worst(), eps), (coulomb_set, kkt))
     }
 
+    fn rows(&self) -> Vec<usize> {
+        // λ is whole on every rank
+        (0..self.dual.dim()).collect()
+    }
+
     fn kept_sigma(&self, sigma: f64) -> Option<f64> {
         Some(sigma)
     }

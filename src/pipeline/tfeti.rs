@@ -584,6 +584,11 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         (Verdict::new(self.comm, &equilibria(dual, &rec.u, &rec.rhs), kkt, eps), judged)
     }
 
+    fn rows(&self) -> Vec<usize> {
+        // the owned rows: global ids fixed by the decomposition, not by the rank count
+        self.dual.dist.owned.clone()
+    }
+
     fn kept_sigma(&self, sigma: f64) -> Option<f64> {
         // σ_max of SMALSE-M's penalized operator is its own business: measured every solve
         (!self.orthogonal).then_some(sigma)
