@@ -466,15 +466,13 @@ pub fn run_solve_from<C: Comm>(
     resume: Option<&std::path::Path>,
 ) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
-    let Prepared { mut ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
-    if let Some(p) = resume {
-        let c = comm.agree(output::checkpoint::Digest::of(&ls).and_then(|d| output::checkpoint::read(p, &d)))?;
-        ls.resume = Some(std::sync::Arc::new(c));
-    }
+    let Prepared { ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
+    let resume = resume.map(|p| checkpoint::read(comm, &ls, p)).transpose()?;
+    let resume = resume.as_ref();
     memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
     let (sol, outcome) = match &model.pairs {
-        _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),
-        Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o))),
+        _ if tfeti => tfeti::solve_from(comm, &ls, &mut model, resume, &mut t),
+        Some(_) => monolithic::solve_contact_from(comm, &ls, &model, resume, &mut t).map(|(s, o)| (s, Some(o))),
         None => solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t).map(|s| (s, None)),
     }
     .map_err(|e| memory::name_the_mesh(&ls, e))?;

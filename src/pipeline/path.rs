@@ -91,7 +91,7 @@ impl Walk {
 
     /// Continues from checkpoint `c`: y and the jump on this rank's dual rows `rows` (global
     /// ids), σ_max, the records (their rows on rank 0, `root`) and the tightenings so far.
-    pub fn resume(&mut self, c: &crate::output::checkpoint::Checkpoint, rows: &[usize], root: bool) -> Option<()> {
+    pub fn resume(&mut self, c: &super::checkpoint::Checkpoint, rows: &[usize], root: bool) -> Option<()> {
         if c.steps != self.steps || c.y.len() != c.jump.len() || rows.iter().any(|&r| r >= c.y.len()) {
             return None;
         }

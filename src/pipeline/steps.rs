@@ -62,7 +62,7 @@ pub(crate) struct Solved<D: StepDual + ?Sized> {
 }
 
 /// Walks the scene's load path on `dual` from b = `b`: the last step's solution and contact
-/// outcome (with every step's record and tightening).
+/// outcome (with every step's record and tightening); from the step after `resume`'s when given.
 pub(crate) fn walk<C: Comm, D: StepDual>(
     comm: &C,
     ls: &LoadedScene,
@@ -71,6 +71,7 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
     dual: &mut D,
     mut b: Vec<f64>,
     dim: usize,
+    resume: Option<&checkpoint::Checkpoint>,
     t: &mut Timings,
 ) -> Result<(Solution, Option<ContactOutcome>)> {
     let contact: Option<&Contact> = model.pairs.as_ref();
@@ -78,7 +79,7 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
     let mut walk = Walk::new(&model.path, dim, params, super::report::UnitsReport::of(&ls.scene.units));
     let rows = dual.rows();
     let mut saver = checkpoint::Saver::new(comm, ls, walk.on_path)?;
-    let first = match &ls.resume {
+    let first = match resume {
         Some(c) => {
             let shown = c.path.display().to_string();
             let resumed = walk.resume(c, &rows, comm.is_root()).map(|()| saver.resumed(c));
@@ -102,7 +103,9 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
             }
             return Ok((solution, outcome));
         }
-        t.phase(comm, "checkpoint", || saver.save(&walk, k, &rows))?;
+        if saver.active() {
+            t.phase(comm, "checkpoint", || saver.save(&walk, k, &rows))?;
+        }
     }
     unreachable!("a load path has at least one step")
 }

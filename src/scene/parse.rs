@@ -13,8 +13,6 @@ pub struct LoadedScene {
     pub scene: Scene,
     /// The scene file.
     pub path: PathBuf,
-    /// The checkpoint a `solve --resume` continues from (read and checked before the solve).
-    pub(crate) resume: Option<std::sync::Arc<crate::output::checkpoint::Checkpoint>>,
 }
 
 impl LoadedScene {
@@ -36,7 +34,7 @@ impl LoadedScene {
 pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedScene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display().to_string(), e))?;
     let scene = parse(&text, &path.display().to_string(), overrides)?;
-    Ok(LoadedScene { scene, path: path.to_path_buf(), resume: None })
+    Ok(LoadedScene { scene, path: path.to_path_buf() })
 }
 
 /// Parses scene text (`file` is only used in messages).

@@ -43,7 +43,7 @@ fn sphere_bulge_geometry() {
     assert!(centred.bulge(0.0, 0.0).abs() < 1e-14 && centred.bulge(1.0, 2.0).abs() < 1e-14);
     // the built mesh: the zmin nodes lie on the sphere of radius R centred above the pole,
     // the zmax nodes stay flat, the ones between in proportion
-    let model = crate::model::build(&LoadedScene { scene, path: "t.toml".into(), resume: None }).expect("builds");
+    let model = crate::model::build(&LoadedScene { scene, path: "t.toml".into() }).expect("builds");
     let zc = 1.0 + (r * r - h2).sqrt(); // the sphere's centre: the far corner at z = 1
     let (mut low, mut top) = (0, 0);
     for p in &model.mesh.nodes {

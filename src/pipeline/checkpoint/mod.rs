@@ -1,7 +1,8 @@
 //! Writing the load path's checkpoints from the walk ([`Saver`]): after each completed step
 //! but the last, every rank sends rank 0 its dual rows (y and the jump, by global id) and its
-//! rows of the new step's record; rank 0 writes the file ([`crate::output::checkpoint`]) and
-//! tells the signal thread which step the checkpoint holds, for its one line.
+//! rows of the new step's record; rank 0 writes the file ([`file`]) and
+//! tells the signal thread which step the checkpoint holds, for its one line. [`read`] loads
+//! and checks one for `solve --resume` before the solve starts.
 
 use std::path::PathBuf;
 
@@ -9,9 +10,12 @@ use super::path::Walk;
 use super::LocalFields;
 use crate::comm::Comm;
 use crate::error::Result;
-use crate::output::checkpoint::{self, Checkpoint, Digest, Record};
+pub(crate) mod file;
+
 use crate::output::tmpfiles;
 use crate::scene::LoadedScene;
+pub(crate) use file::Checkpoint;
+use file::{Digest, Record};
 
 /// The checkpoints of one walk (`output.checkpoint`; inactive otherwise).
 pub(crate) struct Saver<'a, C: Comm> {
@@ -29,11 +33,16 @@ impl<'a, C: Comm> Saver<'a, C> {
         let target = if ls.scene.output.checkpoint && on_path {
             let digest = comm.agree(Digest::of(ls))?;
             let h5 = ls.output_path();
-            Some((checkpoint::path_for(&h5), checkpoint::prev_for(&h5), digest))
+            Some((file::path_for(&h5), file::prev_for(&h5), digest))
         } else {
             None
         };
         Ok(Saver { comm, target, records: vec![], scene: ls.path.clone() })
+    }
+
+    /// Whether checkpoints are written (a phase of their own then).
+    pub fn active(&self) -> bool {
+        self.target.is_some()
     }
 
     /// Continues after checkpoint `c`: its records are the first ones.
@@ -68,11 +77,17 @@ impl<'a, C: Comm> Saver<'a, C> {
             digest: *digest,
             path: PathBuf::new(),
         };
-        checkpoint::write(path, prev, &c)?;
+        file::write(path, prev, &c)?;
         tmpfiles::note_checkpoint(k, walk.steps, &self.scene, path);
         stop_for_tests(k);
         Ok(())
     }
+}
+
+/// The checkpoint `path` for a run of `ls`, checked against its scene, meshes and program
+/// (collective: every rank reads it).
+pub(crate) fn read<C: Comm>(comm: &C, ls: &LoadedScene, path: &std::path::Path) -> Result<Checkpoint> {
+    comm.agree(Digest::of(ls).and_then(|d| file::read(path, &d)))
 }
 
 /// A distributed vector whole on rank 0 by the global ids of its entries (`rows`; replicated

@@ -15,13 +15,14 @@
 //!
 //! **Atomic.** The file is written under a temporary name (tracked by [`super::tmpfiles`]),
 //! fsynced, the previous checkpoint renamed to `x.checkpoint.prev.h5`, then the new one renamed
-//! into place, under [`super::tmpfiles::hold`] so a signal never interleaves with the renames.
+//! into place, under [`tmpfiles::hold`] so a signal never interleaves with the renames.
 //! A payload digest (FNV-1a over every stored value) catches a corrupt file.
 
 use std::path::{Path, PathBuf};
 
 use crate::contact::state::ContactState;
 use crate::error::{Error, Result};
+use crate::output::tmpfiles;
 use crate::pipeline::accuracy::Tightening;
 use crate::pipeline::path::{StepOutput, StepReport};
 use crate::pipeline::LocalFields;
@@ -279,8 +280,8 @@ pub fn write(path: &Path, prev: &Path, c: &Checkpoint) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display().to_string(), e))?;
     }
-    let tmp = super::staging(path, &super::tmpfiles::token());
-    super::tmpfiles::track(&tmp);
+    let tmp = crate::output::staging(path, &tmpfiles::token());
+    tmpfiles::track(&tmp);
     let result = (|| -> std::result::Result<(), ::hdf5::Error> {
         let file = ::hdf5::File::create(&tmp)?;
         file.new_dataset::<u8>().shape(meta.len()).create("meta")?.write_raw(&meta)?;
@@ -295,7 +296,7 @@ pub fn write(path: &Path, prev: &Path, c: &Checkpoint) -> Result<()> {
     .map_err(|e| Error::output(&shown, format!("checkpoint: {e}")))
     .and_then(|()| std::fs::File::open(&tmp).and_then(|f| f.sync_all()).map_err(|e| Error::io(&shown, e)))
     .and_then(|()| {
-        let _held = super::tmpfiles::hold();
+        let _held = tmpfiles::hold();
         if path.exists() {
             std::fs::rename(path, prev).map_err(|e| Error::io(prev.display().to_string(), e))?;
         }
@@ -304,7 +305,7 @@ pub fn write(path: &Path, prev: &Path, c: &Checkpoint) -> Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    super::tmpfiles::untrack(&tmp);
+    tmpfiles::untrack(&tmp);
     result
 }
 
