@@ -113,6 +113,14 @@ enum Cmd {
         /// (the scene key `output.export_fclib`; monolithic dual, isotropic Coulomb).
         #[arg(long = "export-fclib", value_name = "PATH")]
         export_fclib: Option<PathBuf>,
+        /// Write a checkpoint after each completed load step (`output.checkpoint`):
+        /// `<name>.checkpoint.h5` beside the result.
+        #[arg(long)]
+        checkpoint: bool,
+        /// Continue a load path from this checkpoint (written by `--checkpoint`): the steps after
+        /// its last one, with the same result set an uninterrupted run writes.
+        #[arg(long, value_name = "CHECKPOINT")]
+        resume: Option<PathBuf>,
         #[command(flatten)]
         memory: MaxMemory,
     },
@@ -534,12 +542,15 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
         faer::set_global_parallelism(faer::Par::Seq);
     }
     let result = match cmd {
-        Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, memory } => {
+        Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, checkpoint, resume, memory } => {
             memory.apply();
             if let Some(p) = export_fclib {
                 set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
             }
-            pipeline::run_solve(comm, &scene, &set, out, quiet)
+            if checkpoint {
+                set.push("output.checkpoint=true".into());
+            }
+            pipeline::run_solve_from(comm, &scene, &set, out, quiet, resume.as_deref())
         }
         .map(|s| {
             if comm.is_root() {

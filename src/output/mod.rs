@@ -163,7 +163,7 @@ pub fn sibling(h5: &Path, ext: &str) -> PathBuf {
 }
 
 /// `<path>.<token>.tmp`: where `path` is written before its rename.
-fn staging(path: &Path, token: &str) -> PathBuf {
+pub(crate) fn staging(path: &Path, token: &str) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
     s.push(format!(".{token}.tmp"));
     PathBuf::from(s)

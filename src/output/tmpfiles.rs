@@ -16,9 +16,11 @@ pub struct Files {
     pub temps: Vec<PathBuf>,
     /// Result files renamed into place: the set is complete.
     pub written: Vec<PathBuf>,
+    /// The last checkpoint written: (its step, the path's steps, the scene, the file).
+    pub checkpoint: Option<(usize, usize, PathBuf, PathBuf)>,
 }
 
-static TRACKED: Mutex<Files> = Mutex::new(Files { temps: Vec::new(), written: Vec::new() });
+static TRACKED: Mutex<Files> = Mutex::new(Files { temps: Vec::new(), written: Vec::new(), checkpoint: None });
 
 /// The list, even if a thread panicked while holding it (a list of paths stays valid).
 fn list() -> MutexGuard<'static, Files> {
@@ -44,6 +46,11 @@ impl Files {
     }
 }
 
+/// Records that the checkpoint `file` of `scene` now holds step `step` of `steps`.
+pub fn note_checkpoint(step: usize, steps: usize, scene: &Path, file: &Path) {
+    list().checkpoint = Some((step, steps, scene.to_path_buf(), file.to_path_buf()));
+}
+
 /// Holds the list for the caller's renames: the signal thread waits until they are done.
 pub fn hold() -> MutexGuard<'static, Files> {
     list()
@@ -56,13 +63,13 @@ pub fn token() -> String {
     format!("{}-{:x}", std::process::id(), nanos as u64)
 }
 
-/// Starts the thread that, on SIGINT or SIGTERM, removes the tracked files and ends the
+/// Starts the thread that, on SIGINT, SIGTERM or SIGUSR1 (Slurm's `--signal`), removes the tracked files and ends the
 /// process (exit status 128 + signal number); `loud`: print the one line (rank 0 only): the
 /// temporary files removed (no result written), or, once the set was renamed into place, that
 /// it is complete.
 pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    use signal_hook::consts::{SIGINT, SIGTERM, SIGUSR1};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGUSR1])?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
         if let Some(sig) = signals.forever().next() {
             let files = list();
@@ -70,10 +77,17 @@ pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
             for f in &files.temps {
                 let _ = std::fs::remove_file(f);
             }
-            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            let name = match sig {
+                SIGINT => "SIGINT",
+                SIGUSR1 => "SIGUSR1",
+                _ => "SIGTERM",
+            };
             // nothing staged nor written: a rank that mpirun ends after another failed (its
             // error is said)
-            if loud && !files.temps.is_empty() {
+            if let (true, true, Some((k, n, scene, file))) = (loud, files.written.is_empty(), &files.checkpoint) {
+                // the checkpoint's renames run under the list: the last one is whole
+                eprintln!("stopped by {name} after step {k} of {n}; resume with: tresca-feti solve {} --resume {}", scene.display(), file.display());
+            } else if loud && !files.temps.is_empty() {
                 eprintln!("error: interrupted by {name}; removed {} temporary file(s), no result written", files.temps.len());
             } else if loud && !files.written.is_empty() {
                 let names: Vec<String> = files.written.iter().map(|p| p.display().to_string()).collect();

@@ -13,6 +13,7 @@
 
 pub(crate) mod accuracy;
 mod check;
+mod checkpoint;
 pub(crate) mod finish;
 pub mod memory;
 pub(crate) mod monitor;
@@ -470,12 +471,28 @@ pub struct ContactOutcome {
 
 /// `tresca-feti solve`: the whole pipeline, files written by rank 0.
 pub fn run_solve<C: Comm>(comm: &C, scene_path: &std::path::Path, overrides: &[String], out: Option<PathBuf>, quiet: bool) -> Result<Summary> {
+    run_solve_from(comm, scene_path, overrides, out, quiet, None)
+}
+
+/// [`run_solve`], continued from checkpoint `resume` where given (`solve --resume`): it is read
+/// and checked against the scene, its mesh files and the program before the solve; a refusal
+/// writes nothing.
+pub fn run_solve_from<C: Comm>(
+    comm: &C,
+    scene_path: &std::path::Path,
+    overrides: &[String],
+    out: Option<PathBuf>,
+    quiet: bool,
+    resume: Option<&std::path::Path>,
+) -> Result<Summary> {
     let mut t = Timings::live(comm.is_root() && !quiet);
     let Prepared { ls, mut model, plan, tfeti } = check::prepare(comm, scene_path, overrides, out, comm.size(), &mut t)?;
+    let resume = resume.map(|p| checkpoint::read(comm, &ls, p)).transpose()?;
+    let resume = resume.as_ref();
     memory::check_after_plan(comm, &ls, &model, plan.as_deref())?;
     let (sol, outcome) = match &model.pairs {
-        _ if tfeti => tfeti::solve(comm, &ls, &mut model, &mut t),
-        Some(_) => solve_contact(comm, &ls, &model, &mut t).map(|(s, o)| (s, Some(o))),
+        _ if tfeti => tfeti::solve_from(comm, &ls, &mut model, resume, &mut t),
+        Some(_) => monolithic::solve_contact_from(comm, &ls, &model, resume, &mut t).map(|(s, o)| (s, Some(o))),
         None => solve_elastic(comm, &model, ls.scene.factorization.ordering, &mut t).map(|s| (s, None)),
     }
     .map_err(|e| memory::name_the_mesh(&ls, e))?;

@@ -20,6 +20,17 @@ use crate::scene::LoadedScene;
 /// The contact solve on the monolithic dual: factorize, build A and b (phase `dual`), then walk
 /// the load path ([`steps::walk`]). The outcome is the last step's, with every step's record.
 pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut Timings) -> Result<(Solution, ContactOutcome)> {
+    solve_contact_from(comm, ls, model, None, t)
+}
+
+/// [`solve_contact`] from the step after checkpoint `resume`'s where given.
+pub(crate) fn solve_contact_from<C: Comm>(
+    comm: &C,
+    ls: &LoadedScene,
+    model: &Model,
+    resume: Option<&super::checkpoint::Checkpoint>,
+    t: &mut Timings,
+) -> Result<(Solution, ContactOutcome)> {
     let contact = model.pairs.as_ref().expect("contact is active");
     if let Some(g) = model.floating.first() {
         return Err(Error::scene(
@@ -44,7 +55,7 @@ pub fn solve_contact<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, t: &mut
     let set = contact.constraint_set();
     let coulomb = contact.is_coulomb().then_some(contact.coulomb.as_slice());
     let mut steps = Steps { comm, ls, model, contact, dual: &mut dual, set, coulomb, method: s.params.method().name() };
-    let (solution, outcome) = steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, t)?;
+    let (solution, outcome) = steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, resume, t)?;
     Ok((solution, outcome.expect("a contact solve has an outcome")))
 }
 
@@ -105,6 +116,11 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         let pieces: Vec<_> =
             self.dual.blocks.iter().zip(&rec.u).zip(&rec.rhs).map(|((blk, u), f)| accuracy::Equilibrium::of(&blk.local.sys.k, u, f, &[])).collect();
         (Verdict::new(self.comm, &pieces, kkt.worst(), eps), (coulomb_set, kkt))
+    }
+
+    fn rows(&self) -> Vec<usize> {
+        // λ is whole on every rank
+        (0..self.dual.dim()).collect()
     }
 
     fn kept_sigma(&self, sigma: f64) -> Option<f64> {

@@ -89,6 +89,30 @@ impl Walk {
         None
     }
 
+    /// Continues from checkpoint `c`: y and the jump on this rank's dual rows `rows` (global
+    /// ids), σ_max, the records (their rows on rank 0, `root`) and the tightenings so far.
+    pub fn resume(&mut self, c: &super::checkpoint::Checkpoint, rows: &[usize], root: bool) -> Option<()> {
+        if c.steps != self.steps || c.y.len() != c.jump.len() || rows.iter().any(|&r| r >= c.y.len()) {
+            return None;
+        }
+        self.y = rows.iter().map(|&r| c.y[r]).collect();
+        self.jump = rows.iter().map(|&r| c.jump[r]).collect();
+        self.params.common.sigma = c.sigma;
+        self.records = c.records.iter().map(|r| r.to_step(root)).collect();
+        self.tightenings = c.tightenings.clone();
+        Some(())
+    }
+
+    /// The records of the steps so far.
+    pub fn records(&self) -> &[StepOutput] {
+        &self.records
+    }
+
+    /// The tightenings of ε so far.
+    pub fn tightenings(&self) -> &[Tightening] {
+        &self.tightenings
+    }
+
     /// Every tightening of ε by the accuracy guard along the path (taken).
     pub fn take_tightenings(&mut self) -> Vec<Tightening> {
         std::mem::take(&mut self.tightenings)

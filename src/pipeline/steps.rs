@@ -5,6 +5,7 @@
 //! What differs between the duals sits behind [`StepDual`].
 
 use super::accuracy::{self, Verdict};
+use super::checkpoint;
 use super::monitor::Live;
 use super::path::Walk;
 use super::{ContactOutcome, Solution, Timings};
@@ -36,6 +37,9 @@ pub(crate) trait StepDual {
     fn recover(&self, sol: &QpSolution) -> Result<Recovered>;
     /// The verdict on a recovered solve at ε = `eps` (collective).
     fn judge(&self, rec: &Recovered, sol: &QpSolution, bnorm: f64, eps: f64) -> (Verdict, Self::Judged);
+    /// The global ids of this rank's dual entries (`Space::global_index`): a checkpoint stores
+    /// λ by them, so a resume on another rank count finds its rows.
+    fn rows(&self) -> Vec<usize>;
     /// σ_max(A) measured by a solve, as the next solve may reuse it (`None`: measure again).
     fn kept_sigma(&self, sigma: f64) -> Option<f64>;
     /// Step `k` (on b) solved and judged: the solution (stresses, gathered fields) and the
@@ -58,7 +62,7 @@ pub(crate) struct Solved<D: StepDual + ?Sized> {
 }
 
 /// Walks the scene's load path on `dual` from b = `b`: the last step's solution and contact
-/// outcome (with every step's record and tightening).
+/// outcome (with every step's record and tightening); from the step after `resume`'s when given.
 pub(crate) fn walk<C: Comm, D: StepDual>(
     comm: &C,
     ls: &LoadedScene,
@@ -67,12 +71,24 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
     dual: &mut D,
     mut b: Vec<f64>,
     dim: usize,
+    resume: Option<&checkpoint::Checkpoint>,
     t: &mut Timings,
 ) -> Result<(Solution, Option<ContactOutcome>)> {
     let contact: Option<&Contact> = model.pairs.as_ref();
     let what = dual.what();
     let mut walk = Walk::new(&model.path, dim, params, super::report::UnitsReport::of(&ls.scene.units));
-    for k in 1..=walk.steps {
+    let rows = dual.rows();
+    let mut saver = checkpoint::Saver::new(comm, ls, walk.on_path)?;
+    let first = match resume {
+        Some(c) => {
+            let shown = c.path.display().to_string();
+            let resumed = walk.resume(c, &rows, comm.is_root()).map(|()| saver.resumed(c));
+            comm.agree(resumed.ok_or_else(|| Error::output(shown, "cannot resume from this checkpoint: its load path or dual does not fit this run")))?;
+            c.step + 1
+        }
+        None => 1,
+    };
+    for k in first..=walk.steps {
         walk.begin();
         if walk.on_path {
             b = t.phase(comm, "load", || dual.set_load(k, &walk.jump))?;
@@ -86,6 +102,9 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
                 o.tightenings = walk.take_tightenings();
             }
             return Ok((solution, outcome));
+        }
+        if saver.active() {
+            t.phase(comm, "checkpoint", || saver.save(&walk, k, &rows))?;
         }
     }
     unreachable!("a load path has at least one step")

@@ -430,6 +430,17 @@ pub fn piece_weights(model: &Model, d: &Decomposition, clusters: &Clustering) ->
 /// dual ([`steps::walk`]): contact or not, warm-started from the last step. The outcome is the
 /// last step's, with every step's record.
 pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Timings) -> Result<(Solution, Option<ContactOutcome>)> {
+    solve_from(comm, ls, model, None, t)
+}
+
+/// [`solve`] from the step after checkpoint `resume`'s where given.
+pub(crate) fn solve_from<C: Comm>(
+    comm: &C,
+    ls: &LoadedScene,
+    model: &mut Model,
+    resume: Option<&super::checkpoint::Checkpoint>,
+    t: &mut Timings,
+) -> Result<(Solution, Option<ContactOutcome>)> {
     let s = &super::solver_for(ls, model);
     let TfetiProblem { clusters, constraints: cons, owner, mut dual, b, set, share, coarse_dim, nnz_c, coarse_explicit_bytes, .. } = setup(comm, ls, model, t)?;
     let model = &*model;
@@ -459,7 +470,7 @@ pub fn solve<C: Comm>(comm: &C, ls: &LoadedScene, model: &mut Model, t: &mut Tim
         penalty: ls.scene.decomposition.penalty,
         what,
     };
-    steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, t)
+    steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, resume, t)
 }
 
 /// The global figures of the decomposition the report carries.
@@ -582,6 +593,11 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         });
         let kkt = judged.as_ref().map_or(0.0, |j| j.3.worst());
         (Verdict::new(self.comm, &equilibria(dual, &rec.u, &rec.rhs), kkt, eps), judged)
+    }
+
+    fn rows(&self) -> Vec<usize> {
+        // the owned rows: global ids fixed by the decomposition, not by the rank count
+        self.dual.dist.owned.clone()
     }
 
     fn kept_sigma(&self, sigma: f64) -> Option<f64> {

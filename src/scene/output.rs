@@ -53,6 +53,10 @@ pub struct OutputSettings {
     /// our solution as the guess; `dual::fclib`, `run/peer/fclib_check.py`); `--export-fclib`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub export_fclib: Option<PathBuf>,
+    /// After each completed load step but the last, write what the next step needs to
+    /// `<name>.checkpoint.h5` beside the result (`solve --checkpoint`; `solve --resume`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub checkpoint: bool,
 }
 
 fn default_fields() -> Vec<String> {
@@ -61,6 +65,15 @@ fn default_fields() -> Vec<String> {
 
 impl Default for OutputSettings {
     fn default() -> Self {
-        OutputSettings { path: None, fields: default_fields(), xdmf: true, report: true, verify: false, export_dual: None, export_fclib: None }
+        OutputSettings {
+            path: None,
+            fields: default_fields(),
+            xdmf: true,
+            report: true,
+            verify: false,
+            export_dual: None,
+            export_fclib: None,
+            checkpoint: false,
+        }
     }
 }
