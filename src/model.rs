@@ -314,7 +314,8 @@ fn file_geometry(ls: &LoadedScene, i: usize, b: &crate::scene::Body, key: &str, 
     let mut geom = match g.resolved_format() {
         Some(MeshFormat::Abaqus) => abaqus::read(&path, g.volume.as_deref())?,
         Some(MeshFormat::Gmsh) => gmsh::read(&path, g.volume.as_deref())?,
-        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh)")),
+        Some(MeshFormat::Exodus) => crate::mesh::exodus::read(&path, g.volume.as_deref())?,
+        None => return Err(Error::scene(format!("body[{i}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, exodus)")),
     };
     if let Some(t) = g.translate {
         for p in &mut geom.nodes {

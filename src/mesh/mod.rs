@@ -2,12 +2,13 @@
 //!
 //! Owns the [`Mesh`] (all bodies, global node and cell numbering, one node set per body —
 //! bodies never share nodes), the cell and facet types ([`cell`]), the structured box generator
-//! ([`boxgen`]), the Gmsh 4.1 and Abaqus `.inp` importers ([`gmsh`], [`abaqus`]), the boundary topology shared by both
+//! ([`boxgen`]), the Gmsh 4.1, Abaqus `.inp` and Exodus II importers ([`gmsh`], [`abaqus`], [`exodus`]), the boundary topology shared by both
 //! ([`topology`]) and a body's rigid motions ([`rigid`]).
 
 pub mod abaqus;
 pub mod boxgen;
 pub(crate) mod cell;
+pub mod exodus;
 pub mod gmsh;
 pub(crate) mod rigid;
 pub(crate) mod topology;

@@ -105,14 +105,18 @@ pub enum MeshFormat {
     Abaqus,
     /// `gmsh`: a Gmsh 4.1 `.msh` (ASCII or binary).
     Gmsh,
+    /// `exodus`: an Exodus II file (`.exo`, `.e`, `.ex2`; netCDF-4 or netCDF-3).
+    Exodus,
 }
 
 impl MeshFormat {
-    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh; any case).
+    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh, `.exo`/`.e`/`.ex2`:
+    /// Exodus; any case).
     pub fn of_extension(file: &std::path::Path) -> Option<MeshFormat> {
         match file.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "inp" => Some(MeshFormat::Abaqus),
             "msh" => Some(MeshFormat::Gmsh),
+            "exo" | "e" | "ex2" => Some(MeshFormat::Exodus),
             _ => None,
         }
     }
