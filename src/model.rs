@@ -12,7 +12,7 @@ use crate::fem::assembly::{add_pressure, add_traction};
 use crate::fem::facet::{facet_area_inside, facet_centre, facet_nodal_areas};
 use crate::fem::material::Lame;
 use crate::linalg::ordering::NodeOrder;
-use crate::mesh::{abaqus, boxgen, gmsh, med, rigid, BodyGeometry, Face, Mesh};
+use crate::mesh::{abaqus, boxgen, exodus, gmsh, med, rigid, BodyGeometry, Face, Mesh};
 use crate::qp::cone::Coefficient;
 use crate::scene::{Component, LoadedScene, MeshFormat, Scene, Side};
 
@@ -338,9 +338,10 @@ fn file_bodies(ls: &LoadedScene, first: usize, g: &crate::scene::MeshDef) -> Res
         Some(MeshFormat::Abaqus) => abaqus::read_many(&path, &volumes)?,
         Some(MeshFormat::Gmsh) => gmsh::read_many(&path, &volumes)?,
         Some(MeshFormat::Med) => med::read_many(&path, &volumes)?,
+        Some(MeshFormat::Exodus) => exodus::read_many(&path, &volumes)?,
         None => {
             let key = ls.scene.bodies[first].mesh_file().map_or("mesh", |(k, _)| k);
-            return Err(Error::scene(format!("body[{first}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, med)"));
+            return Err(Error::scene(format!("body[{first}].{key}.file"), "unknown mesh format (known: abaqus, gmsh, med, exodus)"));
         }
     };
     Ok(same.into_iter().map(|(k, _)| k).zip(bodies).collect())

@@ -2,12 +2,13 @@
 //!
 //! Owns the [`Mesh`] (all bodies, global node and cell numbering, one node set per body —
 //! bodies never share nodes), the cell and facet types ([`cell`]), the structured box generator
-//! ([`boxgen`]), the Gmsh 4.1, Abaqus `.inp` and MED `.med` importers ([`gmsh`], [`abaqus`], [`med`]), the boundary topology shared by them
+//! ([`boxgen`]), the Gmsh 4.1, Abaqus `.inp`, MED `.med` and Exodus II importers ([`gmsh`], [`abaqus`], [`med`], [`exodus`]), the boundary topology shared by them
 //! ([`topology`]) and a body's rigid motions ([`rigid`]).
 
 pub mod abaqus;
 pub mod boxgen;
 pub(crate) mod cell;
+pub mod exodus;
 pub mod gmsh;
 pub mod med;
 pub(crate) mod rigid;

@@ -111,6 +111,7 @@ impl MeshCount {
                 let counts = match g.resolved_format() {
                     Some(crate::scene::MeshFormat::Abaqus) => crate::mesh::abaqus::counts(&path),
                     Some(crate::scene::MeshFormat::Med) => crate::mesh::med::counts(&path),
+                    Some(crate::scene::MeshFormat::Exodus) => crate::mesh::exodus::counts(&path),
                     _ => crate::mesh::gmsh::header_counts(&path),
                 };
                 let (nodes, elements, bytes) = counts.map_or((0.0, 0.0, 0.0), |(n, e, s)| (n as f64, e as f64, s as f64));

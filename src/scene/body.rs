@@ -111,15 +111,19 @@ pub enum MeshFormat {
     Gmsh,
     /// `med`: a Salome / code_aster MED file (`.med`, MED 3.x/4.x on HDF5).
     Med,
+    /// `exodus`: an Exodus II file (`.exo`, `.e`, `.ex2`; netCDF-4 or netCDF-3).
+    Exodus,
 }
 
 impl MeshFormat {
-    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh, `.med`: MED; any case).
+    /// The format a file's extension names (`.inp`: Abaqus, `.msh`: Gmsh, `.med`: MED,
+    /// `.exo`/`.e`/`.ex2`: Exodus; any case).
     pub fn of_extension(file: &std::path::Path) -> Option<MeshFormat> {
         match file.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "inp" => Some(MeshFormat::Abaqus),
             "msh" => Some(MeshFormat::Gmsh),
             "med" => Some(MeshFormat::Med),
+            "exo" | "e" | "ex2" => Some(MeshFormat::Exodus),
             _ => None,
         }
     }
@@ -131,11 +135,12 @@ impl MeshFormat {
 pub struct MeshDef {
     /// Path of the mesh file, relative to the scene file.
     pub file: PathBuf,
-    /// The part of the file that is this body: a Gmsh physical volume or an Abaqus element set
-    /// (default: every volume element of the file).
+    /// The part of the file that is this body: a Gmsh physical volume, an Abaqus element set or
+    /// instance, a MED group of volume cells or Exodus element blocks (default: every volume
+    /// element of the file).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<String>,
-    /// The file's format; defaults to the one its extension names (`.inp`, `.msh`).
+    /// The file's format; defaults to the one its extension names (`.inp`, `.msh`, `.med`, `.exo`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub format: Option<MeshFormat>,
     /// Shift applied to all node coordinates.

@@ -169,7 +169,7 @@ fn body<'a>(i: usize, b: &'a Body, materials: &HashSet<&str>, names: &mut HashSe
         return Err(Error::scene(
             k(&format!("{key}.file")),
             format!(
-                "cannot tell the format of \"{}\" from its extension (known: .inp for abaqus, .msh for gmsh, .med for med); give `format = \"abaqus\"`, `\"gmsh\"` or `\"med\"`",
+                "cannot tell the format of \"{}\" from its extension (known: .inp for abaqus, .msh for gmsh, .med for med, .exo/.e/.ex2 for exodus); give `format = \"abaqus\"`, `\"gmsh\"`, `\"med\"` or `\"exodus\"`",
                 m.file.display()
             ),
         ));
