@@ -224,21 +224,27 @@ impl FacetKind {
     }
 }
 
+/// The most nodes a cell keeps inline (tet10); cells with more keep them on the heap, so that a
+/// mesh of linear or tet10 cells pays nothing for the 27 nodes a hex27 has.
+const INLINE_NODES: usize = 10;
+
 /// One volume cell: its type and global (or local) node indices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Cell {
     /// The cell's type.
     pub kind: CellKind,
-    n: [usize; MAX_CELL_NODES],
+    n: [usize; INLINE_NODES],
+    /// The nodes of a cell with more than [`INLINE_NODES`] (then `n` is unused).
+    big: Option<Box<[usize; MAX_CELL_NODES]>>,
 }
 
 impl Cell {
     /// A cell of type `kind` on `nodes` (`nodes.len() == kind.len()`).
     pub fn new(kind: CellKind, nodes: &[usize]) -> Self {
         assert_eq!(nodes.len(), kind.len(), "{kind:?} has {} nodes", kind.len());
-        let mut n = [0; MAX_CELL_NODES];
-        n[..nodes.len()].copy_from_slice(nodes);
-        Cell { kind, n }
+        let mut c = Cell { kind, n: [0; INLINE_NODES], big: (nodes.len() > INLINE_NODES).then(|| Box::new([0; MAX_CELL_NODES])) };
+        c.nodes_mut().copy_from_slice(nodes);
+        c
     }
 
     /// A hex8 cell on `nodes`.
@@ -249,19 +255,25 @@ impl Cell {
     /// Its nodes, `kind.len()` of them.
     #[inline]
     pub fn nodes(&self) -> &[usize] {
-        &self.n[..self.kind.len()]
+        match &self.big {
+            Some(b) => &b[..self.kind.len()],
+            None => &self.n[..self.kind.len()],
+        }
     }
 
     /// Its nodes, mutable.
     #[inline]
     pub fn nodes_mut(&mut self) -> &mut [usize] {
         let k = self.kind.len();
-        &mut self.n[..k]
+        match &mut self.big {
+            Some(b) => &mut b[..k],
+            None => &mut self.n[..k],
+        }
     }
 
     /// The same cell with every node mapped by `f`.
     pub fn map(&self, f: impl Fn(usize) -> usize) -> Self {
-        let mut c = *self;
+        let mut c = self.clone();
         for v in c.nodes_mut() {
             *v = f(*v);
         }
@@ -271,7 +283,7 @@ impl Cell {
     /// The outward facet of local face `f`.
     pub fn facet(&self, elem: usize, f: usize) -> Facet {
         let local = self.kind.faces()[f];
-        let nodes: Vec<usize> = local.iter().map(|&l| self.n[l]).collect();
+        let nodes: Vec<usize> = local.iter().map(|&l| self.nodes()[l]).collect();
         Facet::new(elem, self.kind.facet_kind(local.len()), &nodes)
     }
 

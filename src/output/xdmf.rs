@@ -449,7 +449,7 @@ mod tests {
         }
         assert_eq!(CellKind::Tet10.xdmf_name(), "Tetrahedron_10");
         // a hexahedron and a 10-node tetrahedron: 1 + 8 + 1 + 10 values
-        data.cells = vec![data.cells[0], tet(CellKind::Hex8)];
+        data.cells = vec![data.cells[0].clone(), tet(CellKind::Hex8)];
         data.cells[0] = tet(CellKind::Tet10);
         let layout = CellLayout::of_cells(&data.cells);
         assert_eq!(layout, CellLayout::Mixed { len: 20 });

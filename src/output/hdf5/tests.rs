@@ -79,7 +79,7 @@ fn a_mesh_given_as_rows_is_written_whole() {
     let node_rows: Vec<usize> = (0..nn).rev().collect();
     let cell_rows: Vec<usize> = (0..nc).rev().collect();
     dist.coordinates = node_rows.iter().map(|&r| whole.coordinates[r]).collect();
-    dist.cells = cell_rows.iter().map(|&r| whole.cells[r]).collect();
+    dist.cells = cell_rows.iter().map(|&r| whole.cells[r].clone()).collect();
     dist.mesh_rows = Some(crate::output::MeshRows { nodes: nn, cells: nc, node_rows, cell_rows });
     let (a, b) = (tmp("mesh_whole.h5"), tmp("mesh_rows.h5"));
     write(&a, &whole).unwrap();
@@ -365,7 +365,7 @@ fn every_cell_layout_round_trips() {
         let (nn, nc) = (whole.coordinates.len(), whole.cells.len());
         let mut dist = whole.clone();
         let cell_rows: Vec<usize> = (0..nc).rev().collect();
-        dist.cells = cell_rows.iter().map(|&r| whole.cells[r]).collect();
+        dist.cells = cell_rows.iter().map(|&r| whole.cells[r].clone()).collect();
         dist.mesh_rows = Some(crate::output::MeshRows { nodes: nn, cells: nc, node_rows: (0..nn).collect(), cell_rows });
         let path2 = tmp(&format!("layout_{name}_rows.h5"));
         write(&path2, &dist).unwrap();
