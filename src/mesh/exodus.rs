@@ -245,6 +245,7 @@ fn classify(elem_type: &str, nodes: usize) -> Ty {
         ("TETRA" | "TETRA4" | "TET" | "TET4", 4) => Ty::Cell(CellKind::Tet4),
         ("TETRA" | "TETRA10" | "TET" | "TET10", 10) => Ty::Cell(CellKind::Tet10),
         ("WEDGE" | "WEDGE6", 6) => Ty::Cell(CellKind::Wedge6),
+        ("PYRAMID" | "PYRAMID5", 5) => Ty::Cell(CellKind::Pyr5),
         _ if ["SHELL", "QUAD", "TRI", "BAR", "BEAM", "TRUSS", "SPHERE", "CIRCLE", "NULL", "TSHELL", "EDGE", "FACE"].iter().any(|p| t.starts_with(p)) => {
             Ty::Ignored
         }
@@ -497,10 +498,12 @@ fn exodus_sides(kind: CellKind) -> &'static [&'static [usize]] {
     const HEX: [&[usize]; 6] = [&[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[0, 4, 7, 3], &[0, 3, 2, 1], &[4, 5, 6, 7]];
     const TET: [&[usize]; 4] = [&[0, 1, 3], &[1, 2, 3], &[0, 3, 2], &[0, 2, 1]];
     const WEDGE: [&[usize]; 5] = [&[0, 1, 4, 3], &[1, 2, 5, 4], &[0, 3, 5, 2], &[0, 2, 1], &[3, 4, 5]];
+    const PYR: [&[usize]; 5] = [&[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[0, 4, 3], &[0, 3, 2, 1]];
     match kind {
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
         CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
+        CellKind::Pyr5 => &PYR,
     }
 }
 

@@ -340,6 +340,7 @@ fn every_cell_layout_round_trips() {
             vec![0, 1, 2, 3, 4, 5, 6, 7, 9, 8, 2, 3, 4, 5, 6, 7, 8, 9, 11, 10],
         ),
         (vec![cell(CellKind::Wedge6, 6), cell(CellKind::Wedge6, 0)], "wedges", vec![2, 6], vec![6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]),
+        (vec![cell(CellKind::Pyr5, 3), cell(CellKind::Pyr5, 0)], "pyramids", vec![2, 5], vec![3, 4, 5, 6, 7, 0, 1, 2, 3, 4]),
         (
             vec![cell(CellKind::Hex8, 0), cell(CellKind::Tet10, 2), cell(CellKind::Tet4, 8), cell(CellKind::Wedge6, 1)],
             "mixed",
