@@ -292,9 +292,9 @@ fn the_fine_rule_integrates_degree_seven_exactly() {
     let q: f64 = r.iter().map(|(p, w)| w * p[0] * p[1].powi(2) * p[2].powi(4)).sum();
     // ∫_T ξ η² · ∫ ζ⁴ = (1·2/5!) · (2/5)
     assert!((q - 2.0 / 120.0 * 0.4).abs() < 1e-15, "{q}");
-    // ∫ ξ² η⁴ ζ over the pyramid = (2/3)(2/5) B(2, 9) = (4/15)/72
+    // ∫ ξ² η⁴ ζ over the pyramid = (2/3)(2/5) B(2, 9) = (4/15)/90
     let q: f64 = fine_rule(CellKind::Pyr5).iter().map(|(p, w)| w * p[0].powi(2) * p[1].powi(4) * p[2]).sum();
-    assert!((q - 4.0 / 15.0 / 72.0).abs() < 1e-15, "{q}");
+    assert!((q - 4.0 / 15.0 / 90.0).abs() < 1e-15, "{q}");
 }
 
 /// A unit-cube body of `kind` cells on an `n`-node grid: the box generator's hex8/tet4/tet10,

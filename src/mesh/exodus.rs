@@ -14,9 +14,9 @@
 //! `node_num_map`/`elem_num_map` are labels only and are not used.
 //!
 //! Volume elements: `HEX`/`HEX8`, `TETRA`/`TETRA4` (4 nodes), `TETRA10` (`TETRA` with 10
-//! nodes) and `WEDGE`/`WEDGE6`. Exodus's node orders are the program's ([`super::cell`])
+//! nodes), `WEDGE`/`WEDGE6` and `PYRAMID`/`PYRAMID5`. Exodus's node orders are the program's ([`super::cell`])
 //! except the 10-node tetrahedron's last two edge nodes (Exodus: 9 on edge 2–4, 10 on edge
-//! 3–4), swapped on reading. Another solid type (`HEX20`, `HEX27`, `PYRAMID`, `WEDGE15`, …)
+//! 3–4), swapped on reading. Another solid type (`HEX20`, `HEX27`, `PYRAMID13`, `WEDGE15`, …)
 //! in a block of the body is refused, naming the block and the type; blocks of shells, bars
 //! or spheres are not volumes and are skipped.
 //!
@@ -519,7 +519,7 @@ mod tests {
                 .faces()
                 .iter()
                 .map(|f| {
-                    let mut c = f[..if f.len() == 6 { 3 } else { f.len() }].to_vec();
+                    let mut c = f[..kind.facet_kind(f.len()).corners()].to_vec();
                     c.sort_unstable();
                     c
                 })
@@ -540,7 +540,8 @@ mod tests {
         assert_eq!(classify("tetra", 10), Ty::Cell(CellKind::Tet10));
         assert_eq!(classify("HEX20", 20), Ty::Solid);
         assert_eq!(classify("HEX", 27), Ty::Solid);
-        assert_eq!(classify("PYRAMID5", 5), Ty::Solid);
+        assert_eq!(classify("PYRAMID5", 5), Ty::Cell(CellKind::Pyr5));
+        assert_eq!(classify("PYRAMID13", 13), Ty::Solid);
         assert_eq!(classify("SHELL4", 4), Ty::Ignored);
     }
 }
