@@ -1,7 +1,7 @@
 //! Finite-element correctness: patch tests (a linear field is reproduced exactly, under
 //! Dirichlet-only and mixed Dirichlet/traction conditions, on distorted meshes) and convergence
 //! to an analytic solution of the Navier equations at the rates of trilinear elements; for
-//! tet4, tet10 and wedge6 cells: convergence to a manufactured solution with body force, patch
+//! tet4, tet10, wedge6 and mixed hex8/pyr5/tet4 cells: convergence to a manufactured solution with body force, patch
 //! tests on distorted meshes and the six rigid modes of a free body.
 
 use tresca_feti::fem::assembly::{add_traction, assemble_body, DofMap};
@@ -195,6 +195,7 @@ fn converges_at_the_rates_of_trilinear_elements() {
 // Tetrahedra (tet4, tet10) and wedges: convergence on a manufactured solution with body force,
 // patch tests on distorted meshes, rigid modes of a free body.
 
+use tresca_feti::fem::pyramid::{pyr5_gradients, pyr5_shape};
 use tresca_feti::fem::quadratic::Quadratic;
 use tresca_feti::fem::tet::{tet10_gradients, tet10_shape, tet4_gradients, tet4_shape, TET10_EDGES};
 use tresca_feti::fem::wedge::{wedge6_gradients, wedge6_shape};
@@ -229,8 +230,9 @@ fn fine_rule(kind: CellKind) -> Vec<([f64; 3], f64)> {
                 match kind {
                     CellKind::Tet4 | CellKind::Tet10 => r.push(([u, (1.0 - u) * v, (1.0 - u) * (1.0 - v) * w], wu * wv * ww * (1.0 - u).powi(2) * (1.0 - v))),
                     CellKind::Wedge6 | CellKind::Wedge15 => r.push(([u, (1.0 - u) * v, 2.0 * w - 1.0], 2.0 * wu * wv * ww * (1.0 - u))),
-                    CellKind::Hex20 | CellKind::Hex27 => r.push(([2.0 * u - 1.0, 2.0 * v - 1.0, 2.0 * w - 1.0], 8.0 * wu * wv * ww)),
-                    CellKind::Hex8 => unreachable!(),
+                    CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => r.push(([2.0 * u - 1.0, 2.0 * v - 1.0, 2.0 * w - 1.0], 8.0 * wu * wv * ww)),
+                    // the pyramid {|ξ|, |η| ≤ 1 − ζ, 0 ≤ ζ ≤ 1} collapsed from the cube
+                    CellKind::Pyr5 => r.push(([(2.0 * u - 1.0) * (1.0 - w), (2.0 * v - 1.0) * (1.0 - w), w], 4.0 * wu * wv * ww * (1.0 - w).powi(2))),
                 }
             }
         }
@@ -263,7 +265,14 @@ fn shape_at(kind: CellKind, x: &[[f64; 3]], xi: [f64; 3]) -> (Vec<f64>, Vec<[f64
             let (g, det) = q.gradients(x, xi);
             (q.shape(xi).0, g, det)
         }
-        CellKind::Hex8 => unreachable!(),
+        CellKind::Hex8 => {
+            let (g, det) = hex_gradients(x.try_into().unwrap(), xi);
+            (hex_shape(xi).to_vec(), g.to_vec(), det)
+        }
+        CellKind::Pyr5 => {
+            let (g, det) = pyr5_gradients(x.try_into().unwrap(), xi);
+            (pyr5_shape(xi).to_vec(), g.to_vec(), det)
+        }
     }
 }
 
@@ -283,6 +292,9 @@ fn the_fine_rule_integrates_degree_seven_exactly() {
     let q: f64 = r.iter().map(|(p, w)| w * p[0] * p[1].powi(2) * p[2].powi(4)).sum();
     // ∫_T ξ η² · ∫ ζ⁴ = (1·2/5!) · (2/5)
     assert!((q - 2.0 / 120.0 * 0.4).abs() < 1e-15, "{q}");
+    // ∫ ξ² η⁴ ζ over the pyramid = (2/3)(2/5) B(2, 9) = (4/15)/90
+    let q: f64 = fine_rule(CellKind::Pyr5).iter().map(|(p, w)| w * p[0].powi(2) * p[1].powi(4) * p[2]).sum();
+    assert!((q - 4.0 / 15.0 / 90.0).abs() < 1e-15, "{q}");
 }
 
 /// A unit-cube body of `kind` cells on an `n`-node grid: the box generator's hex8/tet4/tet10,
@@ -304,6 +316,7 @@ fn unit_body(kind: CellKind, n: usize, jitter: f64) -> Mesh {
             BodyGeometry { nodes: hex.nodes, cells, faces: Vec::new() }
         }
         CellKind::Wedge15 => wedge15_body(n),
+        CellKind::Pyr5 => hex_pyr_tet_body(n),
         k => boxgen::try_generate_cells([0.0; 3], [1.0; 3], [n; 3], k).unwrap(),
     };
     let h = 1.0 / (n - 1) as f64;
@@ -361,6 +374,42 @@ fn wedge15_body(n: usize) -> BodyGeometry {
         }
     }
     let cells = cells.iter().map(|c| c.map(|v| new[v])).collect();
+    BodyGeometry { nodes, cells, faces: Vec::new() }
+}
+
+/// The unit cube's hex8 box of `n` nodes per direction as a conforming mix of hex8, pyr5 and
+/// tet4: the hexahedra of odd i + j + k each cut into six pyramids on its faces with a new node
+/// at its centre as their apex, and of those the pyramids whose base lies on the cube's
+/// boundary cut into two tetrahedra along a base diagonal (inside, a pyramid's quadrilateral
+/// base meets a hexahedron's face or another pyramid's base; the triangles are shared within a
+/// cut hexahedron). The grid's nodes come first, the centres after them.
+fn hex_pyr_tet_body(n: usize) -> BodyGeometry {
+    let hex = boxgen::try_generate([0.0; 3], [1.0; 3], [n; 3]).unwrap();
+    let mut nodes = hex.nodes.clone();
+    let h = 1.0 / (n - 1) as f64;
+    let on_boundary = |p: [f64; 3], k: usize| p[k].abs() < 1e-12 || (p[k] - 1.0).abs() < 1e-12;
+    let mut cells = Vec::new();
+    for cell in &hex.cells {
+        let c = cell.nodes();
+        let centre: [f64; 3] = std::array::from_fn(|k| c.iter().map(|&v| hex.nodes[v][k]).sum::<f64>() / 8.0);
+        let parity: usize = centre.iter().map(|x| (x / h).floor() as usize).sum();
+        if parity % 2 == 0 {
+            cells.push(*cell);
+            continue;
+        }
+        let apex = nodes.len();
+        nodes.push(centre);
+        for face in CellKind::Hex8.faces() {
+            // the outward face reversed: counter-clockwise seen from the centre
+            let base: Vec<usize> = face.iter().rev().map(|&l| c[l]).collect();
+            if (0..3).any(|k| base.iter().all(|&v| on_boundary(hex.nodes[v], k) && (hex.nodes[v][k] - hex.nodes[base[0]][k]).abs() < 1e-12)) {
+                cells.push(Cell::new(CellKind::Tet4, &[base[0], base[1], base[2], apex]));
+                cells.push(Cell::new(CellKind::Tet4, &[base[0], base[2], base[3], apex]));
+            } else {
+                cells.push(Cell::new(CellKind::Pyr5, &[base[0], base[1], base[2], base[3], apex]));
+            }
+        }
+    }
     BodyGeometry { nodes, cells, faces: Vec::new() }
 }
 
@@ -577,6 +626,23 @@ fn hex20_hex27_and_wedge15_converge_at_rates_three_and_two() {
     }
 }
 
+/// The mixed hex8 + pyr5 + tet4 cube ([`hex_pyr_tet_body`]): linear elements, L² rate 2 and
+/// H¹ rate 1 (all three kinds present on every grid).
+#[test]
+fn hex8_pyr5_tet4_mix_converges_at_rates_two_and_one() {
+    for n in [5, 9] {
+        let g = hex_pyr_tet_body(n);
+        for kind in [CellKind::Hex8, CellKind::Pyr5, CellKind::Tet4] {
+            assert!(g.cells.iter().any(|c| c.kind == kind), "{kind:?} missing at n = {n}");
+        }
+    }
+    let rates = convergence(CellKind::Pyr5, &[5, 9, 17]);
+    for (rl2, rh1) in &rates {
+        assert!(*rl2 >= 1.9 && *rl2 <= 2.1, "L2 rate {rl2} (all: {rates:?})");
+        assert!(*rh1 >= 0.95 && *rh1 <= 1.05, "H1 rate {rh1} (all: {rates:?})");
+    }
+}
+
 #[test]
 fn wedge6_converges_at_rates_two_and_one() {
     let rates = convergence(CellKind::Wedge6, &[5, 9, 17]);
@@ -587,7 +653,7 @@ fn wedge6_converges_at_rates_two_and_one() {
     }
 }
 
-/// Patch test on distorted tet4, tet10 (straight edges) and wedge meshes: a linear field on the
+/// Patch test on distorted tet4, tet10 (straight edges), wedge and hex8/pyr5/tet4 meshes: a linear field on the
 /// boundary is reproduced at every node (1e-10 relative) and the stress at every point of the
 /// fine rule of every cell is the field's constant stress (1e-8 relative). Catches a wrong
 /// shape-function derivative, an inconsistent node order between the kernels and the generator
@@ -598,7 +664,7 @@ fn patch_tests_on_distorted_tetrahedra_and_wedges() {
     let eps = [H[0][0], H[1][1], H[2][2], H[0][1] + H[1][0], H[1][2] + H[2][1], H[2][0] + H[0][2]];
     let sigma = lame.stress(&eps);
     let smax = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-    for kind in [CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6] {
+    for kind in [CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Pyr5] {
         let mesh = unit_body(kind, 6, 0.2);
         // the jitter really distorted it: no interior grid node is left on its grid point
         let moved = mesh.nodes.iter().take(216).filter(|p| p.iter().any(|c| ((c * 5.0).round() - c * 5.0).abs() > 1e-3)).count();
@@ -611,13 +677,13 @@ fn patch_tests_on_distorted_tetrahedra_and_wedges() {
         for (c, cell) in mesh.cells.iter().enumerate() {
             let x = mesh.cell_coords(c);
             let ue: Vec<[f64; 3]> = cell.nodes().iter().map(|&v| u[v]).collect();
-            for (xi, _) in fine_rule(kind).into_iter().step_by(7) {
-                let (_, g, det) = shape_at(kind, &x, xi);
+            for (xi, _) in fine_rule(cell.kind).into_iter().step_by(7) {
+                let (_, g, det) = shape_at(cell.kind, &x, xi);
                 assert!(det > 0.0, "{kind:?} cell {c} inverted by the jitter");
                 let s = lame.stress(&tresca_feti::fem::element::strain(&g, &ue));
                 worst = worst.max(s.iter().zip(&sigma).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / smax);
             }
-            let sc = tresca_feti::fem::cell::cell_center_stress(kind, &x, &ue, lame);
+            let sc = tresca_feti::fem::cell::cell_center_stress(cell.kind, &x, &ue, lame);
             worst = worst.max(sc.iter().zip(&sigma).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / smax);
         }
         assert!(worst <= 1e-8, "{kind:?}: stress off the constant by {worst:e}");
@@ -631,7 +697,7 @@ fn patch_tests_on_distorted_tetrahedra_and_wedges() {
 #[test]
 fn free_bodies_have_exactly_six_rigid_modes() {
     let lame = Lame::from_young_poisson(1.0, 0.3);
-    for (kind, n) in [(CellKind::Tet10, 3), (CellKind::Tet4, 4), (CellKind::Wedge6, 4)] {
+    for (kind, n) in [(CellKind::Tet10, 3), (CellKind::Tet4, 4), (CellKind::Wedge6, 4), (CellKind::Pyr5, 4)] {
         let mesh = unit_body(kind, n, 0.1);
         let dofs = DofMap::new(mesh.bodies[0].nodes.clone(), &[]);
         let k = assemble_body(&mesh, 0, lame, &dofs, &vec![0.0; 3 * mesh.nodes.len()]).unwrap().k;

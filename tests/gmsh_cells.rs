@@ -298,3 +298,50 @@ p = [0.1, 0.0, -1.0]
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(scale > 0.0 && a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-9 * scale), "displacements differ between 1 and 2 ranks");
 }
+
+/// The hexahedral-dominant two blocks of `mesh/make_pyramid_fixture.py` (Gmsh type 7
+/// pyramids between structured hexahedra and tetrahedra): each body holds hex8, pyr5 and tet4
+/// cells (Gmsh counted 128 hexahedra, 32 pyramids and 842 tetrahedra in the file), every cell
+/// positive, the faces at z = 1 — quadrangles of hexahedra, triangles of tetrahedra and
+/// pyramids — outward and of area 2. Then solved end to end as the seed's block on a block
+/// (run/gmsh_blocks.toml on this mesh): it runs, writes a `Mixed` XDMF topology holding the
+/// pyramids (type 7), and the contact force is near the hexahedral mesh's.
+#[test]
+fn hexahedra_pyramids_and_tetrahedra_are_read_and_solved_in_contact() {
+    let file = mesh_file("hex_pyr_tet.msh");
+    let mut total = std::collections::BTreeMap::new();
+    for (body, face, normal) in [("upper", "upper_bottom", MZ), ("lower", "lower_top", Z)] {
+        let g = gmsh::read(&file, Some(body)).unwrap_or_else(|e| panic!("{e}"));
+        check_cells(&g, body);
+        let c = counts(&g);
+        for kind in [CellKind::Hex8, CellKind::Tet4, CellKind::Pyr5] {
+            assert!(c.iter().any(|&(k, n)| k == kind && n > 0), "{body}: no {kind:?} in {c:?}");
+        }
+        c.iter().for_each(|&(k, n)| *total.entry(k).or_insert(0) += n);
+        let n = g.faces.iter().find(|(f, _)| f == face).unwrap().1.len();
+        check_face(&g, face, n, &[FacetKind::Quad4, FacetKind::Tri3], 2.0, normal);
+        let (_, facets) = g.faces.iter().find(|(f, _)| f == face).unwrap();
+        assert!(facets.iter().any(|q| q.kind == FacetKind::Quad4) && facets.iter().any(|q| q.kind == FacetKind::Tri3), "{face}");
+    }
+    assert_eq!(total.into_iter().collect::<Vec<_>>(), [(CellKind::Hex8, 128), (CellKind::Tet4, 842), (CellKind::Pyr5, 32)]);
+    let dir = tmpdir("hex-pyr-tet");
+    let gmsh_toml = std::fs::read_to_string(root().join("run/gmsh_blocks.toml")).unwrap();
+    let mut force = Vec::new();
+    for (name, mesh) in [("hex", mesh_file("two_blocks.msh")), ("pyr", file.clone())] {
+        let scene = dir.join(format!("{name}.toml"));
+        std::fs::write(&scene, gmsh_toml.replace("\"../mesh/two_blocks.msh\"", &format!("\"{}\"", mesh.display()))).unwrap();
+        let out = dir.join(format!("{name}.h5"));
+        let o = run(&["solve", scene.to_str().unwrap(), "--set", "output.verify=true", "--out", out.to_str().unwrap(), "--quiet"]);
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
+        force.push(report["contact"]["total_force_on_slave"][2].as_f64().unwrap());
+        if name == "pyr" {
+            let data = fields(&out);
+            assert_eq!(data.cells.iter().filter(|c| c.kind == CellKind::Pyr5).count(), 32);
+            let xdmf = std::fs::read_to_string(out.with_extension("xdmf")).unwrap();
+            assert!(xdmf.contains(r#"<Topology TopologyType="Mixed" NumberOfElements="1002">"#), "{xdmf}");
+        }
+    }
+    eprintln!("contact force F_z: hexahedra {:.5}, hex/pyr/tet {:.5} ({:+.2} %)", force[0], force[1], 100.0 * (force[1] / force[0] - 1.0));
+    assert!((force[1] / force[0] - 1.0).abs() < 0.05, "{force:?}");
+}

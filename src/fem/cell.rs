@@ -1,4 +1,4 @@
-//! Kernels by cell type (hex8, tet4, tet10, wedge6, and hex20, hex27, wedge15 through
+//! Kernels by cell type (hex8, tet4, tet10, wedge6, pyr5, and hex20, hex27, wedge15 through
 //! [`super::quadratic`]): the element stiffness, the inversion check and the centre stress of
 //! any [`CellKind`] — dispatching to the pure per-type kernels — and the area of a mesh face.
 //! The facet kernels (shape functions, rules, nodal weights ∫ N_a dA of any
@@ -7,6 +7,7 @@
 use super::element::{hex8_center_stress, hex8_stiffness, hex_min_jacobian};
 pub use super::facet::{facet_area_inside, facet_area_vector, facet_centre, facet_nodal_areas, facet_normal_area, facet_point, facet_rule, facet_shape};
 use super::material::Lame;
+use super::pyramid::{pyr5_min_jacobian, pyr5_stiffness, pyr5_strain, PYR5_CENTRE};
 use super::quadratic::Quadratic;
 use super::tet::{tet10_min_jacobian, tet10_stiffness, tet10_strain, tet4_gradients, tet4_stiffness, tet4_strain};
 use super::wedge::{wedge6_min_jacobian, wedge6_stiffness, wedge6_strain};
@@ -24,6 +25,8 @@ pub enum CellMatrix {
     Tet10([[f64; 30]; 30]),
     /// Of a wedge6 cell.
     Wedge6([[f64; 18]; 18]),
+    /// Of a pyr5 cell.
+    Pyr5([[f64; 15]; 15]),
     /// Of a quadratic hexahedron or wedge (hex20, hex27, wedge15): 3n and the entries row by
     /// row, on the heap.
     Dense(usize, Vec<f64>),
@@ -37,6 +40,7 @@ impl CellMatrix {
             CellMatrix::Tet4(k) => (12, k.as_flattened()),
             CellMatrix::Tet10(k) => (30, k.as_flattened()),
             CellMatrix::Wedge6(k) => (18, k.as_flattened()),
+            CellMatrix::Pyr5(k) => (15, k.as_flattened()),
             CellMatrix::Dense(n, k) => (*n, k),
         }
     }
@@ -63,6 +67,7 @@ pub fn cell_stiffness(kind: CellKind, x: &[[f64; 3]], m: Lame) -> CellMatrix {
         CellKind::Tet4 => CellMatrix::Tet4(tet4_stiffness(arr(x), m)),
         CellKind::Tet10 => CellMatrix::Tet10(tet10_stiffness(arr(x), m)),
         CellKind::Wedge6 => CellMatrix::Wedge6(wedge6_stiffness(arr(x), m)),
+        CellKind::Pyr5 => CellMatrix::Pyr5(pyr5_stiffness(arr(x), m)),
         CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => {
             let q = quadratic(kind).expect("a quadratic kind");
             CellMatrix::Dense(3 * q.len(), q.stiffness(x, m))
@@ -77,6 +82,7 @@ pub fn cell_min_jacobian(kind: CellKind, x: &[[f64; 3]]) -> f64 {
         CellKind::Tet4 => tet4_gradients(arr(x)).1,
         CellKind::Tet10 => tet10_min_jacobian(arr(x)),
         CellKind::Wedge6 => wedge6_min_jacobian(arr(x)),
+        CellKind::Pyr5 => pyr5_min_jacobian(arr(x)),
         CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => quadratic(kind).expect("a quadratic kind").min_jacobian(x),
     }
 }
@@ -88,6 +94,7 @@ pub fn cell_center_strain(kind: CellKind, x: &[[f64; 3]], u: &[[f64; 3]]) -> [f6
         CellKind::Tet4 => tet4_strain(arr(x), arr(u)),
         CellKind::Tet10 => tet10_strain(arr(x), arr(u), [0.25; 3]),
         CellKind::Wedge6 => wedge6_strain(arr(x), arr(u), [1.0 / 3.0, 1.0 / 3.0, 0.0]),
+        CellKind::Pyr5 => pyr5_strain(arr(x), arr(u), PYR5_CENTRE),
         CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => {
             let q = quadratic(kind).expect("a quadratic kind");
             q.strain(x, u, q.centre())

@@ -100,14 +100,15 @@ pub fn try_generate(min: [f64; 3], max: [f64; 3], n: [usize; 3]) -> Result<BodyG
 /// The box of [`try_generate`] meshed with cells of type `kind`: hexahedra as there; tet4 and
 /// tet10 cut each hexahedron into six tetrahedra (tet10: a node at the middle of every edge);
 /// hex20 and hex27 the same hexahedra with a node at the middle of every edge (hex27 also of
-/// every face and cell: the grid of 2n − 1 nodes per direction). Wedges are not generated.
+/// every face and cell: the grid of 2n − 1 nodes per direction). Wedges and pyramids are not
+/// generated.
 pub fn try_generate_cells(min: [f64; 3], max: [f64; 3], n: [usize; 3], kind: CellKind) -> Result<BodyGeometry> {
     let hex = try_generate(min, max, n)?;
     match kind {
         CellKind::Hex8 => Ok(hex),
         CellKind::Tet4 | CellKind::Tet10 => Ok(tetrahedralize(hex, min, max, kind == CellKind::Tet10)),
         CellKind::Hex20 | CellKind::Hex27 => Ok(quadratic_hexes(min, max, n, kind)?),
-        CellKind::Wedge6 | CellKind::Wedge15 => panic!("the box generator makes no wedges"),
+        CellKind::Wedge6 | CellKind::Wedge15 | CellKind::Pyr5 => panic!("the box generator makes no wedges or pyramids"),
     }
 }
 

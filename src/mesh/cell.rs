@@ -1,11 +1,12 @@
-//! Cell and facet types of a mixed mesh: hex8, hex20, hex27, tet4, tet10, wedge6 and wedge15
-//! cells, their outward faces, and the boundary facets (tri3, quad4, tri6, quad8, quad9) they
+//! Cell and facet types of a mixed mesh: hex8, hex20, hex27, tet4, tet10, wedge6, wedge15 and
+//! pyr5 cells, their outward faces, and the boundary facets (tri3, quad4, tri6, quad8, quad9) they
 //! make.
 //!
 //! Node orders are Gmsh's (= VTK's for the linear types): hex8 bottom 0-1-2-3 counter-clockwise
 //! seen from above, top 4-5-6-7 above it; tet4 corners 0-3 with (x₁−x₀, x₂−x₀, x₃−x₀)
 //! right-handed; tet10 then its edge nodes 4:(0,1) 5:(1,2) 6:(2,0) 7:(3,0) 8:(3,2) 9:(3,1);
-//! wedge6 bottom triangle 0-1-2 counter-clockwise seen from above, top 3-4-5 (3 above 0).
+//! wedge6 bottom triangle 0-1-2 counter-clockwise seen from above, top 3-4-5 (3 above 0);
+//! pyr5 (Gmsh type 7, = VTK's) base 0-1-2-3 counter-clockwise seen from the apex, apex 4.
 //! Hex20 (Gmsh type 17) then its edge nodes 8:(0,1) 9:(0,3) 10:(0,4) 11:(1,2) 12:(1,5)
 //! 13:(2,3) 14:(2,6) 15:(3,7) 16:(4,5) 17:(4,7) 18:(5,6) 19:(6,7) ([`HEX20_EDGES`]; VTK's
 //! order differs); hex27 (type 12) then the face centres 20:(0,1,2,3) 21:(0,1,5,4)
@@ -52,6 +53,8 @@ pub enum CellKind {
     Hex27,
     /// 15-node wedge (quadratic serendipity prism).
     Wedge15,
+    /// 5-node pyramid (rational shape functions; base quad, apex).
+    Pyr5,
 }
 
 /// The type of a surface facet.
@@ -89,14 +92,16 @@ const HEX27_FACES_LOCAL: [&[usize]; 6] = [
     &[2, 3, 7, 6, 13, 15, 19, 14, 24],
     &[3, 0, 4, 7, 9, 10, 17, 15, 22],
 ];
+const PYR5_FACES: [&[usize]; 5] = [&[0, 3, 2, 1], &[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[3, 0, 4]];
 const WEDGE15_FACES: [&[usize]; 5] =
     [&[0, 2, 1, 7, 9, 6], &[3, 4, 5, 12, 14, 13], &[0, 1, 4, 3, 6, 10, 12, 8], &[1, 2, 5, 4, 9, 11, 14, 10], &[2, 0, 3, 5, 7, 8, 13, 11]];
 
 impl CellKind {
     /// Every cell type.
-    pub const ALL: [CellKind; 7] = [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15];
+    pub const ALL: [CellKind; 8] =
+        [CellKind::Hex8, CellKind::Tet4, CellKind::Tet10, CellKind::Wedge6, CellKind::Hex20, CellKind::Hex27, CellKind::Wedge15, CellKind::Pyr5];
     /// The number of cell types (the length of per-type count arrays indexed by [`Self::code`]).
-    pub const COUNT: usize = 7;
+    pub const COUNT: usize = 8;
 
     /// Number of nodes.
     #[allow(clippy::len_without_is_empty)]
@@ -109,6 +114,7 @@ impl CellKind {
             CellKind::Hex20 => 20,
             CellKind::Hex27 => 27,
             CellKind::Wedge15 => 15,
+            CellKind::Pyr5 => 5,
         }
     }
 
@@ -132,6 +138,7 @@ impl CellKind {
             CellKind::Hex20 => &HEX20_FACES,
             CellKind::Hex27 => &HEX27_FACES_LOCAL,
             CellKind::Wedge15 => &WEDGE15_FACES,
+            CellKind::Pyr5 => &PYR5_FACES,
         }
     }
 
@@ -156,6 +163,7 @@ impl CellKind {
             CellKind::Hex20 => "20-node hexahedra",
             CellKind::Hex27 => "27-node hexahedra",
             CellKind::Wedge15 => "15-node wedges",
+            CellKind::Pyr5 => "pyramids",
         }
     }
 
@@ -169,6 +177,7 @@ impl CellKind {
             CellKind::Hex20 => "Hexahedron_20",
             CellKind::Hex27 => "Hexahedron_27",
             CellKind::Wedge15 => "Wedge_15",
+            CellKind::Pyr5 => "Pyramid",
         }
     }
 
@@ -182,6 +191,7 @@ impl CellKind {
             CellKind::Hex20 => 48,
             CellKind::Hex27 => 50,
             CellKind::Wedge15 => 40,
+            CellKind::Pyr5 => 7,
         }
     }
 
@@ -394,6 +404,7 @@ mod tests {
         for [a, b] in WEDGE15_EDGES {
             wedge15.push(mid(wedge[a], wedge[b]));
         }
+        let pyr: Vec<[f64; 3]> = vec![[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.], [0.5, 0.5, 1.]];
         let all = [
             (CellKind::Hex8, hex),
             (CellKind::Tet4, tet4),
@@ -402,6 +413,7 @@ mod tests {
             (CellKind::Hex20, hex20),
             (CellKind::Hex27, hex27),
             (CellKind::Wedge15, wedge15),
+            (CellKind::Pyr5, pyr),
         ];
         for (kind, x) in all {
             let n = x.len() as f64;

@@ -14,9 +14,9 @@
 //! `node_num_map`/`elem_num_map` are labels only and are not used.
 //!
 //! Volume elements: `HEX`/`HEX8`, `TETRA`/`TETRA4` (4 nodes), `TETRA10` (`TETRA` with 10
-//! nodes) and `WEDGE`/`WEDGE6`. Exodus's node orders are the program's ([`super::cell`])
+//! nodes), `WEDGE`/`WEDGE6` and `PYRAMID`/`PYRAMID5`. Exodus's node orders are the program's ([`super::cell`])
 //! except the 10-node tetrahedron's last two edge nodes (Exodus: 9 on edge 2–4, 10 on edge
-//! 3–4), swapped on reading. Another solid type (`HEX20`, `HEX27`, `PYRAMID`, `WEDGE15`, …)
+//! 3–4), swapped on reading. Another solid type (`HEX20`, `HEX27`, `PYRAMID13`, `WEDGE15`, …)
 //! in a block of the body is refused, naming the block and the type; blocks of shells, bars
 //! or spheres are not volumes and are skipped.
 //!
@@ -245,6 +245,7 @@ fn classify(elem_type: &str, nodes: usize) -> Ty {
         ("TETRA" | "TETRA4" | "TET" | "TET4", 4) => Ty::Cell(CellKind::Tet4),
         ("TETRA" | "TETRA10" | "TET" | "TET10", 10) => Ty::Cell(CellKind::Tet10),
         ("WEDGE" | "WEDGE6", 6) => Ty::Cell(CellKind::Wedge6),
+        ("PYRAMID" | "PYRAMID5", 5) => Ty::Cell(CellKind::Pyr5),
         _ if ["SHELL", "QUAD", "TRI", "BAR", "BEAM", "TRUSS", "SPHERE", "CIRCLE", "NULL", "TSHELL", "EDGE", "FACE"].iter().any(|p| t.starts_with(p)) => {
             Ty::Ignored
         }
@@ -497,10 +498,12 @@ fn exodus_sides(kind: CellKind) -> &'static [&'static [usize]] {
     const HEX: [&[usize]; 6] = [&[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[0, 4, 7, 3], &[0, 3, 2, 1], &[4, 5, 6, 7]];
     const TET: [&[usize]; 4] = [&[0, 1, 3], &[1, 2, 3], &[0, 3, 2], &[0, 2, 1]];
     const WEDGE: [&[usize]; 5] = [&[0, 1, 4, 3], &[1, 2, 5, 4], &[0, 3, 5, 2], &[0, 2, 1], &[3, 4, 5]];
+    const PYR: [&[usize]; 5] = [&[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[0, 4, 3], &[0, 3, 2, 1]];
     match kind {
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
         CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
+        CellKind::Pyr5 => &PYR,
     }
 }
 
@@ -516,7 +519,7 @@ mod tests {
                 .faces()
                 .iter()
                 .map(|f| {
-                    let mut c = f[..if matches!(f.len(), 3 | 6) { 3 } else { 4 }].to_vec();
+                    let mut c = f[..kind.facet_kind(f.len()).corners()].to_vec();
                     c.sort_unstable();
                     c
                 })
@@ -537,7 +540,8 @@ mod tests {
         assert_eq!(classify("tetra", 10), Ty::Cell(CellKind::Tet10));
         assert_eq!(classify("HEX20", 20), Ty::Solid);
         assert_eq!(classify("HEX", 27), Ty::Solid);
-        assert_eq!(classify("PYRAMID5", 5), Ty::Solid);
+        assert_eq!(classify("PYRAMID5", 5), Ty::Cell(CellKind::Pyr5));
+        assert_eq!(classify("PYRAMID13", 13), Ty::Solid);
         assert_eq!(classify("SHELL4", 4), Ty::Ignored);
     }
 }

@@ -52,6 +52,7 @@ fn classify(name: &str) -> Option<Ty> {
         "T10" => Ty::Cell(CellKind::Tet10, &[0, 2, 1, 3, 6, 5, 4, 7, 8, 9]),
         "HE8" => Ty::Cell(CellKind::Hex8, &[0, 3, 2, 1, 4, 7, 6, 5]),
         "PE6" => Ty::Cell(CellKind::Wedge6, &[0, 2, 1, 3, 5, 4]),
+        "PY5" => Ty::Cell(CellKind::Pyr5, &[0, 3, 2, 1, 4]),
         "TR3" | "TR6" => Ty::Facet(3),
         "QU4" | "QU8" => Ty::Facet(4),
         "PO1" | "SE2" | "SE3" | "SE4" => Ty::Ignored,

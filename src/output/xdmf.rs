@@ -440,7 +440,12 @@ mod tests {
         use crate::mesh::{Cell, CellKind};
         let mut data = sample();
         let tet = |k: CellKind| Cell::new(k, &(0..k.len()).collect::<Vec<_>>());
-        for (kind, dims, dataset) in [(CellKind::Tet4, "2 4", "tetrahedra"), (CellKind::Tet10, "2 10", "tetrahedra10"), (CellKind::Wedge6, "2 6", "wedges")] {
+        for (kind, dims, dataset) in [
+            (CellKind::Tet4, "2 4", "tetrahedra"),
+            (CellKind::Tet10, "2 10", "tetrahedra10"),
+            (CellKind::Wedge6, "2 6", "wedges"),
+            (CellKind::Pyr5, "2 5", "pyramids"),
+        ] {
             data.cells = vec![tet(kind); 2];
             let doc = render("r.h5", &data, CellLayout::of_cells(&data.cells)).unwrap();
             check_xml(&doc).unwrap_or_else(|e| panic!("{e}\n{doc}"));

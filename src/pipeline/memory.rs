@@ -172,7 +172,7 @@ pub fn box_counts(n: [usize; 3], kind: CellKind) -> (f64, f64, f64) {
     let squares = 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]);
     let grid = n[0] * n[1] * n[2];
     match kind {
-        CellKind::Hex8 | CellKind::Wedge6 | CellKind::Wedge15 => (grid, hexes, squares),
+        CellKind::Hex8 | CellKind::Wedge6 | CellKind::Wedge15 | CellKind::Pyr5 => (grid, hexes, squares),
         CellKind::Hex20 | CellKind::Hex27 => {
             // the grid of 2n − 1 nodes per direction; hex20 without its face and cell centres
             let fine = (2.0 * n[0] - 1.0) * (2.0 * n[1] - 1.0) * (2.0 * n[2] - 1.0);

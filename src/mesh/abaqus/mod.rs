@@ -279,6 +279,7 @@ fn classify(name: &str) -> Option<Ty> {
         "C3D4" | "C3D4H" => Ty::Cell(CellKind::Tet4),
         "C3D10" | "C3D10H" | "C3D10M" | "C3D10MH" => Ty::Cell(CellKind::Tet10),
         "C3D6" | "C3D6H" => Ty::Cell(CellKind::Wedge6),
+        "C3D5" | "C3D5H" => Ty::Cell(CellKind::Pyr5),
         _ if ["C3D", "DC3D", "AC3D", "SC6", "SC8", "COH3D", "CCL"].iter().any(|p| name.starts_with(p)) => Ty::Solid,
         _ if ["CPS", "CPE", "S3", "S4", "S8", "S9", "STRI", "M3D", "SFM3D", "R3D", "DS3", "DS4", "DS6", "DS8"].iter().any(|p| name.starts_with(p)) => Ty::Facet,
         _ if [
@@ -758,10 +759,12 @@ fn abaqus_faces(kind: CellKind) -> &'static [&'static [usize]] {
     const HEX: [&[usize]; 6] = [&[0, 1, 2, 3], &[4, 7, 6, 5], &[0, 4, 5, 1], &[1, 5, 6, 2], &[2, 6, 7, 3], &[3, 7, 4, 0]];
     const TET: [&[usize]; 4] = [&[0, 1, 2], &[0, 3, 1], &[1, 3, 2], &[2, 3, 0]];
     const WEDGE: [&[usize]; 5] = [&[0, 1, 2], &[3, 5, 4], &[0, 3, 4, 1], &[1, 4, 5, 2], &[2, 5, 3, 0]];
+    const PYR: [&[usize]; 5] = [&[0, 1, 2, 3], &[0, 4, 1], &[1, 4, 2], &[2, 4, 3], &[3, 4, 0]];
     match kind {
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
         CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
+        CellKind::Pyr5 => &PYR,
     }
 }
 

@@ -714,7 +714,7 @@ fn named_faces(
 }
 
 /// The volume element types read, for messages.
-pub(super) const SUPPORTED: &str = "Hex8, Hex20, Hex27, Tet4, Tet10, Pri6 (wedge), Pri15";
+pub(super) const SUPPORTED: &str = "Hex8, Hex20, Hex27, Tet4, Tet10, Pri6 (wedge), Pri15, Pyr5";
 
 /// The cell type of a Gmsh volume element type, if it is one this reader takes.
 fn cell_kind(t: ElementType) -> Option<CellKind> {
@@ -726,6 +726,7 @@ fn cell_kind(t: ElementType) -> Option<CellKind> {
         ElementType::Hex20 => Some(CellKind::Hex20),
         ElementType::Hex27 => Some(CellKind::Hex27),
         ElementType::Pri15 => Some(CellKind::Wedge15),
+        ElementType::Pyr5 => Some(CellKind::Pyr5),
         _ => None,
     }
 }
@@ -753,6 +754,7 @@ pub(super) fn singular(kind: CellKind) -> &'static str {
         CellKind::Hex20 => "20-node hexahedron",
         CellKind::Hex27 => "27-node hexahedron",
         CellKind::Wedge15 => "15-node wedge",
+        CellKind::Pyr5 => "pyramid",
     }
 }
 
@@ -766,6 +768,7 @@ fn plural(kind: CellKind) -> &'static str {
         CellKind::Hex20 => "20-node hexahedra",
         CellKind::Hex27 => "27-node hexahedra",
         CellKind::Wedge15 => "15-node wedges",
+        CellKind::Pyr5 => "pyramids",
     }
 }
 
@@ -774,10 +777,12 @@ fn edges(kind: CellKind) -> &'static [[usize; 2]] {
     const HEX: [[usize; 2]; 12] = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]];
     const TET: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
     const WEDGE: [[usize; 2]; 9] = [[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]];
+    const PYR: [[usize; 2]; 8] = [[0, 1], [1, 2], [2, 3], [3, 0], [0, 4], [1, 4], [2, 4], [3, 4]];
     match kind {
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
         CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
+        CellKind::Pyr5 => &PYR,
     }
 }
 
@@ -853,6 +858,7 @@ pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
         }
         CellKind::Tet4 | CellKind::Tet10 => vec![scaled_triple(p[0], p[1], p[2], p[3])],
         CellKind::Wedge6 | CellKind::Wedge15 => wedge_corner_jacobians(&p),
+        CellKind::Pyr5 => pyramid_corner_jacobians(&p),
     };
     if j.iter().any(|&d| d <= 0.0) {
         if !j.iter().all(|&d| d < 0.0) {
@@ -871,6 +877,7 @@ pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
             CellKind::Hex20 => &[(1, 3), (5, 7), (8, 9), (11, 13), (12, 15), (16, 17), (18, 19)],
             CellKind::Hex27 => &[(1, 3), (5, 7), (8, 9), (11, 13), (12, 15), (16, 17), (18, 19), (21, 22), (23, 24)],
             CellKind::Wedge15 => &[(1, 2), (4, 5), (6, 7), (10, 11), (12, 13)],
+            CellKind::Pyr5 => &[(1, 3)],
         };
         let v = cell.nodes_mut();
         for &(a, b) in swaps {
@@ -912,6 +919,12 @@ fn wedge_corner_jacobians(p: &[[f64; 3]]) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+/// Scaled Jacobian at the four base corners of a pyramid: the triple product of the edges to
+/// the next and the previous base corner and the edge up to the apex.
+fn pyramid_corner_jacobians(p: &[[f64; 3]]) -> Vec<f64> {
+    (0..4).map(|c| scaled_triple(p[c], p[(c + 1) % 4], p[(c + 3) % 4], p[4])).collect()
 }
 
 /// Scaled Jacobian at the eight corners of a hex8 (VTK order): the triple product of the three

@@ -352,12 +352,13 @@ fn mixed_hexahedron_and_tetrahedron_body() {
 /// beside supported ones; a file without volume elements says what it holds.
 #[test]
 fn unsupported_volume_types_are_named() {
-    let x = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.], [0.5, 0.5, 1.], [0.5, 0.5, -1.]];
-    let pyramid = (7, vec![(1, vec![1, 2, 3, 4, 5]), (2, vec![1, 4, 3, 2, 6])]);
+    // 13-node pyramids (Gmsh type 19): the nodes' positions do not matter, the type is refused
+    let x: Vec<[f64; 3]> = (0..14).map(|k| [k as f64, (k * k) as f64, 1.0]).collect();
+    let pyramid = (19, vec![(1, (1..14).collect::<Vec<u64>>()), (2, (2..15).collect())]);
     let tet = (4, vec![(3, vec![1, 2, 3, 5])]);
     for cells in [vec![pyramid.clone()], vec![tet.clone(), pyramid.clone()]] {
         let msg = parse(msh_text(&x, &cells, &[]).as_bytes(), Some("solid")).unwrap_err();
-        assert!(msg.contains("physical volume \"solid\"") && msg.contains("Pyr5: 2") && msg.contains("not supported"), "{msg}");
+        assert!(msg.contains("physical volume \"solid\"") && msg.contains("Pyr13: 2") && msg.contains("not supported"), "{msg}");
         assert!(!msg.contains('\n'), "{msg}");
     }
     let msg = parse(msh_text(&x, &[], &[(2, vec![(1, vec![1, 2, 3])])]).as_bytes(), None).unwrap_err();

@@ -22,6 +22,7 @@ const WEDGES: &str = "wedges";
 const HEXAHEDRA20: &str = "hexahedra20";
 const HEXAHEDRA27: &str = "hexahedra27";
 const WEDGES15: &str = "wedges15";
+const PYRAMIDS: &str = "pyramids";
 pub(super) const MIXED: &str = "mixed";
 pub(super) const CENTER_ATTR: &str = "center";
 
@@ -76,13 +77,14 @@ impl CellLayout {
             CellLayout::Uniform(CellKind::Hex20) => HEXAHEDRA20,
             CellLayout::Uniform(CellKind::Hex27) => HEXAHEDRA27,
             CellLayout::Uniform(CellKind::Wedge15) => WEDGES15,
+            CellLayout::Uniform(CellKind::Pyr5) => PYRAMIDS,
             CellLayout::Mixed { .. } => MIXED,
         }
     }
 }
 
 /// The cell datasets [`read`](fn@super::read) knows, one of which a file holds.
-pub(super) const CELL_DATASETS: [&str; 8] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, HEXAHEDRA20, HEXAHEDRA27, WEDGES15, MIXED];
+pub(super) const CELL_DATASETS: [&str; 9] = [HEXAHEDRA, TETRAHEDRA, TETRAHEDRA10, WEDGES, HEXAHEDRA20, HEXAHEDRA27, WEDGES15, PYRAMIDS, MIXED];
 
 /// The layout of the cells of `data` over all ranks: that of `data.cells` where they are the
 /// whole mesh; where the mesh is distributed, that of the rows the ranks hold (their cell types

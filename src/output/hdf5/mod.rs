@@ -15,6 +15,7 @@
 //! | `/mesh/hexahedra20` | i64 | ncells × 20 (hex20 cells only, VTK's node order) |
 //! | `/mesh/hexahedra27` | i64 | ncells × 27 (hex27 cells only, VTK's node order) |
 //! | `/mesh/wedges15` | i64 | ncells × 15 (wedge15 cells only, VTK's node order) |
+//! | `/mesh/pyramids` | i64 | ncells × 5 (pyr5 cells only) |
 //! | `/mesh/mixed` | i64 | Σ (1 + nodes of the cell) (cells of several types) |
 //! | `/fields/<name>` | f64 or i32 | `len` (ncomp = 1) or `len × ncomp` |
 //! | `/steps/<NNNN>/<name>` | f64 or i32 | as `/fields/<name>` |
@@ -24,7 +25,7 @@
 //! node numbers in XDMF's (= VTK's) node order, which is ours but for a 10-node tetrahedron: its
 //! edge nodes (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — Gmsh's last two swapped. `/mesh/mixed` is
 //! XDMF's `Mixed` topology: per cell, in the global cell order, its XDMF type id
-//! ([`CellKind::xdmf_id`](crate::mesh::CellKind::xdmf_id): Hexahedron 9, Tetrahedron 6, Tetrahedron_10 38, Wedge 8) and its
+//! ([`CellKind::xdmf_id`](crate::mesh::CellKind::xdmf_id): Hexahedron 9, Tetrahedron 6, Tetrahedron_10 38, Wedge 8, Pyramid 7, …) and its
 //! nodes. Cell-centred fields are indexed by the global cell order whatever the layout. Under
 //! MPI with a distributed mesh, the layout is agreed over the ranks ([`cell_layout`]), and each
 //! rank writes the mixed values of its block of cell rows at their offset in the global list.
