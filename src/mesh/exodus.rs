@@ -13,12 +13,16 @@
 //! order, from 1), node numbers the positions in the coordinate arrays (from 1); the optional
 //! `node_num_map`/`elem_num_map` are labels only and are not used.
 //!
-//! Volume elements: `HEX`/`HEX8`, `TETRA`/`TETRA4` (4 nodes), `TETRA10` (`TETRA` with 10
-//! nodes), `WEDGE`/`WEDGE6` and `PYRAMID`/`PYRAMID5`. Exodus's node orders are the program's ([`super::cell`])
-//! except the 10-node tetrahedron's last two edge nodes (Exodus: 9 on edge 2–4, 10 on edge
-//! 3–4), swapped on reading. Another solid type (`HEX20`, `HEX27`, `PYRAMID13`, `WEDGE15`, …)
-//! in a block of the body is refused, naming the block and the type; blocks of shells, bars
-//! or spheres are not volumes and are skipped.
+//! Volume elements: `HEX`/`HEX8`, `HEX20`, `HEX27` (`HEX` with 20 or 27 nodes),
+//! `TETRA`/`TETRA4` (4 nodes), `TETRA10` (`TETRA` with 10 nodes), `WEDGE`/`WEDGE6` and
+//! `WEDGE15` (`WEDGE` with 15 nodes), `PYRAMID`/`PYRAMID5`. Exodus's corner orders are the program's
+//! ([`super::cell`]); the 10-node tetrahedron's last two edge nodes (Exodus: 9 on edge 2–4, 10
+//! on edge 3–4) are swapped on reading, and the edge, face and centre nodes of HEX20, HEX27 and
+//! WEDGE15 (Exodus II manual, SEACAS `ex_get_side_set_node_list` tables: bottom edges,
+//! vertical edges, top edges; then the HEX27's centre and faces) are put in Gmsh's order
+//! ([`HEX27_TO_OURS`], [`WEDGE15_TO_OURS`]). Another solid type (`PYRAMID13`, `HEX9`, …) in a
+//! block of the body is refused, naming the block and the type; blocks of shells, bars or
+//! spheres are not volumes and are skipped.
 //!
 //! The body is `volume = "name"`: the blocks of that `eb_names` entry (case-insensitive), or
 //! `block_<id>` for the block of id `<id>` (the name an unnamed block gets); every volume block
@@ -27,7 +31,7 @@
 //! - a side set: its (element, side) pairs on the body's boundary (Exodus side numbering:
 //!   HEX8 S1 1-2-6-5, S2 2-3-7-6, S3 3-4-8-7, S4 1-5-8-4, S5 1-4-3-2, S6 5-6-7-8; TETRA S1
 //!   1-2-4, S2 2-3-4, S3 1-4-3, S4 1-3-2; WEDGE6 S1 1-2-5-4, S2 2-3-6-5, S3 1-4-6-3, S4 1-3-2,
-//!   S5 4-5-6);
+//!   S5 4-5-6; the quadratic types' sides are the same, with their edge and face nodes);
 //! - a node set: every boundary facet of the body all of whose nodes lie in the set (a node
 //!   set that holds a whole face's nodes gives that face; one that holds the nodes of a line
 //!   or of isolated points gives no facet and is left out).
@@ -45,7 +49,19 @@ use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
 /// The element types read, for messages.
-const EXODUS_SUPPORTED: &str = "HEX8, TETRA4, TETRA10, WEDGE6";
+const EXODUS_SUPPORTED: &str = "HEX8, HEX20, HEX27, TETRA4, TETRA10, WEDGE6, WEDGE15";
+
+/// The program's node `k` of a 20- or 27-node hexahedron is the Exodus HEX20/HEX27's node
+/// `HEX27_TO_OURS[k]` (0-based; Exodus: edge nodes 9–12 on the bottom edges 1-2, 2-3, 3-4,
+/// 4-1, 13–16 on the vertical edges 1-5, 2-6, 3-7, 4-8, 17–20 on the top edges 5-6, 6-7, 7-8,
+/// 8-5; HEX27 then 21 the centre, 22 face 1-4-3-2, 23 face 5-6-7-8, 24 face 1-5-8-4, 25 face
+/// 2-3-7-6, 26 face 1-2-6-5, 27 face 3-4-8-7).
+const HEX27_TO_OURS: [usize; 27] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 12, 9, 13, 10, 14, 15, 16, 19, 17, 18, 21, 25, 23, 24, 26, 22, 20];
+
+/// The program's node `k` of a 15-node wedge is the Exodus WEDGE15's node `WEDGE15_TO_OURS[k]`
+/// (Exodus: edge nodes 7–9 on the bottom edges 1-2, 2-3, 3-1, 10–12 on the vertical edges 1-4,
+/// 2-5, 3-6, 13–15 on the top edges 4-5, 5-6, 6-4).
+const WEDGE15_TO_OURS: [usize; 15] = [0, 1, 2, 3, 4, 5, 6, 8, 9, 7, 10, 11, 12, 14, 13];
 
 /// How to convert a file the reader cannot open.
 const CONVERT: &str = "convert it with `nccopy -k nc4 in.exo out.exo`";
@@ -246,6 +262,9 @@ fn classify(elem_type: &str, nodes: usize) -> Ty {
         ("TETRA" | "TETRA10" | "TET" | "TET10", 10) => Ty::Cell(CellKind::Tet10),
         ("WEDGE" | "WEDGE6", 6) => Ty::Cell(CellKind::Wedge6),
         ("PYRAMID" | "PYRAMID5", 5) => Ty::Cell(CellKind::Pyr5),
+        ("HEX" | "HEX20" | "HEXAHEDRON", 20) => Ty::Cell(CellKind::Hex20),
+        ("HEX" | "HEX27" | "HEXAHEDRON", 27) => Ty::Cell(CellKind::Hex27),
+        ("WEDGE" | "WEDGE15", 15) => Ty::Cell(CellKind::Wedge15),
         _ if ["SHELL", "QUAD", "TRI", "BAR", "BEAM", "TRUSS", "SPHERE", "CIRCLE", "NULL", "TSHELL", "EDGE", "FACE"].iter().any(|p| t.starts_with(p)) => {
             Ty::Ignored
         }
@@ -384,8 +403,11 @@ fn build(nc: &Nc, volume: Option<&str>) -> std::result::Result<BodyGeometry, Str
                 return Err(format!("{}: element {label} refers to node {t}, outside the file's nodes 1 … {n}", b.describe()));
             }
             let mut nodes: Vec<u64> = nodes.iter().map(|&t| t as u64).collect();
-            if kind == CellKind::Tet10 {
-                nodes.swap(8, 9); // Exodus: 9 on edge 2-4, 10 on 3-4; ours 8 on (3,2), 9 on (3,1)
+            match kind {
+                CellKind::Tet10 => nodes.swap(8, 9), // Exodus: 9 on edge 2-4, 10 on 3-4; ours 8 on (3,2), 9 on (3,1)
+                CellKind::Hex20 | CellKind::Hex27 => nodes = HEX27_TO_OURS[..kind.len()].iter().map(|&k| nodes[k]).collect(),
+                CellKind::Wedge15 => nodes = WEDGE15_TO_OURS.iter().map(|&k| nodes[k]).collect(),
+                _ => {}
             }
             conn.push((label, kind, nodes));
         }
@@ -538,10 +560,60 @@ mod tests {
     fn element_types() {
         assert_eq!(classify("HEX8", 8), Ty::Cell(CellKind::Hex8));
         assert_eq!(classify("tetra", 10), Ty::Cell(CellKind::Tet10));
-        assert_eq!(classify("HEX20", 20), Ty::Solid);
-        assert_eq!(classify("HEX", 27), Ty::Solid);
+        assert_eq!(classify("HEX20", 20), Ty::Cell(CellKind::Hex20));
+        assert_eq!(classify("HEX", 27), Ty::Cell(CellKind::Hex27));
+        assert_eq!(classify("WEDGE15", 15), Ty::Cell(CellKind::Wedge15));
+        assert_eq!(classify("HEX9", 9), Ty::Solid);
         assert_eq!(classify("PYRAMID5", 5), Ty::Cell(CellKind::Pyr5));
         assert_eq!(classify("PYRAMID13", 13), Ty::Solid);
         assert_eq!(classify("SHELL4", 4), Ty::Ignored);
+    }
+
+    /// The HEX27 and WEDGE15 node positions of SEACAS's side tables
+    /// (`ex_get_side_set_node_list`: each side's corners, then its edge nodes in turn, then a
+    /// HEX27 side's centre), mapped by the permutations, are the program's edge and face nodes.
+    #[test]
+    fn quadratic_permutations_follow_the_side_tables() {
+        use crate::mesh::cell::{HEX20_EDGES, HEX27_FACES, WEDGE15_EDGES};
+        let hex: [[usize; 9]; 6] = [
+            [1, 2, 6, 5, 9, 14, 17, 13, 26],
+            [2, 3, 7, 6, 10, 15, 18, 14, 25],
+            [3, 4, 8, 7, 11, 16, 19, 15, 27],
+            [1, 5, 8, 4, 13, 20, 16, 12, 24],
+            [1, 4, 3, 2, 12, 11, 10, 9, 22],
+            [5, 6, 7, 8, 17, 18, 19, 20, 23],
+        ];
+        let wedge: [&[usize]; 5] =
+            [&[1, 2, 5, 4, 7, 11, 13, 10], &[2, 3, 6, 5, 8, 12, 14, 11], &[1, 4, 6, 3, 10, 15, 12, 9], &[1, 3, 2, 9, 8, 7], &[4, 5, 6, 13, 14, 15]];
+        // Exodus node (0-based) → its corners, from the tables
+        let mut of: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+        for (kind, sides) in [(0, hex.iter().map(|s| &s[..]).collect::<Vec<_>>()), (1, wedge.to_vec())] {
+            for s in sides {
+                let n = if s.len() == 6 { 3 } else { 4 };
+                for e in 0..n {
+                    of.insert((kind, s[n + e] - 1), vec![s[e] - 1, s[(e + 1) % n] - 1]);
+                }
+                if s.len() == 9 {
+                    of.insert((kind, s[8] - 1), s[..4].iter().map(|v| v - 1).collect());
+                }
+            }
+        }
+        let sorted = |mut v: Vec<usize>| {
+            v.sort_unstable();
+            v
+        };
+        assert_eq!(HEX27_TO_OURS[..8], [0, 1, 2, 3, 4, 5, 6, 7]);
+        for (e, ours) in HEX20_EDGES.iter().enumerate() {
+            assert_eq!(sorted(of[&(0, HEX27_TO_OURS[8 + e])].clone()), sorted(ours.to_vec()), "hex edge node {}", 8 + e);
+        }
+        for (f, ours) in HEX27_FACES.iter().enumerate() {
+            assert_eq!(sorted(of[&(0, HEX27_TO_OURS[20 + f])].clone()), sorted(ours.to_vec()), "hex face node {}", 20 + f);
+        }
+        assert_eq!(HEX27_TO_OURS[26], 20, "the centre: the one node no side holds");
+        assert!(!of.contains_key(&(0, 20)));
+        assert_eq!(WEDGE15_TO_OURS[..6], [0, 1, 2, 3, 4, 5]);
+        for (e, ours) in WEDGE15_EDGES.iter().enumerate() {
+            assert_eq!(sorted(of[&(1, WEDGE15_TO_OURS[6 + e])].clone()), sorted(ours.to_vec()), "wedge edge node {}", 6 + e);
+        }
     }
 }

@@ -11,12 +11,15 @@
 //! - `/FAS/<m>/ELEME/<family>`: attribute `NUM` (the family number) and `GRO/NOM`, the names of
 //!   the groups the family belongs to (80 bytes each, padded with spaces or NULs).
 //!
-//! Cell types: `TE4`, `T10`, `HE8`, `PE6` (volumes), `TR3`, `QU4`, `TR6`, `QU8` (faces); points
-//! and edges (`PO1`, `SE2`, `SE3`, `SE4`) are skipped; any other type in the file (`H20`,
-//! `H27`, `PY5`, `P15`, `QU9`, …) is refused naming it. MED numbers a cell's corners the other
-//! way round from Gmsh (its reference cells have a negative Jacobian in the program's convention,
-//! [`super::cell`]); the node orders are converted as Gmsh's own MED reader does: TE4 0 2 1 3,
-//! T10 0 2 1 3 6 5 4 7 8 9, HE8 0 3 2 1 4 7 6 5, PE6 0 2 1 3 5 4; face types keep their order.
+//! Cell types: `TE4`, `T10`, `HE8`, `H20`, `H27`, `PE6`, `P15` (volumes), `TR3`, `QU4`, `TR6`,
+//! `QU8`, `QU9` (faces); points and edges (`PO1`, `SE2`, `SE3`, `SE4`) are skipped; any other
+//! type in the file (`PY5`, `P18`, …) is refused naming it. MED numbers a cell's corners the
+//! other way round from Gmsh (its reference cells have a negative Jacobian in the program's
+//! convention, [`super::cell`]); the node orders are converted as Gmsh's own MED reader does
+//! (`med2mshNodeIndex` of its `GModelIO_MED.cpp`: the program's node k is MED's node
+//! `perm[k]`): TE4 0 2 1 3, T10 0 2 1 3 6 5 4 7 8 9, HE8 0 3 2 1 4 7 6 5, H20 0 3 2 1 4 7 6 5
+//! 11 8 16 10 19 9 18 17 15 12 14 13, H27 the H20's then 20 24 21 23 22 25 26, PE6 0 2 1 3 5 4,
+//! P15 0 2 1 3 5 4 8 6 12 7 14 13 11 9 10; face types keep their order.
 //!
 //! Faces: every group holding face cells that bound the body is the face `body.<group>`; a
 //! family in several groups puts its cells in each.
@@ -32,7 +35,7 @@ use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
 /// The volume cell types read, in MED's names, for messages.
-const MED_SUPPORTED: &str = "TE4, T10, HE8, PE6 (volumes), TR3, QU4, TR6, QU8 (faces)";
+const MED_SUPPORTED: &str = "TE4, T10, HE8, H20, H27, PE6, P15 (volumes), TR3, QU4, TR6, QU8, QU9 (faces)";
 
 /// What a MED cell type is to this reader.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,8 +56,11 @@ fn classify(name: &str) -> Option<Ty> {
         "HE8" => Ty::Cell(CellKind::Hex8, &[0, 3, 2, 1, 4, 7, 6, 5]),
         "PE6" => Ty::Cell(CellKind::Wedge6, &[0, 2, 1, 3, 5, 4]),
         "PY5" => Ty::Cell(CellKind::Pyr5, &[0, 3, 2, 1, 4]),
+        "H20" => Ty::Cell(CellKind::Hex20, &[0, 3, 2, 1, 4, 7, 6, 5, 11, 8, 16, 10, 19, 9, 18, 17, 15, 12, 14, 13]),
+        "H27" => Ty::Cell(CellKind::Hex27, &[0, 3, 2, 1, 4, 7, 6, 5, 11, 8, 16, 10, 19, 9, 18, 17, 15, 12, 14, 13, 20, 24, 21, 23, 22, 25, 26]),
+        "P15" => Ty::Cell(CellKind::Wedge15, &[0, 2, 1, 3, 5, 4, 8, 6, 12, 7, 14, 13, 11, 9, 10]),
         "TR3" | "TR6" => Ty::Facet(3),
-        "QU4" | "QU8" => Ty::Facet(4),
+        "QU4" | "QU8" | "QU9" => Ty::Facet(4),
         "PO1" | "SE2" | "SE3" | "SE4" => Ty::Ignored,
         _ => return None,
     })
@@ -69,6 +75,10 @@ fn nodes_of(name: &str) -> usize {
         "SE4" | "QU4" | "TE4" => 4,
         "TR6" | "PE6" => 6,
         "QU8" | "HE8" => 8,
+        "QU9" => 9,
+        "P15" => 15,
+        "H20" => 20,
+        "H27" => 27,
         _ => 10, // T10
     }
 }

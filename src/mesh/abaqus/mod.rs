@@ -17,10 +17,15 @@
 //!
 //! Volume elements: `C3D8`, `C3D8R`, `C3D8I`, `C3D8H`, `C3D8RH`, `C3D8IH` (read as 8-node
 //! hexahedra: the program's own integration, not Abaqus's reduced or incompatible-mode one),
-//! `C3D4`/`C3D4H`, `C3D10`/`C3D10H`/`C3D10M`/`C3D10MH` and `C3D6`/`C3D6H` (wedges). Abaqus's
-//! node orders are the program's ([`super::cell`]) except the 10-node tetrahedron's last two
-//! edge nodes (Abaqus: 9 on edge 2–4, 10 on edge 3–4), which are swapped on reading. Other
-//! solid types (`C3D20`, `C3D15`, `C3D5`, …) in the body are an error naming them.
+//! `C3D4`/`C3D4H`, `C3D10`/`C3D10H`/`C3D10M`/`C3D10MH`, `C3D6`/`C3D6H` (wedges),
+//! `C3D20`/`C3D20R`/`C3D20H`/`C3D20RH` (20-node hexahedra) and `C3D15`/`C3D15H` (15-node
+//! wedges). Abaqus's corner orders are the program's ([`super::cell`]); the 10-node
+//! tetrahedron's last two edge nodes (Abaqus: 9 on edge 2–4, 10 on edge 3–4) are swapped on
+//! reading, and the edge nodes of C3D20 and C3D15 (bottom edges, top edges, then vertical
+//! edges) are put in Gmsh's order ([`C3D20_TO_OURS`], [`C3D15_TO_OURS`]). Other solid types
+//! (`C3D27`, whose face-node order is not checked here, `C3D5`, …) in the body are an error
+//! naming them. Faces S1–S6 of C3D20 and S1–S5 of C3D15 are 8-node quadrilaterals and 6-node
+//! triangles with their edge nodes.
 //!
 //! Faces, each named by its set or surface name (the scene says `body.name`):
 //! - every `*SURFACE, TYPE=ELEMENT` whose facets bound the body's elements (Abaqus face
@@ -54,7 +59,17 @@ const MAX_DEPTH: usize = 16;
 const MAX_GENERATE: u64 = 100_000_000;
 
 /// The volume element types read, in Abaqus's names, for messages.
-const ABAQUS_SUPPORTED: &str = "C3D8 (C3D8R, C3D8I, C3D8H), C3D4, C3D10 (C3D10M), C3D6";
+const ABAQUS_SUPPORTED: &str = "C3D8 (C3D8R, C3D8I, C3D8H), C3D4, C3D10 (C3D10M), C3D6, C3D20 (C3D20R, C3D20H), C3D15";
+
+/// The program's node `k` of a 20-node hexahedron is the C3D20's node `C3D20_TO_OURS[k]`
+/// (0-based; Abaqus: edge nodes 9–12 on the bottom edges 1-2, 2-3, 3-4, 4-1, 13–16 on the top
+/// edges 5-6, 6-7, 7-8, 8-5, 17–20 on the vertical edges 1-5, 2-6, 3-7, 4-8).
+const C3D20_TO_OURS: [usize; 20] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 16, 9, 17, 10, 18, 19, 12, 15, 13, 14];
+
+/// The program's node `k` of a 15-node wedge is the C3D15's node `C3D15_TO_OURS[k]` (Abaqus:
+/// edge nodes 7–9 on the bottom edges 1-2, 2-3, 3-1, 10–12 on the top edges 4-5, 5-6, 6-4,
+/// 13–15 on the vertical edges 1-4, 2-5, 3-6).
+const C3D15_TO_OURS: [usize; 15] = [0, 1, 2, 3, 4, 5, 6, 8, 12, 7, 13, 14, 9, 11, 10];
 
 /// Reads the cells of element set `volume` (every volume element of the file when `None`) from
 /// the Abaqus input file `path`, in a compact local numbering that keeps the file's node order;
@@ -280,6 +295,8 @@ fn classify(name: &str) -> Option<Ty> {
         "C3D10" | "C3D10H" | "C3D10M" | "C3D10MH" => Ty::Cell(CellKind::Tet10),
         "C3D6" | "C3D6H" => Ty::Cell(CellKind::Wedge6),
         "C3D5" | "C3D5H" => Ty::Cell(CellKind::Pyr5),
+        "C3D20" | "C3D20R" | "C3D20H" | "C3D20RH" => Ty::Cell(CellKind::Hex20),
+        "C3D15" | "C3D15H" => Ty::Cell(CellKind::Wedge15),
         _ if ["C3D", "DC3D", "AC3D", "SC6", "SC8", "COH3D", "CCL"].iter().any(|p| name.starts_with(p)) => Ty::Solid,
         _ if ["CPS", "CPE", "S3", "S4", "S8", "S9", "STRI", "M3D", "SFM3D", "R3D", "DS3", "DS4", "DS6", "DS8"].iter().any(|p| name.starts_with(p)) => Ty::Facet,
         _ if [
@@ -577,8 +594,11 @@ impl Deck {
         if ty == Ty::Ignored || (ty == Ty::Facet && ![3, 4, 6, 8, 9].contains(&nodes.len())) {
             return Ok(());
         }
-        if ty == Ty::Cell(CellKind::Tet10) {
-            nodes.swap(8, 9); // Abaqus: 9 on edge 2-4, 10 on 3-4; ours 8 on (3,2), 9 on (3,1)
+        match ty {
+            Ty::Cell(CellKind::Tet10) => nodes.swap(8, 9), // Abaqus: 9 on edge 2-4, 10 on 3-4; ours 8 on (3,2), 9 on (3,1)
+            Ty::Cell(CellKind::Hex20) => nodes = C3D20_TO_OURS.iter().map(|&k| nodes[k]).collect(),
+            Ty::Cell(CellKind::Wedge15) => nodes = C3D15_TO_OURS.iter().map(|&k| nodes[k]).collect(),
+            _ => {}
         }
         if self.elem_index.insert(label, self.elems.len()).is_some() {
             return Err(Fail::at(i, format!("element {label} is defined twice")));
@@ -905,8 +925,29 @@ mod tests {
         assert!(e.contains("*NODE"), "{e}");
         let e = err(&TWO_HEX.replace("C3D8R", "C3D20"));
         assert!(e.contains("C3D20") && e.contains("line 18"), "{e}");
+        let e = err(&TWO_HEX.replace("C3D8R", "C3D27"));
+        assert!(e.contains("C3D27") && e.contains("line 18"), "{e}");
         let e = err("*PART, NAME=p\n*NODE\n1, 0, 0, 0\n");
         assert!(e.contains("line 1") && e.contains("*END PART"), "{e}");
         assert!(!e.contains('\n'));
+    }
+
+    /// The edge nodes' corner pairs (0-based) as Abaqus numbers them (Abaqus Analysis User's
+    /// Guide, "Three-dimensional solid element library", the 20-node brick and 15-node wedge
+    /// figures), mapped by the permutations, are the program's edges.
+    #[test]
+    fn quadratic_permutations_follow_the_element_library() {
+        use crate::mesh::cell::{HEX20_EDGES, WEDGE15_EDGES};
+        let c3d20: [[usize; 2]; 12] = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]];
+        let c3d15: [[usize; 2]; 9] = [[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]];
+        let same = |a: [usize; 2], b: [usize; 2]| a == b || a == [b[1], b[0]];
+        assert_eq!(C3D20_TO_OURS[..8], [0, 1, 2, 3, 4, 5, 6, 7]);
+        for (e, &ours) in HEX20_EDGES.iter().enumerate() {
+            assert!(same(c3d20[C3D20_TO_OURS[8 + e] - 8], ours), "hex20 edge node {}", 8 + e);
+        }
+        assert_eq!(C3D15_TO_OURS[..6], [0, 1, 2, 3, 4, 5]);
+        for (e, &ours) in WEDGE15_EDGES.iter().enumerate() {
+            assert!(same(c3d15[C3D15_TO_OURS[6 + e] - 6], ours), "wedge15 edge node {}", 6 + e);
+        }
     }
 }
