@@ -201,7 +201,7 @@ fn show(s: &Shared, label: &str, unit: Unit, period: Duration, terminal: bool) {
     }
     loop {
         let text = count(unit, s.done.load(Relaxed), s.total.load(Relaxed));
-        let line = format!("{label}: {text}{:.1} s\n", start.elapsed().as_secs_f64());
+        let line = format!("{label}: {text}{:.2} s\n", start.elapsed().as_secs_f64());
         let _ = std::io::stderr().lock().write_all(line.as_bytes());
         if !wait(Instant::now() + period) {
             break;
