@@ -252,16 +252,17 @@ pub fn cell_kind(c: crate::scene::BoxCells) -> crate::mesh::CellKind {
 
 /// Builds the model of a loaded scene.
 pub fn build(ls: &LoadedScene) -> Result<Model> {
-    build_timed(ls, &mut Vec::new())
+    build_timed(ls, &mut Vec::new(), &|_, _| ())
 }
 
 /// [`build`], adding the wall time of its large parts to `times`: `mesh read` (the files read
 /// and parsed, the boxes generated), `pairing` (the contact and tie pairs) and `hold buckets`
-/// (what holds each body, the floating groups).
-pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>) -> Result<Model> {
+/// (what holds each body, the floating groups). `read(done, total)` hears the bytes read of each
+/// Gmsh or Abaqus file as the reader goes (for the monitor; it must not print into the mesh).
+pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>, read: &dyn Fn(u64, u64)) -> Result<Model> {
     let scene: &Scene = &ls.scene;
     let clock = std::time::Instant::now();
-    let mut mesh = read_bodies(ls)?;
+    let mut mesh = read_bodies(ls, read)?;
     times.push(("mesh read", clock.elapsed().as_secs_f64()));
     let (faces, cut_faces) = cut_scene_faces(scene, &mut mesh)?;
     let lame = body_lame(scene);
@@ -295,7 +296,7 @@ pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>) -> Re
 
 /// The mesh of every body, boxes generated and mesh files read, in scene order. Each file is
 /// read and parsed once, at its first body, and every body that names it is built from it.
-fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
+fn read_bodies(ls: &LoadedScene, progress: &dyn Fn(u64, u64)) -> Result<Mesh> {
     let scene: &Scene = &ls.scene;
     let mut mesh = Mesh::default();
     // the bodies built from a file already parsed, by body index
@@ -306,7 +307,7 @@ fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
             (_, Some((_, m))) => match read.remove(&i) {
                 Some(geom) => geom?,
                 None => {
-                    read.extend(file_bodies(ls, i, &m)?);
+                    read.extend(file_bodies(ls, i, &m, progress)?);
                     read.remove(&i).expect("the file's first body is among its bodies")?
                 }
             },
@@ -322,8 +323,9 @@ fn read_bodies(ls: &LoadedScene) -> Result<Mesh> {
 }
 
 /// Every body from body `first` on that reads the same file, in the same format, as body
-/// `first` (its mesh `g`), built from one parse of the file (translations not yet applied).
-fn file_bodies(ls: &LoadedScene, first: usize, g: &crate::scene::MeshDef) -> Result<Vec<(usize, Result<BodyGeometry>)>> {
+/// `first` (its mesh `g`), built from one parse of the file (translations not yet applied);
+/// `progress` hears the bytes read.
+fn file_bodies(ls: &LoadedScene, first: usize, g: &crate::scene::MeshDef, progress: &dyn Fn(u64, u64)) -> Result<Vec<(usize, Result<BodyGeometry>)>> {
     let path = ls.dir().join(&g.file);
     let format = g.resolved_format();
     let same: Vec<(usize, crate::scene::MeshDef)> = ls.scene.bodies[first..]
@@ -335,8 +337,8 @@ fn file_bodies(ls: &LoadedScene, first: usize, g: &crate::scene::MeshDef) -> Res
         .collect();
     let volumes: Vec<Option<&str>> = same.iter().map(|(_, m)| m.volume.as_deref()).collect();
     let bodies = match format {
-        Some(MeshFormat::Abaqus) => abaqus::read_many(&path, &volumes)?,
-        Some(MeshFormat::Gmsh) => gmsh::read_many(&path, &volumes)?,
+        Some(MeshFormat::Abaqus) => abaqus::read_many_with(&path, &volumes, progress)?,
+        Some(MeshFormat::Gmsh) => gmsh::read_many_with(&path, &volumes, progress)?,
         Some(MeshFormat::Med) => med::read_many(&path, &volumes)?,
         Some(MeshFormat::Exodus) => exodus::read_many(&path, &volumes)?,
         None => {

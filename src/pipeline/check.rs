@@ -7,7 +7,7 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use super::memory::{self, MeshCount};
-use super::{body_dofs, pair_notes, plan, preconditioner, report, resolve_method, DualKind, Timings};
+use super::{body_dofs, monitor, pair_notes, plan, preconditioner, report, resolve_method, DualKind, Timings};
 use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::fem::assembly::DofMap;
@@ -46,8 +46,8 @@ pub fn prepare<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], out: 
         Ok(ls)
     })?;
     let mut parts = Vec::new();
-    let model = t.phase(comm, "mesh", || {
-        memory::check_before_mesh(comm, &ls).and_then(|()| model::build_timed(&ls, &mut parts)).and_then(|mut m| {
+    let model = t.phase_with(comm, "mesh", Some(monitor::Unit::Bytes), |p| {
+        memory::check_before_mesh(comm, &ls).and_then(|()| model::build_timed(&ls, &mut parts, &|done, total| p.set(done, total))).and_then(|mut m| {
             let clock = std::time::Instant::now();
             let held = m.check_held();
             parts.push(("hold check", clock.elapsed().as_secs_f64()));

@@ -69,10 +69,23 @@ impl Timings {
 
     /// Runs one phase on every rank, records its time (max over ranks) and makes its result
     /// collective.
+    /// A phase that runs 2 s shows its time on rank 0 ([`monitor::Progress`]); `iterate` does not:
+    /// its outer iterations are shown as they end.
     pub fn phase<C: Comm, T>(&mut self, comm: &C, name: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        let unit = (name != "iterate").then_some(monitor::Unit::Time);
+        self.phase_with(comm, name, unit, |_| f())
+    }
+
+    /// [`Timings::phase`] whose body counts its work in `unit` on the [`monitor::Progress`] it is
+    /// handed (`None`: nothing shown but the phase's start line).
+    pub fn phase_with<C: Comm, T>(&mut self, comm: &C, name: &str, unit: Option<monitor::Unit>, f: impl FnOnce(&monitor::Progress) -> Result<T>) -> Result<T> {
         self.live.phase(name);
         let t0 = Instant::now();
-        let r = f().and_then(|v| injected_fault(comm, name).map_or(Ok(v), Err));
+        let r = {
+            let progress = unit.map_or_else(monitor::Progress::default, |u| monitor::Progress::start(&self.live, name, u));
+            f(&progress)
+        };
+        let r = r.and_then(|v| injected_fault(comm, name).map_or(Ok(v), Err));
         let mut t = [t0.elapsed().as_secs_f64(), peak_rss_bytes()];
         let r = comm.agree(r);
         comm.max_f64(&mut t);

@@ -7,7 +7,7 @@
 
 use super::accuracy::{self, Verdict};
 use super::finish::{finish, PieceLayout, PieceSolution, PieceStats};
-use super::monitor::Live;
+use super::monitor::{self, Live};
 use super::steps::{self, Solved, StepDual};
 use super::{BodyStats, ContactOutcome, Solution, Timings};
 use crate::comm::Comm;
@@ -226,10 +226,15 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
     model.release_mesh();
     let model = &*model;
     let contact = model.pairs.as_ref();
-    let pieces = t.phase(comm, "factorize", || {
+    // rank 0 shows its own share (no collective for the monitor)
+    let unit = monitor::Unit::Items(if comm.size() > 1 { "subdomains of rank 0" } else { "subdomains" });
+    let pieces = t.phase_with(comm, "factorize", Some(unit), |progress| {
         let held = share.held(&model.constraints.iter().map(|c| c.2).collect::<Vec<_>>());
-        (0..clusters.len())
-            .filter(|&c| owner[c] == comm.rank())
+        let mine: Vec<usize> = (0..clusters.len()).filter(|&c| owner[c] == comm.rank()).collect();
+        let total: usize = mine.iter().map(|&c| clusters.members[c].len()).sum();
+        let done = std::cell::Cell::new(0);
+        progress.set(0, total as u64);
+        mine.into_iter()
             .map(|c| {
                 let subs = clusters.members[c]
                     .iter()
@@ -248,6 +253,10 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
                             share.eliminated[p].clone(),
                             held[p].clone(),
                         )
+                        .inspect(|_| {
+                            done.set(done.get() + 1);
+                            progress.set(done.get(), total as u64);
+                        })
                     })
                     .collect::<Result<Vec<_>>>()?;
                 ClusterSystem::new(c, subs, clusters.bc[c].0.clone(), clusters.bc[c].1)

@@ -82,8 +82,14 @@ pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
 /// each element set of `volumes` is built from the parsed deck. The outer error is the file's;
 /// the inner ones are each body's.
 pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
+    read_many_with(path, volumes, &|_, _| ())
+}
+
+/// [`read_many`], telling `progress(done, total)` the bytes of the file being loaded (the input
+/// file or one it includes) read so far.
+pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u64, u64)) -> Result<Vec<Result<BodyGeometry>>> {
     let mut lines = Vec::new();
-    load(path, 0, &mut lines, None)?;
+    load(path, 0, &mut lines, None, progress)?;
     let deck = Deck::parse(&lines)?;
     Ok(volumes.iter().map(|&v| deck.build(v).map_err(|f| f.into_error(path, &lines))).collect())
 }
@@ -208,8 +214,8 @@ fn relative(file: &Path, name: &str) -> PathBuf {
 }
 
 /// Reads `path` into `out`, expanding `*INCLUDE` and `INPUT=` in place; `from` is the line that
-/// names it (for the error when it cannot be read).
-fn load(path: &Path, depth: usize, out: &mut Vec<Line>, from: Option<usize>) -> Result<()> {
+/// names it (for the error when it cannot be read); `progress` hears the bytes of it read.
+fn load(path: &Path, depth: usize, out: &mut Vec<Line>, from: Option<usize>, progress: &dyn Fn(u64, u64)) -> Result<()> {
     let here = |out: &Vec<Line>, msg: String| match from {
         Some(i) => Fail::at(i, msg).into_error(path, out),
         None => Error::mesh(path.display().to_string(), msg),
@@ -227,6 +233,9 @@ fn load(path: &Path, depth: usize, out: &mut Vec<Line>, from: Option<usize>) -> 
     let raw: Vec<&str> = text.lines().collect();
     let mut k = 0;
     while k < raw.len() {
+        if k % 65_536 == 0 {
+            progress((raw[k].as_ptr() as usize - text.as_ptr() as usize) as u64, text.len() as u64);
+        }
         let no = k + 1;
         let mut t = raw[k].trim().to_string();
         k += 1;
@@ -248,9 +257,10 @@ fn load(path: &Path, depth: usize, out: &mut Vec<Line>, from: Option<usize>) -> 
                 out.pop();
                 out.push(Line { file: file.clone(), no, text: "**".into() });
             }
-            load(&relative(path, inc), depth + 1, out, Some(at))?;
+            load(&relative(path, inc), depth + 1, out, Some(at), progress)?;
         }
     }
+    progress(text.len() as u64, text.len() as u64);
     Ok(())
 }
 
@@ -836,6 +846,21 @@ mod tests {
 
     /// Two hexahedra stacked in z (unit cubes), nodes 1…12, with a surface on the top.
     const TWO_HEX: &str = "*Heading\n two hexes\n** comment\n*Node, nset=all\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n8, 0, 1, 1\n9, 0., 0., 2.\n10, 1., 0., 2.\n11, 1.0, 1.0, 2.0\n12, 0, 1, 2\n*element, type=C3D8R, elset=block\n1, 1, 2, 3, 4,\n 5, 6, 7, 8\n2, 5, 6, 7, 8, 9, 10, 11, 12\n*Elset, elset=upper\n2,\n*ELSET, ELSET=both, GENERATE\n1, 2, 1\n*Surface, type=ELEMENT, name=top\nupper, S2\n*SURFACE, NAME=bottom\n1, S1\n*SURFACE, NAME=skin\nboth\n*MATERIAL, NAME=steel\n*ELASTIC\n210000., 0.3\n";
+
+    /// The reader tells its progress in bytes of the file, rising, ending at its size; the
+    /// bodies read are the same as without it.
+    #[test]
+    fn progress_counts_the_bytes_read() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("mesh/two_blocks.inp");
+        let calls = std::cell::RefCell::new(Vec::new());
+        let with = read_many_with(&path, &[None], &|d, n| calls.borrow_mut().push((d, n))).unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        let calls = calls.into_inner();
+        assert!(calls.windows(2).all(|w| w[0].0 <= w[1].0) && calls.iter().all(|c| c.0 <= c.1), "{calls:?}");
+        assert_eq!(calls.last(), Some(&(size, size)));
+        let plain = read_many(&path, &[None]).unwrap();
+        assert_eq!(format!("{:?}", with[0].as_ref().unwrap().nodes), format!("{:?}", plain[0].as_ref().unwrap().nodes));
+    }
 
     #[test]
     fn reads_two_hexes_with_surfaces() {

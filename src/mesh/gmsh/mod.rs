@@ -49,8 +49,14 @@ pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
 /// `volumes` is built from the parsed file. The outer error is the file's (unreadable,
 /// malformed); the inner ones are each body's (a volume not in the file, a bad cell).
 pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
+    read_many_with(path, volumes, &|_, _| ())
+}
+
+/// [`read_many`], telling `progress(done, total)` the bytes of the file read so far (a pipe:
+/// its total is what has arrived).
+pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u64, u64)) -> Result<Vec<Result<BodyGeometry>>> {
     let file = path.display().to_string();
-    let bytes = read_bytes(path).map_err(|e| match e {
+    let bytes = read_bytes(path, progress).map_err(|e| match e {
         Error::Memory { msg, .. } => Error::memory(&file, msg),
         e => e,
     })?;
@@ -61,17 +67,20 @@ pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<Bod
 /// The whole file, its buffer reserved first: a file larger than the memory left is an error,
 /// not an abort. A pipe (`/dev/stdin`) is read once, as it arrives, each chunk's memory
 /// reserved before it is read.
-fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+fn read_bytes(path: &Path, progress: &dyn Fn(u64, u64)) -> Result<Vec<u8>> {
     use std::io::Read;
+    const CHUNK: usize = 1 << 22;
     let file = path.display().to_string();
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(&file, e))?;
     let meta = f.metadata().map_err(|e| Error::io(&file, e))?;
     if meta.is_file() {
         let mut bytes = super::try_vec::<u8>("the file's bytes", (meta.len() as usize).saturating_add(1))?;
-        f.read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))?;
+        // in chunks into the reserved buffer, for the monitor
+        while f.by_ref().take(CHUNK as u64).read_to_end(&mut bytes).map_err(|e| Error::io(&file, e))? > 0 {
+            progress(bytes.len() as u64, meta.len().max(bytes.len() as u64));
+        }
         return Ok(bytes);
     }
-    const CHUNK: usize = 1 << 22;
     let mut bytes: Vec<u8> = Vec::new();
     loop {
         bytes
@@ -81,6 +90,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
         if n == 0 {
             return Ok(bytes);
         }
+        progress(bytes.len() as u64, bytes.len() as u64);
     }
 }
 

@@ -381,3 +381,18 @@ fn one_parse_builds_every_body_as_its_own_read() {
     }
     assert!(many[0].as_ref().unwrap().cells.len() != many[2].as_ref().unwrap().cells.len());
 }
+
+/// The reader tells its progress in bytes of the file, rising, ending at its size; the bodies
+/// read are the same as without it.
+#[test]
+fn progress_counts_the_bytes_read() {
+    let path = mesh_file("two_blocks.msh");
+    let calls = std::cell::RefCell::new(Vec::new());
+    let with = read_many_with(&path, &[None], &|d, n| calls.borrow_mut().push((d, n))).unwrap();
+    let size = std::fs::metadata(&path).unwrap().len();
+    let calls = calls.into_inner();
+    assert!(!calls.is_empty() && calls.windows(2).all(|w| w[0].0 <= w[1].0) && calls.iter().all(|c| c.1 == size), "{calls:?}");
+    assert_eq!(calls.last(), Some(&(size, size)));
+    let plain = read_many(&path, &[None]).unwrap();
+    assert_eq!(format!("{:?}", with[0].as_ref().unwrap().nodes), format!("{:?}", plain[0].as_ref().unwrap().nodes));
+}
