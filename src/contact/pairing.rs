@@ -23,6 +23,7 @@
 //! The nodal area wᵢ = ∫ φᵢ dA over the slave face (2×2 Gauss; a quarter of a quad at corners
 //! of a uniform grid), and the slip bound gᵢ = g·wᵢ (orthotropic: g₁wᵢ along t₁, g₂wᵢ along t₂).
 
+use crate::contact::recovery::{is_quadratic, Recovery};
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
@@ -90,6 +91,9 @@ pub struct Contact {
     /// p̄ᵢ = Σ_j w_ij p_j, the area-weighted average over the node's slave facets of each
     /// facet's mean nodal pressure ([`Contact::smooth`]).
     pub smoothing: Vec<Vec<(usize, f64)>>,
+    /// The entries with quadratic slave faces, whose `contact_pressure` is the L2 projection of
+    /// the multiplier field on the face ([`Recovery`]).
+    pub recovery: Vec<Recovery>,
 }
 
 impl Contact {
@@ -484,17 +488,6 @@ fn interface_rows(
     search: Option<f64>,
     outside: bool,
 ) -> Result<Interface> {
-    for face in [slave, master] {
-        if face.facets.iter().any(|q| q.kind == FacetKind::Quad9) {
-            return Err(Error::scene(
-                key,
-                format!(
-                    "face {} has 9-node quadrilaterals (of 27-node hexahedra): contact and ties have no dual mortar basis for them (the modified quadratic basis is built for 6-node triangles and 8-node quadrilaterals only); mesh that body with 20-node hexahedra",
-                    face.name
-                ),
-            ));
-        }
-    }
     let search = search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
     let mortar = || mortar_rows(mesh, key, slave, master, search, outside);
     let nodal = |rows| Ok(Interface { rows, how: Discretization::NodeToNode, outside: vec![], search });
@@ -638,6 +631,9 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         }
         c.interference.push(fit);
         smoothing_weights(mesh, slave, first_row, &mut c);
+        if is_quadratic(slave) {
+            c.recovery.push(Recovery::new(mesh, slave, first_row..c.len()));
+        }
     }
     Ok(c)
 }
