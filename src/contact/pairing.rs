@@ -488,6 +488,17 @@ fn interface_rows(
     search: Option<f64>,
     outside: bool,
 ) -> Result<Interface> {
+    for face in [slave, master] {
+        if face.facets.iter().any(|q| q.kind == FacetKind::Quad9) {
+            return Err(Error::scene(
+                key,
+                format!(
+                    "face {} has 9-node quadrilaterals (of 27-node hexahedra): contact and ties have no dual mortar basis for them (the modified quadratic basis is built for 6-node triangles and 8-node quadrilaterals only); mesh that body with 20-node hexahedra",
+                    face.name
+                ),
+            ));
+        }
+    }
     let search = search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
     let mortar = || mortar_rows(mesh, key, slave, master, search, outside);
     let nodal = |rows| Ok(Interface { rows, how: Discretization::NodeToNode, outside: vec![], search });
