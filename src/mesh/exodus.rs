@@ -498,9 +498,9 @@ fn exodus_sides(kind: CellKind) -> &'static [&'static [usize]] {
     const TET: [&[usize]; 4] = [&[0, 1, 3], &[1, 2, 3], &[0, 3, 2], &[0, 2, 1]];
     const WEDGE: [&[usize]; 5] = [&[0, 1, 4, 3], &[1, 2, 5, 4], &[0, 3, 5, 2], &[0, 2, 1], &[3, 4, 5]];
     match kind {
-        CellKind::Hex8 => &HEX,
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &HEX,
         CellKind::Tet4 | CellKind::Tet10 => &TET,
-        CellKind::Wedge6 => &WEDGE,
+        CellKind::Wedge6 | CellKind::Wedge15 => &WEDGE,
     }
 }
 
