@@ -2,7 +2,16 @@
 //! dual and TFETI at a few subdomain counts are priced before anything is assembled — the fill
 //! of every factor (METIS nested dissection and the elimination tree, no numeric work), the
 //! dual's size and its Dirichlet share, the A-products a solve takes and the time of one — and
-//! the cheapest is taken. `tresca-feti check` prints the table.
+//! the cheapest is taken. `tresca-feti check` prints the table, each row marked counted,
+//! model or bound ([`Basis`]).
+//!
+//! Only one TFETI count is partitioned first (the middle one): its B is built and the fill of
+//! a sample of its subdomains counted, which fits the power laws nnz(L) = c₁ n^{4/3},
+//! Σ (column count)² = c₂ n² and a surface law (gluing rows and duplicated nodes ∝ S^{1/3} − 1)
+//! that price the other counts ([`Law`]); the cheapest by the model is partitioned and counted
+//! in turn until the cheapest is counted, and its partition is kept for
+//! the decompose phase (`Model::partition`). The monolithic dual is counted (its orders are kept
+//! for the factorization) unless a lower bound from the laws ([`BOUND`]) already loses.
 //!
 //! Time of a candidate = setup + (nA + σ-estimate products) · t_A with
 //! - t_A = [`SECONDS_PER_NNZ`] · nnz(L) of the busiest rank (the forward and backward solves
@@ -422,12 +431,11 @@ impl<'a, C: Comm> Pricing<'a, C> {
             .collect()
     }
 
-    /// The TFETI candidates: one partition first (the middle count),
-    /// its sampled fills calibrating the power laws and its rows the surface law
-    /// ([`Law`]), every other count priced from them; then the cheapest by the model is
-    /// partitioned and counted in turn until the cheapest is a counted one (at most
-    /// [`PARTITIONS`] partitions). Returns the candidates, the law of the last partition and
-    /// that partition (what the decompose phase reuses when its count is chosen).
+    /// The TFETI candidates: one partition first (the middle count), its sampled fills
+    /// calibrating the power laws and its rows the surface law ([`Law`]), every other count
+    /// priced from them; then the cheapest by the model is partitioned and counted in turn until
+    /// the cheapest is a counted one. Returns the candidates, the law of the last partition and
+    /// the cheapest counted candidate's partition (what the decompose phase reuses).
     fn tfeti_candidates(&self, dec: &DecompositionSettings, specs: Vec<Spec>, split: &mut Split) -> Result<(Vec<Candidate>, Option<Law>, Option<Partition>)> {
         if specs.is_empty() {
             return Ok((vec![], None, None));
@@ -436,25 +444,23 @@ impl<'a, C: Comm> Pricing<'a, C> {
         // the first reference: the middle count with more than one subdomain where there is one
         let many: Vec<usize> = (0..specs.len()).filter(|&j| specs[j].s > 1).collect();
         let mut next = if many.is_empty() { 0 } else { many[many.len() / 2] };
-        let mut last: Option<Partition> = None;
-        let mut law: Option<Law> = None;
-        for _ in 0..PARTITIONS {
+        // the partition of the cheapest counted candidate (its index, the partition)
+        let mut keep: Option<(usize, Partition)> = None;
+        loop {
             let (c, l, part) = self.tfeti(dec, &specs[next], split)?;
             counted[next] = Some((c, l));
-            law = Some(l);
-            last = Some(part);
             let priced = self.tfeti_priced(&specs, &counted, l);
-            let best = (0..priced.len()).min_by(|&a, &b| priced[a].time.total_cmp(&priced[b].time)).expect("a candidate");
+            let time = |j: usize| priced[j].time;
+            if keep.as_ref().is_none_or(|(k, _)| time(next) < time(*k)) {
+                keep = Some((next, part));
+            }
+            let best = (0..priced.len()).min_by(|&a, &b| time(a).total_cmp(&time(b))).expect("a candidate");
+            // done when the cheapest is counted (each turn counts another: it ends)
             if counted[best].is_some() {
-                break;
+                return Ok((priced, Some(l), keep.map(|k| k.1)));
             }
             next = best;
         }
-        let priced = self.tfeti_priced(&specs, &counted, law.expect("one partition"));
-        // the partition kept is the one of the cheapest counted candidate
-        let best = (0..priced.len()).filter(|&j| counted[j].is_some()).min_by(|&a, &b| priced[a].time.total_cmp(&priced[b].time));
-        let keep = last.filter(|p| best.is_some_and(|j| specs[j].parts == p.0));
-        Ok((priced, law, keep))
     }
 
     /// Every candidate: the counted ones as counted, the others from the law.
@@ -538,9 +544,6 @@ type Partition = (Vec<usize>, Decomposition);
 
 /// Seconds of the plan's parts: partitions, B and ranks, sampled fills, the monolithic fill.
 type Split = [(&'static str, f64); 4];
-
-/// Most partitions the plan makes (the first reference, then the cheapest by the model).
-pub const PARTITIONS: usize = 3;
 
 /// A counted partition's figures as laws of the subdomain count: nnz(L) = nnz · n^{4/3} and
 /// Σ (column count)² = flops · n² for a piece of n nodes (nested dissection of 3-D pieces), the
@@ -763,17 +766,34 @@ mod tests {
         let stored: usize = bodies.iter().map(|b| b.chol.nnz_l()).sum();
         let ratio = stored as f64 / mono.nnz_l;
         assert!((1.0..1.5).contains(&ratio), "stored {stored} against counted {}", mono.nnz_l);
-        // TFETI candidates: rows as the decomposition builds them, more subdomains less fill
+        // TFETI candidates: the modelled ones less fill and more gluing with more subdomains;
+        // the counted one's rows as the decomposition builds them
         let tfeti: Vec<&Candidate> = cands.iter().filter(|c| c.tfeti).collect();
-        assert!(!tfeti.is_empty());
-        for w in tfeti.windows(2) {
+        let modelled: Vec<&&Candidate> = tfeti.iter().filter(|c| c.basis == Basis::Modelled).collect();
+        for w in modelled.windows(2) {
             assert!(w[1].parts[0] > w[0].parts[0] && w[1].nnz_l < w[0].nnz_l && w[1].gluing_rows > w[0].gluing_rows);
         }
-        let (_, d, _) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
+        let counted = tfeti.iter().find(|c| c.basis == Basis::Counted).expect("one counted partition");
+        let (_, d, _) = crate::feti::seed_fixture(12, counted.parts[0]);
         let elim = crate::feti::eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
         let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), &model.ties, dec.gluing, &elim);
-        assert_eq!((tfeti[0].gluing_rows, tfeti[0].dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
-        assert_eq!(d.subdomains.len(), 2 * tfeti[0].parts[0]);
+        assert_eq!((counted.gluing_rows, counted.dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
+        assert_eq!(d.subdomains.len(), 2 * counted.parts[0]);
+    }
+
+    #[test]
+    fn the_plans_partition_is_a_fresh_partition_of_the_chosen_count() {
+        // TFETI only: the chosen count's partition is kept for the decompose phase
+        let (model, _, _) = crate::feti::seed_fixture(12, 1);
+        let mut dec = DecompositionSettings { tfeti: true, ..Default::default() };
+        let cands = resolve(&SerialComm, &model, &mut dec, &Common::default(), 2).unwrap().expect("automatic");
+        let best = cheapest(&cands).unwrap();
+        let (parts, kept) = model.partition.get().expect("the chosen count's partition kept");
+        assert_eq!(*parts, best.parts);
+        assert_eq!(parts, &model.mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect::<Vec<_>>());
+        let fresh = decompose_each(&model.mesh, parts).unwrap();
+        assert_eq!(kept.subdomains, fresh.subdomains);
+        assert_eq!(kept.copies, fresh.copies);
     }
 
     #[test]
