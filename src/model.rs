@@ -51,6 +51,9 @@ pub struct Model {
     /// Each body's node order for its factor, computed once: `[plain, contact nodes last]`
     /// (`pipeline::body_order`; the plan counts its fill, the factorization uses it).
     pub orders: Vec<[OnceLock<NodeOrder>; 2]>,
+    /// The partition the plan made for the count it chose (subdomains per body, the
+    /// decomposition): the decompose phase takes it instead of partitioning again.
+    pub partition: OnceLock<(Vec<usize>, crate::feti::decomposition::Decomposition)>,
 }
 
 /// A face cut from another by a region: the facets whose centres lie in it.
@@ -291,7 +294,23 @@ pub fn build_timed(ls: &LoadedScene, times: &mut Vec<(&'static str, f64)>, read:
     let size = MeshSize { nodes: mesh.nodes.len(), elements: mesh.cells.len(), by_kind };
     let orders = mesh.bodies.iter().map(|_| Default::default()).collect();
     let tied_groups = groups.into_iter().filter(|g| g.len() > 1).collect();
-    Ok(Model { mesh, size, lame, constraints, loads, contact, pairs, ties, path, floating, tied_groups, slave_choice, cut_faces, orders })
+    Ok(Model {
+        mesh,
+        size,
+        lame,
+        constraints,
+        loads,
+        contact,
+        pairs,
+        ties,
+        path,
+        floating,
+        tied_groups,
+        slave_choice,
+        cut_faces,
+        orders,
+        partition: OnceLock::new(),
+    })
 }
 
 /// The mesh of every body, boxes generated and mesh files read, in scene order. Each file is

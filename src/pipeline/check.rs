@@ -58,7 +58,11 @@ pub fn prepare<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], out: 
     let mut ls = ls;
     held_by_contact(&mut ls.scene.decomposition, &model);
     let common = ls.scene.solver.params.common.clone();
-    let plan = t.phase(comm, "plan", || plan::resolve(comm, &model, &mut ls.scene.decomposition, &common, ranks)).map_err(|e| memory::name_the_mesh(&ls, e))?;
+    let mut split = Vec::new();
+    let plan = t
+        .phase(comm, "plan", || plan::resolve_timed(comm, &model, &mut ls.scene.decomposition, &common, ranks, &mut split))
+        .map_err(|e| memory::name_the_mesh(&ls, e))?;
+    t.split(comm, "plan", &split);
     let kind = DualKind::of(&ls, &model);
     resolve_method(&mut ls.scene.solver, kind);
     let tfeti = ls.scene.decomposition.is_tfeti(&body_dofs(&model));
@@ -283,7 +287,14 @@ fn contact(s: &mut String, ls: &LoadedScene, model: &Model, u: &Units) {
 fn subdomains(s: &mut String, ls: &LoadedScene, model: &Model) -> Result<()> {
     let (mesh, dec) = (&model.mesh, &ls.scene.decomposition);
     let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
-    let d = crate::feti::decomposition::decompose_each(mesh, &parts)?;
+    let fresh;
+    let d = match model.partition.get() {
+        Some((p, d)) if *p == parts => d,
+        _ => {
+            fresh = crate::feti::decomposition::decompose_each(mesh, &parts)?;
+            &fresh
+        }
+    };
     let _ = writeln!(
         s,
         "TFETI: {} subdomains ({} per body), {} interface nodes",

@@ -2,7 +2,16 @@
 //! dual and TFETI at a few subdomain counts are priced before anything is assembled — the fill
 //! of every factor (METIS nested dissection and the elimination tree, no numeric work), the
 //! dual's size and its Dirichlet share, the A-products a solve takes and the time of one — and
-//! the cheapest is taken. `tresca-feti check` prints the table.
+//! the cheapest is taken. `tresca-feti check` prints the table, each row marked counted,
+//! model or bound ([`Basis`]).
+//!
+//! Only one TFETI count is partitioned first (the middle one): its B is built and the fill of
+//! a sample of its subdomains counted, which fits the power laws nnz(L) = c₁ n^{4/3},
+//! Σ (column count)² = c₂ n² and a surface law (gluing rows and duplicated nodes ∝ S^{1/3} − 1)
+//! that price the other counts ([`Law`]); the cheapest by the model is partitioned and counted
+//! in turn until the cheapest is counted, and its partition is kept for
+//! the decompose phase (`Model::partition`). The monolithic dual is counted (its orders are kept
+//! for the factorization) unless a lower bound from the laws ([`BOUND`]) already loses.
 //!
 //! Time of a candidate = setup + (nA + σ-estimate products) · t_A with
 //! - t_A = [`SECONDS_PER_NNZ`] · nnz(L) of the busiest rank (the forward and backward solves
@@ -25,7 +34,8 @@
 use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
-use crate::feti::{assign_ranks, constraints, decomposition::decompose_each};
+use crate::feti::decomposition::{decompose_each, Decomposition};
+use crate::feti::{assign_ranks, constraints};
 use crate::linalg::ordering::{fill, nested_dissection, Fill};
 use crate::model::Model;
 use crate::qp::Common;
@@ -59,6 +69,9 @@ pub const SAMPLED: usize = 16;
 pub const SAMPLED_NODES: usize = 20_000;
 /// Subdomain counts priced (on the largest body; the others in proportion).
 pub const SUBDOMAIN_COUNTS: [usize; 8] = [2, 4, 8, 16, 32, 64, 128, 256];
+/// The monolithic dual's lower bound takes the power laws' constants fitted on subdomains times
+/// this (a whole body fills at least half as much per n^{4/3} as its subdomains).
+pub const BOUND: f64 = 0.5;
 
 /// One priced decomposition.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -91,6 +104,35 @@ pub struct Candidate {
     /// ordered last where that costs little fill: [`order_last_if_cheap`]).
     #[serde(default)]
     pub explicit: bool,
+    /// Whether the figures were counted, modelled from a counted partition, or a lower bound.
+    #[serde(default)]
+    pub basis: Basis,
+}
+
+/// Where a candidate's figures come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Basis {
+    /// Counted: its partition made, B built, the fill of its factors (or a sample of them) counted.
+    #[default]
+    Counted,
+    /// Modelled: the fill from the power laws and the rows from the surface law of a counted
+    /// partition.
+    Modelled,
+    /// A lower bound (the monolithic dual's fill from the power laws at half their constant),
+    /// which already loses to the cheapest TFETI candidate: not counted.
+    Bound,
+}
+
+impl Basis {
+    /// The word the table prints.
+    pub fn word(self) -> &'static str {
+        match self {
+            Basis::Counted => "counted",
+            Basis::Modelled => "model",
+            Basis::Bound => "bound",
+        }
+    }
 }
 
 impl Candidate {
@@ -116,19 +158,47 @@ pub fn automatic(dec: &DecompositionSettings) -> bool {
 
 /// Prices the monolithic dual (unless `decomposition.tfeti`) and TFETI at the subdomain counts
 /// of [`SUBDOMAIN_COUNTS`] for a run on `ranks` ranks with the solver settings `solver`;
-/// ordered as priced.
-/// The ranks of `comm` share the work — the monolithic candidate's bodies, and each TFETI
-/// candidate whole (its partition, B and fills) — and sum the figures, so every rank gets the
-/// same table.
+/// ordered as priced (the monolithic dual first). Every rank makes the same partitions and
+/// the ranks share and sum the counted fills, so every rank gets the same table.
 pub fn price<C: Comm>(comm: &C, model: &Model, dec: &DecompositionSettings, solver: &Common, ranks: usize) -> Result<Vec<Candidate>> {
+    Ok(price_split(comm, model, dec, solver, ranks, &mut split())?.0)
+}
+
+/// The plan's parts, none timed yet.
+fn split() -> Split {
+    [("plan partition", 0.0), ("plan B", 0.0), ("plan fills", 0.0), ("plan monolithic", 0.0)]
+}
+
+/// [`price`], timing its parts into `split`; with the partition of the cheapest counted TFETI
+/// candidate.
+fn price_split<C: Comm>(
+    comm: &C,
+    model: &Model,
+    dec: &DecompositionSettings,
+    solver: &Common,
+    ranks: usize,
+    split: &mut Split,
+) -> Result<(Vec<Candidate>, Option<Partition>)> {
     let pricing = Pricing::new(comm, model, solver, ranks);
+    let specs = pricing.tfeti_specs(dec.tfeti);
+    let (tfeti, law, partition) = pricing.tfeti_candidates(dec, specs, split)?;
     let mut out = Vec::new();
     if !dec.tfeti {
-        out.push(pricing.monolithic()?);
+        let best = cheapest(&tfeti).map(|c| c.time);
+        let clock = std::time::Instant::now();
+        // branch and bound: a lower bound of the monolithic dual that loses already is not counted
+        let mono = match (law, best) {
+            (Some(law), Some(best)) => Some(pricing.monolithic_bound(law)).filter(|m| m.time > best),
+            _ => None,
+        };
+        out.push(match mono {
+            Some(m) => m,
+            None => pricing.monolithic()?,
+        });
+        split[3].1 += clock.elapsed().as_secs_f64();
     }
-    let specs = pricing.tfeti_specs(dec.tfeti);
-    out.extend(pricing.tfeti_candidates(dec, specs)?);
-    Ok(out)
+    out.extend(tfeti);
+    Ok((out, partition))
 }
 
 /// A record of figures that one rank fills in and the ranks sum (every other rank holds zeros
@@ -169,64 +239,6 @@ impl Summed for BodyFill {
     }
     fn unpack(x: &[f64]) -> Self {
         BodyFill { fill: Fill { nnz_l: x[0], flops: x[1] }, last: x[2] > 0.0 }
-    }
-}
-
-/// A TFETI candidate's figures as its pricing rank computes them.
-#[derive(Clone, Copy, Debug, Default)]
-struct Figures {
-    nnz_l: f64,
-    nnz_l_rank: f64,
-    gluing_rows: f64,
-    dirichlet_rows: f64,
-    n_a: f64,
-    t_product: f64,
-    t_factor: f64,
-    time: f64,
-}
-
-impl Figures {
-    /// The figures of a priced candidate.
-    fn of(c: &Candidate) -> Self {
-        Figures {
-            nnz_l: c.nnz_l,
-            nnz_l_rank: c.nnz_l_rank,
-            gluing_rows: c.gluing_rows as f64,
-            dirichlet_rows: c.dirichlet_rows as f64,
-            n_a: c.n_a,
-            t_product: c.t_product,
-            t_factor: c.t_factor,
-            time: c.time,
-        }
-    }
-
-    /// The TFETI candidate of these figures.
-    fn candidate(self, spec: Spec, contact_rows: usize) -> Candidate {
-        Candidate {
-            parts: spec.parts,
-            tfeti: true,
-            target_dofs: Some(spec.target),
-            nnz_l: self.nnz_l,
-            nnz_l_rank: self.nnz_l_rank,
-            contact_rows,
-            gluing_rows: self.gluing_rows as usize,
-            dirichlet_rows: self.dirichlet_rows as usize,
-            n_a: self.n_a,
-            t_product: self.t_product,
-            t_factor: self.t_factor,
-            time: self.time,
-            explicit: false,
-        }
-    }
-}
-
-impl Summed for Figures {
-    const LEN: usize = 8;
-    fn pack(&self, out: &mut [f64]) {
-        out.copy_from_slice(&[self.nnz_l, self.nnz_l_rank, self.gluing_rows, self.dirichlet_rows, self.n_a, self.t_product, self.t_factor, self.time]);
-    }
-    fn unpack(x: &[f64]) -> Self {
-        Figures { nnz_l: x[0], nnz_l_rank: x[1], gluing_rows: x[2], dirichlet_rows: x[3], n_a: x[4], t_product: x[5], t_factor: x[6], time: x[7] }
     }
 }
 
@@ -311,6 +323,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
             t_factor: SECONDS_PER_FLOP * max(&flops) + SECONDS_PER_DOF * max(&dofs),
             time: 0.0,
             explicit: false,
+            basis: Basis::Counted,
         };
         c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
         c.time = c.t_factor + n_a * c.t_product;
@@ -330,6 +343,28 @@ impl<'a, C: Comm> Pricing<'a, C> {
             self.explicit_products(&mut mono, &by_body, n_a);
         }
         Ok(mono)
+    }
+
+    /// A lower bound of the monolithic dual from a counted partition's law: each body's fill
+    /// from the power laws at [`BOUND`] times their constant, its products the cheaper of the
+    /// factor's solves and the explicit ones.
+    fn monolithic_bound(&self, law: Law) -> Candidate {
+        let (mesh, ranks) = (&self.model.mesh, self.ranks);
+        let nb = mesh.bodies.len();
+        let low = Law { nnz: BOUND * law.nnz, flops: BOUND * law.flops, ..law };
+        let fills: Vec<Fill> = mesh.bodies.iter().map(|b| low.fill(b.nodes.len() as f64)).collect();
+        let n_a = if self.contact.is_some() { PRODUCTS_PER_DIGIT * self.digits + self.power } else { 1.0 };
+        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), n_a);
+        if self.contact.is_some() {
+            let mut explicit = mono.clone();
+            let by_body = crate::model::constraints_by_body(mesh, &self.model.constraints);
+            self.explicit_products(&mut explicit, &by_body, n_a);
+            if explicit.time < mono.time {
+                mono = explicit;
+            }
+        }
+        mono.basis = Basis::Bound;
+        mono
     }
 
     /// Each body's fill (its node order kept for the factorization), counted by rank
@@ -396,81 +431,210 @@ impl<'a, C: Comm> Pricing<'a, C> {
             .collect()
     }
 
-    /// The TFETI candidates (target DOFs, parts): each priced whole — its partition, B, fills —
-    /// by one rank (balanced by the work of its pricing), the figures summed (x + 0 is exact), so
-    /// every rank gets the same table and none repeats another's partitions.
-    fn tfeti_candidates(&self, dec: &DecompositionSettings, specs: Vec<Spec>) -> Result<Vec<Candidate>> {
-        let mesh = &self.model.mesh;
-        // each candidate priced by one rank, the ranks balanced by the work of its pricing: the
-        // partition (~ nodes · log2 S) and the nested dissections of the sample (~ its nodes)
-        let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
-        let per: Vec<f64> = specs.iter().map(|spec| total_nodes as f64 / spec.parts.iter().sum::<usize>() as f64).collect();
-        let samples: Vec<usize> = specs.iter().zip(&per).map(|(spec, &p)| sample_size(spec.parts.iter().sum(), p)).collect();
-        let work: Vec<f64> =
-            specs.iter().enumerate().map(|(j, spec)| total_nodes as f64 * (1.0 + 0.33 * (spec.s as f64).log2()) + 11.0 * per[j] * samples[j] as f64).collect();
-        let pricer = balance(&work, self.workers);
-        let mut figures = vec![Figures::default(); specs.len()];
-        let mut failed = Ok(());
-        for (j, spec) in specs.iter().enumerate().filter(|(j, _)| pricer[*j] == self.me) {
-            match self.tfeti(dec, spec, samples[j]) {
-                Ok(c) => figures[j] = Figures::of(&c),
-                Err(e) => {
-                    failed = Err(e);
-                    break;
-                }
-            }
+    /// The TFETI candidates: one partition first (the middle count), its sampled fills
+    /// calibrating the power laws and its rows the surface law ([`Law`]), every other count
+    /// priced from them; then the cheapest by the model is partitioned and counted in turn until
+    /// the cheapest is a counted one. Returns the candidates, the law of the last partition and
+    /// the cheapest counted candidate's partition (what the decompose phase reuses).
+    fn tfeti_candidates(&self, dec: &DecompositionSettings, specs: Vec<Spec>, split: &mut Split) -> Result<(Vec<Candidate>, Option<Law>, Option<Partition>)> {
+        if specs.is_empty() {
+            return Ok((vec![], None, None));
         }
-        // every rank reaches the sum, then all fail together
-        sum_records(self.comm, &mut figures);
-        self.comm.agree(failed)?;
-        Ok(specs.into_iter().zip(figures).map(|(spec, x)| x.candidate(spec, self.contact_rows)).collect())
+        let mut counted: Vec<Option<(Candidate, Law)>> = vec![None; specs.len()];
+        // the first reference: the middle count with more than one subdomain where there is one
+        let many: Vec<usize> = (0..specs.len()).filter(|&j| specs[j].s > 1).collect();
+        let mut next = if many.is_empty() { 0 } else { many[many.len() / 2] };
+        // the partition of the cheapest counted candidate (its index, the partition)
+        let mut keep: Option<(usize, Partition)> = None;
+        loop {
+            let (c, l, part) = self.tfeti(dec, &specs[next], split)?;
+            counted[next] = Some((c, l));
+            let priced = self.tfeti_priced(&specs, &counted, l);
+            let time = |j: usize| priced[j].time;
+            if keep.as_ref().is_none_or(|(k, _)| time(next) < time(*k)) {
+                keep = Some((next, part));
+            }
+            let best = (0..priced.len()).min_by(|&a, &b| time(a).total_cmp(&time(b))).expect("a candidate");
+            // done when the cheapest is counted (each turn counts another: it ends)
+            if counted[best].is_some() {
+                return Ok((priced, Some(l), keep.map(|k| k.1)));
+            }
+            next = best;
+        }
     }
 
-    /// Prices one TFETI candidate: its partition, B and the fills of `sample` of its subdomains.
-    fn tfeti(&self, dec: &DecompositionSettings, spec: &Spec, sample: usize) -> Result<Candidate> {
+    /// Every candidate: the counted ones as counted, the others from the law.
+    fn tfeti_priced(&self, specs: &[Spec], counted: &[Option<(Candidate, Law)>], law: Law) -> Vec<Candidate> {
+        specs.iter().zip(counted).map(|(spec, c)| c.as_ref().map_or_else(|| self.modelled(spec, law), |c| c.0.clone())).collect()
+    }
+
+    /// The predicted A-products of TFETI with `s` subdomains on the largest body.
+    fn tfeti_products(&self, s: usize) -> f64 {
+        let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
+        if self.contact.is_some() {
+            TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * self.digits + self.power
+        } else {
+            CG_PRODUCTS_PER_DIGIT * self.digits
+        }
+    }
+
+    /// A TFETI candidate priced from the law of a counted partition: every subdomain of body b
+    /// holds its nodes × (1 + duplication) / parts, its fill from the power laws; the gluing and
+    /// Dirichlet rows scaled by the surface law; the ranks balanced by DOFs (LPT).
+    fn modelled(&self, spec: &Spec, law: Law) -> Candidate {
+        let mesh = &self.model.mesh;
+        let surface = law.surface(spec.s);
+        let mut nodes = Vec::new();
+        for (b, &p) in spec.parts.iter().enumerate() {
+            let n = mesh.bodies[b].nodes.len() as f64 * (1.0 + law.duplication * surface) / p as f64;
+            nodes.extend(std::iter::repeat_n(n, p));
+        }
+        let f: Vec<Fill> = nodes.iter().map(|&n| law.fill(n)).collect();
+        let owner = balance(&nodes, self.ranks);
+        let rows = ((law.gluing * surface).round() as usize, (law.dirichlet * (1.0 + law.duplication * surface)).round() as usize);
+        let mut c = self.candidate(spec.parts.clone(), Some(spec.target), &f, &|i| owner[i], &|i| 3.0 * nodes[i], rows, self.tfeti_products(spec.s));
+        c.basis = Basis::Modelled;
+        c
+    }
+
+    /// Partitions and prices one TFETI candidate: its partition, B, the fills of a sample of its
+    /// subdomains (shared by the ranks, summed); and the law its figures calibrate.
+    fn tfeti(&self, dec: &DecompositionSettings, spec: &Spec, split: &mut Split) -> Result<(Candidate, Law, Partition)> {
         let (model, mesh) = (self.model, &self.model.mesh);
+        let clock = std::time::Instant::now();
         let d = decompose_each(mesh, &spec.parts)?;
+        split[0].1 += clock.elapsed().as_secs_f64();
+        let clock = std::time::Instant::now();
         let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
         let cons = constraints::build(&d, &model.constraints, self.contact, &model.ties, dec.gluing, &elim);
-        let f = sampled_fills(mesh, &d, &elim, sample)?;
         let owner = assign_ranks(&d.subdomains.iter().map(|x| 3 * x.nodes.len()).collect::<Vec<_>>(), &cons, self.ranks);
-        let growth = 1.0 + TFETI_GROWTH * (spec.s as f64).log2();
-        let (digits, power) = (self.digits, self.power);
-        let n_a = if self.contact.is_some() { TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * digits + power } else { CG_PRODUCTS_PER_DIGIT * digits };
+        split[1].1 += clock.elapsed().as_secs_f64();
+        let clock = std::time::Instant::now();
+        let total_nodes: usize = mesh.bodies.iter().map(|b| b.nodes.len()).sum();
+        let sample = sample_size(d.subdomains.len(), total_nodes as f64 / d.subdomains.len() as f64);
+        let (f, fit) = sampled_fills(self.comm, mesh, &d, &elim, sample)?;
+        split[2].1 += clock.elapsed().as_secs_f64();
         let rows = (cons.gluing_rows, cons.dirichlet_rows);
-        Ok(self.candidate(spec.parts.clone(), Some(spec.target), &f, &|i| owner[i], &|i| 3.0 * d.subdomains[i].nodes.len() as f64, rows, n_a))
+        let c = self.candidate(
+            spec.parts.clone(),
+            Some(spec.target),
+            &f,
+            &|i| owner[i],
+            &|i| 3.0 * d.subdomains[i].nodes.len() as f64,
+            rows,
+            self.tfeti_products(spec.s),
+        );
+        let held: usize = d.subdomains.iter().map(|x| x.nodes.len()).sum();
+        let surface = Law::surface_of(spec.s);
+        let duplication = if surface > 0.0 { (held as f64 / total_nodes as f64 - 1.0) / surface } else { 0.0 };
+        let scale = 1.0 + duplication * surface;
+        let law = Law {
+            nnz: fit.nnz,
+            flops: fit.flops,
+            duplication,
+            gluing: if surface > 0.0 { cons.gluing_rows as f64 / surface } else { 0.0 },
+            dirichlet: cons.dirichlet_rows as f64 / scale,
+        };
+        Ok((c, law, (spec.parts.clone(), d)))
     }
 }
 
-/// Every subdomain's fill, counted on a sample of them (a quarter of them, 2 to SAMPLED, at most
-/// SAMPLED_NODES nodes: `sample`), the others scaled from it by their node count (nested
-/// dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²).
-fn sampled_fills(mesh: &crate::mesh::Mesh, d: &crate::feti::decomposition::Decomposition, elim: &[Vec<usize>], sample: usize) -> Result<Vec<Fill>> {
+/// The plan's partition of one count: subdomains per body and the decomposition.
+type Partition = (Vec<usize>, Decomposition);
+
+/// Seconds of the plan's parts: partitions, B and ranks, sampled fills, the monolithic fill.
+type Split = [(&'static str, f64); 4];
+
+/// A counted partition's figures as laws of the subdomain count: nnz(L) = nnz · n^{4/3} and
+/// Σ (column count)² = flops · n² for a piece of n nodes (nested dissection of 3-D pieces), the
+/// nodes held by the subdomains (1 + duplication · σ(S)) × the mesh's, the gluing rows gluing ·
+/// σ(S), σ(S) = S^{1/3} − 1 (the interfaces of S cubes cut from one: 3 (S^{1/3} − 1) faces of
+/// the cube's), and the Dirichlet rows in proportion to the nodes held.
+#[derive(Clone, Copy, Debug, Default)]
+struct Law {
+    nnz: f64,
+    flops: f64,
+    duplication: f64,
+    gluing: f64,
+    dirichlet: f64,
+}
+
+impl Law {
+    /// σ(S) = S^{1/3} − 1.
+    fn surface_of(s: usize) -> f64 {
+        (s as f64).cbrt() - 1.0
+    }
+
+    fn surface(&self, s: usize) -> f64 {
+        Self::surface_of(s)
+    }
+
+    /// The modelled fill of a piece of `n` nodes.
+    fn fill(&self, n: f64) -> Fill {
+        Fill { nnz_l: self.nnz * n.powf(4.0 / 3.0), flops: self.flops * n * n }
+    }
+}
+
+/// The fitted constants of the fill's power laws.
+#[derive(Clone, Copy, Debug, Default)]
+struct Fit {
+    nnz: f64,
+    flops: f64,
+}
+
+/// Every subdomain's fill, counted on a sample of them (`sample` of them, spread over the
+/// subdomains; the ranks share them and sum the counts), the others scaled from it by their node
+/// count (nested dissection of 3-D pieces: nnz(L) ~ n^4/3, work ~ n²); and the fitted constants.
+fn sampled_fills<C: Comm>(comm: &C, mesh: &crate::mesh::Mesh, d: &Decomposition, elim: &[Vec<usize>], sample: usize) -> Result<(Vec<Fill>, Fit)> {
     let ns = d.subdomains.len();
     let stride = ns.div_ceil(sample.min(ns));
     let sampled: Vec<usize> = (0..ns).step_by(stride).collect();
-    let counted = sampled
-        .iter()
-        .map(|&s| {
-            let sd = &d.subdomains[s];
-            let (xadj, adj) = node_graph(&mesh.cells, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
-            // the DOFs held inside the subdomain cost no fill
-            let mut free = vec![3u8; sd.nodes.len()];
-            elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);
-            Ok(fill(&xadj, &adj, &nested_dissection(&xadj, &adj)?, &free))
-        })
-        .collect::<Result<Vec<Fill>>>()?;
+    let mut counted = vec![FillRecord::default(); sampled.len()];
+    let mut failed = Ok(());
+    for (i, &s) in sampled.iter().enumerate().filter(|(i, _)| i % comm.size() == comm.rank()) {
+        let sd = &d.subdomains[s];
+        let (xadj, adj) = node_graph(&mesh.cells, sd.elems.iter().copied(), sd.nodes.len(), |v| sd.local(v).expect("node of the subdomain"));
+        // the DOFs held inside the subdomain cost no fill
+        let mut free = vec![3u8; sd.nodes.len()];
+        elim[s].iter().for_each(|&dof| free[dof / 3] -= 1);
+        match nested_dissection(&xadj, &adj) {
+            Ok(perm) => counted[i] = FillRecord(fill(&xadj, &adj, &perm, &free)),
+            Err(e) => {
+                failed = Err(e);
+                break;
+            }
+        }
+    }
+    // every rank reaches the sum, then all fail together
+    sum_records(comm, &mut counted);
+    comm.agree(failed)?;
     let nodes = |s: usize| d.subdomains[s].nodes.len() as f64;
     let (mut a, mut b, mut wa, mut wb) = (0.0, 0.0, 0.0, 0.0);
     for (&s, x) in sampled.iter().zip(&counted) {
-        (a, b, wa, wb) = (a + x.nnz_l, b + x.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
+        (a, b, wa, wb) = (a + x.0.nnz_l, b + x.0.flops, wa + nodes(s).powf(4.0 / 3.0), wb + nodes(s).powi(2));
     }
-    Ok((0..ns)
+    let fit = Fit { nnz: a / wa, flops: b / wb };
+    let fills = (0..ns)
         .map(|s| match sampled.binary_search(&s) {
-            Ok(i) => counted[i],
-            Err(_) => Fill { nnz_l: a / wa * nodes(s).powf(4.0 / 3.0), flops: b / wb * nodes(s).powi(2) },
+            Ok(i) => counted[i].0,
+            Err(_) => Fill { nnz_l: fit.nnz * nodes(s).powf(4.0 / 3.0), flops: fit.flops * nodes(s).powi(2) },
         })
-        .collect())
+        .collect();
+    Ok((fills, fit))
+}
+
+/// One counted fill, summed over the ranks.
+#[derive(Clone, Copy, Debug, Default)]
+struct FillRecord(Fill);
+
+impl Summed for FillRecord {
+    const LEN: usize = 2;
+    fn pack(&self, out: &mut [f64]) {
+        out.copy_from_slice(&[self.0.nnz_l, self.0.flops]);
+    }
+    fn unpack(x: &[f64]) -> Self {
+        FillRecord(Fill { nnz_l: x[0], flops: x[1] })
+    }
 }
 
 /// Subdomains whose fill a candidate counts: a quarter of its `ns`, 2 to [`SAMPLED`], at most
@@ -505,15 +669,38 @@ pub fn cheapest(cands: &[Candidate]) -> Option<&Candidate> {
 /// monolithic dual, `target_dofs` for TFETI) and returns the priced table; `None` when the
 /// scene set the decomposition itself.
 pub fn resolve<C: Comm>(comm: &C, model: &Model, dec: &mut DecompositionSettings, solver: &Common, ranks: usize) -> Result<Option<Vec<Candidate>>> {
-    if !automatic(dec) {
-        return Ok(None);
-    }
-    let cands = price(comm, model, dec, solver, ranks)?;
-    match cheapest(&cands) {
-        Some(c) if c.tfeti => dec.target_dofs = c.target_dofs,
-        _ => dec.subdomains = Some(1),
-    }
-    Ok(Some(cands))
+    resolve_timed(comm, model, dec, solver, ranks, &mut Vec::new())
+}
+
+/// [`resolve`], with the seconds of the plan's parts pushed onto `parts` (the same names on
+/// every rank, for `Timings::split`) and the partition of the chosen count kept in the model
+/// (`Model::partition`) for the decompose phase.
+pub fn resolve_timed<C: Comm>(
+    comm: &C,
+    model: &Model,
+    dec: &mut DecompositionSettings,
+    solver: &Common,
+    ranks: usize,
+    parts: &mut Vec<(&'static str, f64)>,
+) -> Result<Option<Vec<Candidate>>> {
+    let mut times = split();
+    let result = if automatic(dec) {
+        let (cands, partition) = price_split(comm, model, dec, solver, ranks, &mut times)?;
+        match cheapest(&cands) {
+            Some(c) if c.tfeti => {
+                dec.target_dofs = c.target_dofs;
+                if let Some(p) = partition.filter(|p| p.0 == c.parts) {
+                    let _ = model.partition.set(p);
+                }
+            }
+            _ => dec.subdomains = Some(1),
+        }
+        Some(cands)
+    } else {
+        None
+    };
+    parts.extend(times);
+    Ok(result)
 }
 
 /// The table `check` prints.
@@ -523,15 +710,16 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
     let mut s = format!("decomposition by cost ({ranks} rank{}):\n", if ranks == 1 { "" } else { "s" });
     let _ = writeln!(
         s,
-        "  {:<16} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}",
-        "candidate", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s"
+        "  {:<16} {:>8} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}",
+        "candidate", "figures", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s"
     );
     for c in cands {
         let dual = c.dual_rows();
         let _ = writeln!(
             s,
-            "  {:<16} {:>9} {:>11.3e} {:>11.3e} {:>9} {:>6.1} {:>7.0} {:>9.2} {:>9.2} {:>9.2}{}",
+            "  {:<16} {:>8} {:>9} {:>11.3e} {:>11.3e} {:>9} {:>6.1} {:>7.0} {:>9.2} {:>9.2} {:>9.2}{}",
             c.label(),
+            c.basis.word(),
             c.target_dofs.map_or("-".into(), |t| t.to_string()),
             c.nnz_l,
             c.nnz_l_rank,
@@ -544,6 +732,7 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
             if Some(c.label()) == best { "  ← chosen" } else { "" }
         );
     }
+    let _ = writeln!(s, "  (counted: partitioned, B built, fill counted on sampled subdomains or whole; model: power laws and surface law fitted on a counted partition; bound: a lower bound that loses)");
     s
 }
 
@@ -577,17 +766,34 @@ mod tests {
         let stored: usize = bodies.iter().map(|b| b.chol.nnz_l()).sum();
         let ratio = stored as f64 / mono.nnz_l;
         assert!((1.0..1.5).contains(&ratio), "stored {stored} against counted {}", mono.nnz_l);
-        // TFETI candidates: rows as the decomposition builds them, more subdomains less fill
+        // TFETI candidates: the modelled ones less fill and more gluing with more subdomains;
+        // the counted one's rows as the decomposition builds them
         let tfeti: Vec<&Candidate> = cands.iter().filter(|c| c.tfeti).collect();
-        assert!(!tfeti.is_empty());
-        for w in tfeti.windows(2) {
+        let modelled: Vec<&&Candidate> = tfeti.iter().filter(|c| c.basis == Basis::Modelled).collect();
+        for w in modelled.windows(2) {
             assert!(w[1].parts[0] > w[0].parts[0] && w[1].nnz_l < w[0].nnz_l && w[1].gluing_rows > w[0].gluing_rows);
         }
-        let (_, d, _) = crate::feti::seed_fixture(12, tfeti[0].parts[0]);
+        let counted = tfeti.iter().find(|c| c.basis == Basis::Counted).expect("one counted partition");
+        let (_, d, _) = crate::feti::seed_fixture(12, counted.parts[0]);
         let elim = crate::feti::eliminated(&model.mesh, &d, &model.constraints, dec.dirichlet);
         let cons = constraints::build(&d, &model.constraints, model.pairs.as_ref(), &model.ties, dec.gluing, &elim);
-        assert_eq!((tfeti[0].gluing_rows, tfeti[0].dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
-        assert_eq!(d.subdomains.len(), 2 * tfeti[0].parts[0]);
+        assert_eq!((counted.gluing_rows, counted.dirichlet_rows), (cons.gluing_rows, cons.dirichlet_rows));
+        assert_eq!(d.subdomains.len(), 2 * counted.parts[0]);
+    }
+
+    #[test]
+    fn the_plans_partition_is_a_fresh_partition_of_the_chosen_count() {
+        // TFETI only: the chosen count's partition is kept for the decompose phase
+        let (model, _, _) = crate::feti::seed_fixture(12, 1);
+        let mut dec = DecompositionSettings { tfeti: true, ..Default::default() };
+        let cands = resolve(&SerialComm, &model, &mut dec, &Common::default(), 2).unwrap().expect("automatic");
+        let best = cheapest(&cands).unwrap();
+        let (parts, kept) = model.partition.get().expect("the chosen count's partition kept");
+        assert_eq!(*parts, best.parts);
+        assert_eq!(parts, &model.mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect::<Vec<_>>());
+        let fresh = decompose_each(&model.mesh, parts).unwrap();
+        assert_eq!(kept.subdomains, fresh.subdomains);
+        assert_eq!(kept.copies, fresh.copies);
     }
 
     #[test]

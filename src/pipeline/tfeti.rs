@@ -196,12 +196,22 @@ pub struct TfetiProblem<'c, C: Comm> {
 /// pieces it reads; then the model's whole mesh is released and the rest reads the share.
 pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &mut Timings) -> Result<TfetiProblem<'c, C>> {
     let dec = &ls.scene.decomposition;
+    // the plan's partition of the chosen count, when it made one
+    let planned = model.partition.take();
+    let mut split: Vec<(&'static str, f64)> = Vec::new();
     let (clusters, cons, owner, dist, share, loads, halo, weights, names) = t.phase(comm, "decompose", || {
         let (mesh, contact) = (&model.mesh, model.pairs.as_ref());
         let parts: Vec<usize> = mesh.bodies.iter().map(|b| dec.parts(3 * b.nodes.len())).collect();
-        let d = decompose_each(mesh, &parts)?;
+        let clock = std::time::Instant::now();
+        let d = match planned {
+            Some((p, d)) if p == parts => d,
+            _ => decompose_each(mesh, &parts)?,
+        };
+        split.push(("decompose partition", clock.elapsed().as_secs_f64()));
+        let clock = std::time::Instant::now();
         let elim = eliminated(mesh, &d, &model.constraints, dec.dirichlet);
         let sub_cons = constraints::build(&d, &model.constraints, contact, &model.ties, dec.gluing, &elim);
+        split.push(("decompose B", clock.elapsed().as_secs_f64()));
         let clusters = Clustering::new(mesh, &d, &sub_cons, dec.subdomains_per_cluster)?;
         let cons = clusters.outer(sub_cons);
         let dofs: Vec<usize> = clusters.members.iter().map(|m| m.iter().map(|&s| 3 * d.subdomains[s].nodes.len()).sum()).collect();
@@ -222,6 +232,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         let names: Vec<String> = clusters.members.iter().map(|m| mesh.bodies[d.subdomains[m[0]].body].name.clone()).collect();
         Ok((clusters, cons, owner, dist, share, loads, halo, weights, names))
     })?;
+    t.split(comm, "decompose", &split);
     // every rank holds its share: the whole mesh goes before the factors come
     model.release_mesh();
     let model = &*model;
