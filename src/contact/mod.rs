@@ -4,11 +4,9 @@
 //! ([`pairing`]), whether they can hold the bodies held by contact alone under the load
 //! ([`hold`]), and the contact state recovered from the dual solution ([`state`]: open /
 //! stick / slip, tractions, gaps, slip); the dual mortar coupling of non-matching slave and
-//! master faces, with its R*-tree contact search ([`mortar`]); the nodal pressures on quadratic
-//! slave faces ([`recovery`]).
+//! master faces, with its R*-tree contact search ([`mortar`]).
 
 pub(crate) mod hold;
 pub(crate) mod mortar;
 pub(crate) mod pairing;
-pub(crate) mod recovery;
 pub mod state;

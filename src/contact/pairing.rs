@@ -23,7 +23,6 @@
 //! The nodal area wᵢ = ∫ φᵢ dA over the slave face (2×2 Gauss; a quarter of a quad at corners
 //! of a uniform grid), and the slip bound gᵢ = g·wᵢ (orthotropic: g₁wᵢ along t₁, g₂wᵢ along t₂).
 
-use crate::contact::recovery::{is_quadratic, Recovery};
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
@@ -91,9 +90,6 @@ pub struct Contact {
     /// p̄ᵢ = Σ_j w_ij p_j, the area-weighted average over the node's slave facets of each
     /// facet's mean nodal pressure ([`Contact::smooth`]).
     pub smoothing: Vec<Vec<(usize, f64)>>,
-    /// The entries with quadratic slave faces, whose `contact_pressure` is the L2 projection of
-    /// the multiplier field on the face ([`Recovery`]).
-    pub recovery: Vec<Recovery>,
 }
 
 impl Contact {
@@ -642,9 +638,6 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         }
         c.interference.push(fit);
         smoothing_weights(mesh, slave, first_row, &mut c);
-        if is_quadratic(slave) {
-            c.recovery.push(Recovery::new(mesh, slave, first_row..c.len()));
-        }
     }
     Ok(c)
 }

@@ -128,13 +128,7 @@ pub fn contact_fields(contact: &Contact, state: &ContactState, pairs: &[usize], 
         });
     }
     if want("contact_pressure") {
-        // λᵢ/D_ii, or on quadratic slave faces the L2 projection of the multiplier field
-        let mut p: Vec<f64> = (0..contact.len()).map(|i| state.normal_force[i] / contact.area[i]).collect();
-        for r in &contact.recovery {
-            let rows = r.rows.clone();
-            p[rows].copy_from_slice(&r.pressures(&contact.coupling, &contact.slave, &state.normal_force));
-        }
-        fields.push(scalar("contact_pressure", &|i| p[i]));
+        fields.push(scalar("contact_pressure", &|i| state.normal_force[i] / contact.area[i]));
     }
     if want("contact_traction") {
         fields.push(vector("contact_traction", &|i| state.tangential_force[i].map(|f| f / contact.area[i])));
