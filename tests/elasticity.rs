@@ -394,7 +394,7 @@ fn hex_pyr_tet_body(n: usize) -> BodyGeometry {
         let centre: [f64; 3] = std::array::from_fn(|k| c.iter().map(|&v| hex.nodes[v][k]).sum::<f64>() / 8.0);
         let parity: usize = centre.iter().map(|x| (x / h).floor() as usize).sum();
         if parity % 2 == 0 {
-            cells.push(*cell);
+            cells.push(cell.clone());
             continue;
         }
         let apex = nodes.len();

@@ -44,7 +44,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell};
-use super::topology::{boundary_faces, find_boundary_facet};
+use super::topology::{boundary_faces, facets_on_nodes, find_boundary_facet, NamedFaces};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
@@ -441,24 +441,8 @@ fn faces(
 ) -> std::result::Result<Vec<(String, Vec<Facet>)>, String> {
     let boundary = boundary_faces(cells);
     let to_local = |t: u64| local.get((t as usize).wrapping_sub(1)).copied().filter(|&l| l != usize::MAX);
-    let mut faces: Vec<(String, Vec<Facet>)> = Vec::new();
-    let mut seen: Vec<HashSet<(usize, [usize; 4])>> = Vec::new();
-    let mut by_name: HashMap<String, usize> = HashMap::new();
-    let mut add = |name: &str, list: Vec<Facet>| {
-        if list.is_empty() {
-            return;
-        }
-        let f = *by_name.entry(name.to_ascii_uppercase()).or_insert_with(|| {
-            faces.push((name.to_string(), Vec::new()));
-            seen.push(HashSet::new());
-            faces.len() - 1
-        });
-        for q in list {
-            if seen[f].insert((q.elem, q.key())) {
-                faces[f].1.push(q);
-            }
-        }
-    };
+    let mut named = NamedFaces::default();
+    let mut add = |name: &str, list: Vec<Facet>| named.add(name, list);
     let n_ss = nc.count("ss_prop1", "elem_ss");
     let (ids, names) = nc.ids_and_names(n_ss, "ss_prop1", "ss_names")?;
     for k in 1..=n_ss {
@@ -500,19 +484,9 @@ fn faces(
             continue;
         }
         let set: HashSet<usize> = nc.ints(&var)?.into_iter().filter_map(|t| u64::try_from(t).ok().and_then(to_local)).collect();
-        // the boundary facets in cell order (a deterministic order), all of whose nodes are in the set
-        let mut list = Vec::new();
-        for (c, cell) in cells.iter().enumerate() {
-            for f in 0..cell.kind.faces().len() {
-                let q = cell.facet(c, f);
-                if q.nodes().iter().all(|v| set.contains(v)) && boundary.get(&q.key()).is_some_and(|b| b.elem == c) {
-                    list.push(q);
-                }
-            }
-        }
-        add(&name, list);
+        add(&name, facets_on_nodes(cells, &boundary, &set));
     }
-    Ok(faces)
+    Ok(named.into_faces())
 }
 
 /// The corners (0-based Exodus positions) of Exodus sides 1, 2, … of a cell type.

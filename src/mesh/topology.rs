@@ -1,7 +1,7 @@
 //! Boundary topology of mixed meshes: the map from a boundary facet (as a node set) to the cell
 //! it bounds, with the facet oriented outward of that cell.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use super::cell::{corner_key, Cell, Facet};
 
@@ -20,4 +20,52 @@ pub fn boundary_faces(cells: &[Cell]) -> HashMap<[usize; 4], Facet> {
 /// Looks a facet up among the boundary facets by its corners, whatever their order.
 pub fn find_boundary_facet<'a>(boundary: &'a HashMap<[usize; 4], Facet>, corners: &[usize]) -> Option<&'a Facet> {
     boundary.get(&corner_key(corners))
+}
+
+/// The boundary facets, in cell order (a deterministic order), all of whose nodes lie in `set`:
+/// the face a node set (Abaqus `*SURFACE, TYPE=NODE`, an Exodus node set) makes.
+pub fn facets_on_nodes(cells: &[Cell], boundary: &HashMap<[usize; 4], Facet>, set: &HashSet<usize>) -> Vec<Facet> {
+    let mut list = Vec::new();
+    for (c, cell) in cells.iter().enumerate() {
+        for f in 0..cell.kind.faces().len() {
+            let q = cell.facet(c, f);
+            if q.nodes().iter().all(|v| set.contains(v)) && boundary.contains_key(&q.key()) {
+                list.push(q);
+            }
+        }
+    }
+    list
+}
+
+/// Named faces gathered from a file's surfaces and sets: merged by name (case-insensitive, the
+/// first spelling kept), each facet once, empty lists left out.
+#[derive(Default)]
+pub struct NamedFaces {
+    faces: Vec<(String, Vec<Facet>)>,
+    seen: Vec<HashSet<(usize, [usize; 4])>>,
+    by_name: HashMap<String, usize>,
+}
+
+impl NamedFaces {
+    /// Adds the facets `list` to the face `name`.
+    pub fn add(&mut self, name: &str, list: Vec<Facet>) {
+        if list.is_empty() {
+            return;
+        }
+        let f = *self.by_name.entry(name.to_ascii_uppercase()).or_insert_with(|| {
+            self.faces.push((name.to_string(), Vec::new()));
+            self.seen.push(HashSet::new());
+            self.faces.len() - 1
+        });
+        for q in list {
+            if self.seen[f].insert((q.elem, q.key())) {
+                self.faces[f].1.push(q);
+            }
+        }
+    }
+
+    /// The faces in the order their names first came.
+    pub fn into_faces(self) -> Vec<(String, Vec<Facet>)> {
+        self.faces
+    }
 }

@@ -254,16 +254,7 @@ impl Deck {
                 set.extend(to_local(&l));
             }
         }
-        let mut list = Vec::new();
-        for (c, cell) in cells.iter().enumerate() {
-            for f in 0..cell.kind.faces().len() {
-                let q = cell.facet(c, f);
-                if boundary.contains_key(&q.key()) && q.nodes().iter().all(|v| set.contains(v)) {
-                    list.push(q);
-                }
-            }
-        }
-        Ok(list)
+        Ok(crate::mesh::topology::facets_on_nodes(cells, boundary, &set))
     }
 }
 

@@ -48,7 +48,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell, SUPPORTED};
-use super::topology::{boundary_faces, find_boundary_facet};
+use super::topology::{boundary_faces, find_boundary_facet, NamedFaces};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
@@ -695,24 +695,8 @@ impl Deck {
         to_local: &dyn Fn(&u64) -> Option<usize>,
     ) -> std::result::Result<Vec<(String, Vec<Facet>)>, Fail> {
         let boundary = boundary_faces(cells);
-        let mut faces: Vec<(String, Vec<Facet>)> = Vec::new();
-        let mut seen: Vec<HashSet<(usize, [usize; 4])>> = Vec::new();
-        let mut by_name: HashMap<String, usize> = HashMap::new();
-        let mut add = |name: &str, list: Vec<Facet>| {
-            if list.is_empty() {
-                return;
-            }
-            let f = *by_name.entry(name.to_ascii_uppercase()).or_insert_with(|| {
-                faces.push((name.to_string(), Vec::new()));
-                seen.push(HashSet::new());
-                faces.len() - 1
-            });
-            for q in list {
-                if seen[f].insert((q.elem, q.key())) {
-                    faces[f].1.push(q);
-                }
-            }
-        };
+        let mut named = NamedFaces::default();
+        let mut add = |name: &str, list: Vec<Facet>| named.add(name, list);
         for s in &self.surfaces {
             if s.node {
                 add(&s.name, self.node_surface(s, cells, &boundary, to_local)?);
@@ -779,7 +763,7 @@ impl Deck {
             }
             add(&set.name, list);
         }
-        Ok(faces)
+        Ok(named.into_faces())
     }
 }
 
