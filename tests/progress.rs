@@ -8,15 +8,15 @@ use common::{f64_field, fields, mpirun_cmd, root, tmpdir};
 use std::path::Path;
 use std::process::Output;
 
-/// The seed split into 8 subdomains: its factorization and solve each last a few tenths of a
-/// second, several periods of 0.1 s.
+/// The seed split into 8 subdomains: its factorization lasts a few tenths of a second (0.2 s on an
+/// idle 2-core host), several periods of 0.02 s; the times are printed to 0.01 s.
 fn solve(ranks: usize, out: &Path, quiet: bool) -> Output {
     let scene = root().join("run/seed.toml");
     let mut args = vec!["solve", scene.to_str().unwrap(), "--set", "mesh.n=13", "--set", "decomposition.subdomains=8", "--out", out.to_str().unwrap()];
     if quiet {
         args.push("--quiet");
     }
-    let o = mpirun_cmd(ranks, &args).env("TRESCA_FETI_PROGRESS_PERIOD", "0.1").output().expect("mpirun runs");
+    let o = mpirun_cmd(ranks, &args).env("TRESCA_FETI_PROGRESS_PERIOD", "0.02").output().expect("mpirun runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     o
 }
@@ -47,7 +47,7 @@ fn progress_lines_are_periodic_rate_limited_and_change_no_result() {
         // one printer per phase, on rank 0 only: the lines of a phase are a period apart
         for name in ["factorize", "iterate"] {
             let t: Vec<f64> = lines.iter().filter(|l| l.0 == name).map(|l| l.1).collect();
-            assert!(t.windows(2).all(|w| w[1] - w[0] >= 0.09), "{ranks} rank(s), {name}: lines closer than the period: {t:?}\n{err}");
+            assert!(t.windows(2).all(|w| w[1] - w[0] >= 0.0099), "{ranks} rank(s), {name}: lines closer than the period: {t:?}\n{err}");
         }
         assert!(lines.iter().all(|l| l.0 != "iterate"), "iterate shows its outer iterations instead: {err}");
         let q = solve(ranks, &quiet, true);
