@@ -916,7 +916,9 @@ mod tests {
     }
 
     fn err(text: &str) -> String {
-        let d = tmp("err");
+        // a directory of its own per call: the tests run in parallel threads
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let d = tmp(&format!("err{}", CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)));
         read(&write(&d, "bad.inp", text), None).unwrap_err().to_string()
     }
 
