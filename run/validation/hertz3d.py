@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """Hertz 3D check of run/validation/hertz3d.toml (quarter model, non-matching meshes, mortar).
 
-Usage: run/validation/hertz3d.py [--cap hex8|tet4|tet10] [--friction none|coulomb] [--levels 17,25,33]
+Usage: run/validation/hertz3d.py [--cap hex8|tet4|tet10|hex20] [--flat hex8|hex20] [--friction none|coulomb] [--levels 17,25,33]
                                  [--bin target/release/tresca-feti] [--keep DIR] [RESULT.h5 …]
 Solves the scene at each refinement (the cap with n×n×(n+1)/2 nodes, the flat block with a
-different count, ≈ 0.85 n, so the contact faces never match), or reads the given results, and
+different count, ≈ 0.85 n, so the contact faces never match; n counts the cells' corners: hex20
+adds a node at every edge's middle, and h below is the slave face's node spacing, half the cell
+size there), or reads the given results, and
 prints per level: the measured quarter force F (×4 for the full sphere), Hertz's
 a = (3·4F·R/(4E*))^{1/3} and p₀ = 3·4F/(2πa²) (identical materials: 1/E* = 2(1 − ν²)/E), the
 pressure at the pole node, the peak (largest nodal) pressure and their relative errors, the
@@ -35,11 +37,13 @@ def flat_nodes(n):
     return m if m != n else m - 1
 
 
-def level_sets(n, cap, friction, mu):
+def level_sets(n, cap, flat, friction, mu):
     m = flat_nodes(n)
     sets = [f"body.0.box.nodes=[{n}, {n}, {(n + 1) // 2}]", f"body.1.box.nodes=[{m}, {m}, {(m + 1) // 2}]"]
     if cap != "hex8":
         sets.append(f'body.0.box.cells="{cap}"')
+    if flat != "hex8":
+        sets.append(f'body.1.box.cells="{flat}"')
     if friction == "coulomb":
         sets += [f'contact.pair.0.friction={{type="coulomb", mu={mu}}}']
     return sets
@@ -135,7 +139,8 @@ def table(results, label):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("results", nargs="*")
-    ap.add_argument("--cap", default="hex8")
+    ap.add_argument("--cap", default="hex8", choices=["hex8", "tet4", "tet10", "hex20"])
+    ap.add_argument("--flat", default="hex8", choices=["hex8", "hex20"])
     ap.add_argument("--friction", default="none", choices=["none", "coulomb"])
     ap.add_argument("--mu", type=float, default=0.3)
     ap.add_argument("--levels", default="17,25,33")
@@ -143,9 +148,9 @@ def main():
     ap.add_argument("--keep", help="directory for the result files (default: a temporary one)")
     args = ap.parse_args()
     scene = os.path.join(HERE, "hertz3d.toml")
-    paths = args.results or solve_levels(args.bin, scene, args.levels, lambda n: level_sets(n, args.cap, args.friction, args.mu), f"hertz3d-{args.cap}-{args.friction}", args.keep)
+    paths = args.results or solve_levels(args.bin, scene, args.levels, lambda n: level_sets(n, args.cap, args.flat, args.friction, args.mu), f"hertz3d-{args.cap}-{args.flat}-{args.friction}", args.keep)
     results = [analyse(p) for p in paths]
-    table(results, f"Hertz 3D, cap {args.cap} on flat hex8 (non-matching, mortar), friction {args.friction}, R = {R}, E = {E}, ν = {NU}")
+    table(results, f"Hertz 3D, cap {args.cap} on flat {args.flat} (non-matching, mortar), friction {args.friction}, R = {R}, E = {E}, ν = {NU}")
     if args.friction == "coulomb":
         print("closed slave nodes stick / slip:", ", ".join(f"{int((r['st'] == 2).sum())}/{int((r['st'] == 3).sum())}" for r in results))
 
