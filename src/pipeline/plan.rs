@@ -9,8 +9,11 @@
 //! a sample of its subdomains counted, which fits the power laws nnz(L) = c₁ n^{4/3},
 //! Σ (column count)² = c₂ n² and a surface law (gluing rows and duplicated nodes ∝ S^{1/3} − 1)
 //! that price the other counts ([`Law`]); the cheapest by the model is partitioned and counted
-//! in turn until the cheapest is counted, and its partition is kept for
-//! the decompose phase (`Model::partition`). The monolithic dual is counted (its orders are kept
+//! in turn (each count at most once) until the cheapest is counted and at least two counts are,
+//! and its partition is kept for the decompose phase (`Model::partition`). Once two counts are
+//! counted, the other counts take the power laws through the two nearest counted partitions
+//! (constant and exponent: [`Pow`]), which follow the partitions' own fill per subdomain size
+//! (a law at the fixed n^{4/3} fitted on one count priced four times the subdomains ~40 % high). The monolithic dual is counted (its orders are kept
 //! for the factorization) unless a lower bound from the laws ([`BOUND`]) already loses.
 //!
 //! Time of a candidate = setup + (nA + σ-estimate products) · t_A with
@@ -351,7 +354,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
     fn monolithic_bound(&self, law: Law) -> Candidate {
         let (mesh, ranks) = (&self.model.mesh, self.ranks);
         let nb = mesh.bodies.len();
-        let low = Law { nnz: BOUND * law.nnz, flops: BOUND * law.flops, ..law };
+        let low = Law { nnz: BOUND * law.nnz, flops: BOUND * law.flops, pow: None, ..law };
         let fills: Vec<Fill> = mesh.bodies.iter().map(|b| low.fill(b.nodes.len() as f64)).collect();
         let n_a = if self.contact.is_some() { PRODUCTS_PER_DIGIT * self.digits + self.power } else { 1.0 };
         let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), n_a);
@@ -441,6 +444,8 @@ impl<'a, C: Comm> Pricing<'a, C> {
             return Ok((vec![], None, None));
         }
         let mut counted: Vec<Option<(Candidate, Law)>> = vec![None; specs.len()];
+        // two counted partitions fit the exponents of the power laws (where two counts are priced)
+        let wanted = specs.len().min(2);
         // the first reference: the middle count with more than one subdomain where there is one
         let many: Vec<usize> = (0..specs.len()).filter(|&j| specs[j].s > 1).collect();
         let mut next = if many.is_empty() { 0 } else { many[many.len() / 2] };
@@ -455,17 +460,39 @@ impl<'a, C: Comm> Pricing<'a, C> {
                 keep = Some((next, part));
             }
             let best = (0..priced.len()).min_by(|&a, &b| time(a).total_cmp(&time(b))).expect("a candidate");
-            // done when the cheapest is counted (each turn counts another: it ends)
+            let open = |j: usize| counted.get(j).is_some_and(|c| c.is_none());
+            // done when the cheapest is counted and two counts are (each turn counts another: it
+            // ends); with one counted, the cheaper of the cheapest's neighbours next
             if counted[best].is_some() {
-                return Ok((priced, Some(l), keep.map(|k| k.1)));
+                let neighbour = [best.wrapping_sub(1), best + 1].into_iter().filter(|&j| open(j)).min_by(|&a, &b| time(a).total_cmp(&time(b)));
+                match neighbour {
+                    Some(j) if counted.iter().flatten().count() < wanted => next = j,
+                    _ => return Ok((priced, Some(l), keep.map(|k| k.1))),
+                }
+            } else {
+                next = best;
             }
-            next = best;
         }
     }
 
-    /// Every candidate: the counted ones as counted, the others from the law.
+    /// Every candidate: the counted ones as counted, the others from `law` (one counted) or
+    /// from the law of the nearest counted partition with the power laws through the two
+    /// nearest counted partitions ([`Pow::through`]).
     fn tfeti_priced(&self, specs: &[Spec], counted: &[Option<(Candidate, Law)>], law: Law) -> Vec<Candidate> {
-        specs.iter().zip(counted).map(|(spec, c)| c.as_ref().map_or_else(|| self.modelled(spec, law), |c| c.0.clone())).collect()
+        let done: Vec<usize> = (0..specs.len()).filter(|&j| counted[j].is_some()).collect();
+        let law_of = |spec: &Spec| {
+            let mut near = done.clone();
+            // nearest by the ratio of the counts; the smaller count on a tie
+            near.sort_by(|&a, &b| ratio(specs[a].s, spec.s).total_cmp(&ratio(specs[b].s, spec.s)).then(a.cmp(&b)));
+            match near[..] {
+                [a, b, ..] => {
+                    let (la, lb) = (counted[a].as_ref().expect("counted").1, counted[b].as_ref().expect("counted").1);
+                    Law { pow: Some(Pow::through(la.per, lb.per)), ..la }
+                }
+                _ => law,
+            }
+        };
+        specs.iter().zip(counted).map(|(spec, c)| c.as_ref().map_or_else(|| self.modelled(spec, law_of(spec)), |c| c.0.clone())).collect()
     }
 
     /// The predicted A-products of TFETI with `s` subdomains on the largest body.
@@ -528,12 +555,16 @@ impl<'a, C: Comm> Pricing<'a, C> {
         let surface = Law::surface_of(spec.s);
         let duplication = if surface > 0.0 { (held as f64 / total_nodes as f64 - 1.0) / surface } else { 0.0 };
         let scale = 1.0 + duplication * surface;
+        let ns = d.subdomains.len().max(1) as f64;
+        let per = Point { nodes: held as f64 / ns, nnz: f.iter().map(|x| x.nnz_l).sum::<f64>() / ns, flops: f.iter().map(|x| x.flops).sum::<f64>() / ns };
         let law = Law {
             nnz: fit.nnz,
             flops: fit.flops,
             duplication,
             gluing: if surface > 0.0 { cons.gluing_rows as f64 / surface } else { 0.0 },
             dirichlet: cons.dirichlet_rows as f64 / scale,
+            per,
+            pow: None,
         };
         Ok((c, law, (spec.parts.clone(), d)))
     }
@@ -557,6 +588,51 @@ struct Law {
     duplication: f64,
     gluing: f64,
     dirichlet: f64,
+    /// The counted partition's mean subdomain: nodes, nnz(L), Σ (column count)².
+    per: Point,
+    /// The power laws through two counted partitions, where two are (else the fixed exponents).
+    pow: Option<Pow>,
+}
+
+/// A counted partition's mean subdomain: its nodes and fill.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Point {
+    nodes: f64,
+    nnz: f64,
+    flops: f64,
+}
+
+/// Power laws nnz(L) = c_nnz · n^a_nnz and Σ (column count)² = c_flops · n^a_flops through the
+/// mean subdomains of two counted partitions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Pow {
+    c_nnz: f64,
+    a_nnz: f64,
+    c_flops: f64,
+    a_flops: f64,
+}
+
+impl Pow {
+    /// The laws through `p` and `q`: the exponents from the two (nnz(L) within 1 to 2, the work
+    /// within 1.5 to 3: nested dissection of 2-D to beyond 3-D pieces), the constants through `p`.
+    fn through(p: Point, q: Point) -> Pow {
+        let exponent = |a: f64, b: f64, lo: f64, hi: f64, fixed: f64| {
+            let e = (a / b).ln() / (p.nodes / q.nodes).ln();
+            if e.is_finite() {
+                e.clamp(lo, hi)
+            } else {
+                fixed
+            }
+        };
+        let a_nnz = exponent(p.nnz, q.nnz, 1.0, 2.0, 4.0 / 3.0);
+        let a_flops = exponent(p.flops, q.flops, 1.5, 3.0, 2.0);
+        Pow { c_nnz: p.nnz / p.nodes.powf(a_nnz), a_nnz, c_flops: p.flops / p.nodes.powf(a_flops), a_flops }
+    }
+}
+
+/// |ln(a / b)|: how far apart two subdomain counts are.
+fn ratio(a: usize, b: usize) -> f64 {
+    (a as f64 / b as f64).ln().abs()
 }
 
 impl Law {
@@ -571,7 +647,10 @@ impl Law {
 
     /// The modelled fill of a piece of `n` nodes.
     fn fill(&self, n: f64) -> Fill {
-        Fill { nnz_l: self.nnz * n.powf(4.0 / 3.0), flops: self.flops * n * n }
+        match self.pow {
+            Some(p) => Fill { nnz_l: p.c_nnz * n.powf(p.a_nnz), flops: p.c_flops * n.powf(p.a_flops) },
+            None => Fill { nnz_l: self.nnz * n.powf(4.0 / 3.0), flops: self.flops * n * n },
+        }
     }
 }
 
@@ -794,6 +873,27 @@ mod tests {
         let fresh = decompose_each(&model.mesh, parts).unwrap();
         assert_eq!(kept.subdomains, fresh.subdomains);
         assert_eq!(kept.copies, fresh.copies);
+    }
+
+    #[test]
+    fn two_counted_partitions_fit_the_exponents() {
+        // points on nnz = 3 n^1.5, work = 0.5 n^2.4: the law through them gives the law back
+        let at = |n: f64| Point { nodes: n, nnz: 3.0 * n.powf(1.5), flops: 0.5 * n.powf(2.4) };
+        let p = Pow::through(at(2000.0), at(9000.0));
+        assert!((p.a_nnz - 1.5).abs() < 1e-12 && (p.a_flops - 2.4).abs() < 1e-12, "{p:?}");
+        let law = Law { pow: Some(p), ..Default::default() };
+        let f = law.fill(500.0);
+        assert!((f.nnz_l / (3.0 * 500f64.powf(1.5)) - 1.0).abs() < 1e-12 && (f.flops / (0.5 * 500f64.powf(2.4)) - 1.0).abs() < 1e-12);
+        // exponents outside nested dissection's range are clamped, equal sizes keep the fixed ones
+        assert_eq!(Pow::through(at(1000.0), Point { nnz: 1.0, ..at(2000.0) }).a_nnz, 1.0);
+        assert_eq!(Pow::through(at(1000.0), at(1000.0)).a_nnz, 4.0 / 3.0);
+        // the plan counts two partitions, the cheapest among them, and models the others
+        let (model, _, _) = crate::feti::seed_fixture(12, 1);
+        let dec = DecompositionSettings { tfeti: true, ..Default::default() };
+        let cands = price(&SerialComm, &model, &dec, &Common::default(), 2).unwrap();
+        let counted = cands.iter().filter(|c| c.basis == Basis::Counted).count();
+        assert!(cands.len() < 2 || counted >= 2, "{}", table(&cands, 2));
+        assert_eq!(cheapest(&cands).unwrap().basis, Basis::Counted);
     }
 
     #[test]
