@@ -171,3 +171,31 @@ fn a_one_hexahedron_body_held_by_contact_alone_is_solved() {
         assert!(r.report.solver.as_ref().unwrap().kkt_worst <= 1e-8, "{nodes}");
     }
 }
+
+/// The accuracy guard's re-solve of a body held by contact alone continues SMALSE-M from the
+/// loose solve's λ and ν (the quarter Hertz sphere of run/bench pressed by a traction, 3 030
+/// DOFs: its ε = 1e-8 result misses the equilibrium check and ε is tightened to 3.0e-10). The
+/// warm re-solve is compared with a cold solve straight at the tightened ε: u within 10 ε
+/// relative to max |u| (measured: the same to the last bit, both end on the same four pairs in
+/// contact), and the warm re-solve takes a fraction of the cold one's products (48 against 256).
+/// Before, the re-solve restarted ν at 0 and repeated the cold solve step for step.
+#[test]
+fn the_guards_re_solve_continues_smalse_from_its_multipliers() {
+    let scene = root().join("run/bench/hertz_sphere_traction.toml");
+    let dir = tmpdir("warm-guard");
+    let coarse = ["body.0.box.nodes=[11, 11, 5]", "body.1.box.nodes=[9, 9, 5]"];
+    let warm = solve(&scene, &coarse, &dir.join("warm.h5"));
+    let ws = warm.report.solver.as_ref().unwrap();
+    let eps = ws.eps_tightened.last().expect("ε = 1e-8 misses the equilibrium check here").to_eps;
+    let tight = format!("solver.eps={eps}");
+    let cold = solve(&scene, &[coarse[0], coarse[1], &tight], &dir.join("cold.h5"));
+    let cs = cold.report.solver.as_ref().unwrap();
+    assert!(cs.eps_tightened.is_empty(), "the cold solve at ε = {eps:.1e} passes its checks");
+    let products = |r: &tresca_feti::pipeline::Summary| r.report.tfeti.as_ref().unwrap().smalse.as_ref().unwrap().n_a;
+    let (nw, nc) = (products(&warm), products(&cold));
+    let (uw, uc) = (&warm.solution.displacement, &cold.solution.displacement);
+    let d = uw.iter().flatten().zip(uc.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / max_abs(uc);
+    eprintln!("ε = {eps:.2e}: warm re-solve {nw} products (the whole solve {}), cold {nc}; u differs by {d:.1e} relative", ws.info.n_a);
+    assert!(d <= 10.0 * eps, "warm and cold u differ by {d:.1e} relative to max |u|");
+    assert!(2 * nw <= nc, "the warm re-solve takes {nw} products, the cold solve {nc}");
+}

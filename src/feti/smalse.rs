@@ -109,6 +109,17 @@ pub struct SmalseInfo {
     pub penalty: f64,
     /// ϱ‖Qλ̃‖/‖Pd̂‖ at the end.
     pub feasibility: f64,
+    /// A-products of this solve (the σ_max estimate's excluded): with the accuracy guard, of
+    /// its last solve only.
+    #[serde(default, rename = "nA")]
+    pub n_a: usize,
+    /// The multipliers ν of Gλ = e at the end (this rank's part): a later solve of the same
+    /// dual (the accuracy guard's at a tighter ε) continues from them.
+    #[serde(skip)]
+    pub nu: Vec<f64>,
+    /// The inner tolerance ε_k the outer loop had reached.
+    #[serde(skip)]
+    pub eps_k: f64,
 }
 
 /// Solves the TFETI dual by SMALSE-M from λ = `x0` with `p.method` inside (with `coulomb`
@@ -116,7 +127,11 @@ pub struct SmalseInfo {
 /// `penalty`·σ_max(PFP) (`p.common.sigma` when given), the inner solves preconditioned by
 /// [`PenalizedPreconditioner`] when `m` (a preconditioner of F) is given; returns λ with the inner solvers'
 /// counters summed (A-products of A_ϱ = F-products). The dual must be built with the orthogonal
-/// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start).
+/// projector (its λ̂ solves Gλ̂ = e; λ = λ̂ is the natural start). With `warm`, an earlier
+/// solve of the same dual and b that stopped at λ = `x0` (the accuracy guard's re-solve at a
+/// tighter ε), its ν and ε_k are kept when its ϱ is this one's: the first inner solve then
+/// starts at its own minimizer's neighbourhood, where ν = 0 would pull λ back to the first
+/// outer step's and repeat the whole outer loop.
 #[allow(clippy::too_many_arguments)]
 pub fn solve<C: Comm>(
     dual: &TfetiDual<'_, C>,
@@ -124,6 +139,7 @@ pub fn solve<C: Comm>(
     set: &Lambda,
     coulomb: Option<&[Coefficient]>,
     x0: &[f64],
+    warm: Option<&SmalseInfo>,
     p: &Params,
     penalty: f64,
     monitor: &mut dyn Monitor,
@@ -152,7 +168,8 @@ pub fn solve<C: Comm>(
     let pm = m.map(|m| PenalizedPreconditioner { dual, m, penalty: op.penalty });
     let sigma = sigma.max(op.penalty);
     let mut lambda = x0.to_vec();
-    let mut nu = vec![0.0; x0.len()];
+    let warm = warm.filter(|w| w.nu.len() == x0.len() && w.penalty == op.penalty);
+    let mut nu = warm.map_or_else(|| vec![0.0; x0.len()], |w| w.nu.clone());
     // ϱλ_e: the penalty's pull toward Gλ = e
     let b0: Vec<f64> = b0.iter().zip(&lambda_e).map(|(b, l)| b + op.penalty * l).collect();
     // the scale of the residuals: ‖P(d̃ − Fλ̂)‖, but not below what ε of it double precision
@@ -160,9 +177,11 @@ pub fn solve<C: Comm>(
     // held by contact alone, pressed uniformly) the projected rhs is round-off
     let eps = p.common.eps;
     let bnorm = b0_norm.max(REACHABLE / eps * sigma * sp.norm(&lambda_e)).max(f64::MIN_POSITIVE);
-    let mut eps_k = eps.max(1e-2);
+    let mut eps_k = eps.max(warm.map_or(1e-2, |w| w.eps_k.min(1e-2)));
     let mut total = Info { sigma_est: sigma, n_a_power: n_power, n_a: usize::from(shifted), ..Default::default() };
     let mut sm = SmalseInfo { penalty: op.penalty, ..Default::default() };
+    // the gradient A_ϱλ − b_k at λ, once an inner solve has left one
+    let mut gradient: Option<Vec<f64>> = None;
     for k in 0..p.common.max_outer {
         let b: Vec<f64> = b0.iter().zip(&nu).map(|(a, v)| a - v).collect();
         let bk = sp.norm(&b).max(f64::MIN_POSITIVE);
@@ -170,7 +189,9 @@ pub fn solve<C: Comm>(
         inner.common.eps = eps_k * bnorm / bk;
         inner.common.sigma = Some(SIGMA_SAFETY * sigma);
         inner.common.power_iterations = 0;
-        let qp = Qp::new(&op, &b, set).with_preconditioner(pm.as_ref().map(|m| m as &dyn Preconditioner));
+        let qp = Qp::new(&op, &b, set)
+            .with_preconditioner(pm.as_ref().map(|m| m as &dyn Preconditioner))
+            .with_start(gradient.as_deref().map(|g| (lambda.as_slice(), g)));
         let sol = qp::solve_friction(&qp, coulomb, &lambda, &inner, monitor)?;
         total.preconditioner_applications += sol.info.preconditioner_applications;
         lambda = sol.lambda;
@@ -188,9 +209,14 @@ pub fn solve<C: Comm>(
         sm.feasibility = feas;
         total.err = err.max(feas);
         if err <= eps && feas <= eps {
+            (sm.nu, sm.eps_k, sm.n_a) = (nu, eps_k, total.n_a);
             return Ok((QpSolution { lambda, gradient: sol.gradient, info: total }, sm));
         }
         nu.iter_mut().zip(&ql).for_each(|(v, q)| *v += op.penalty * q);
+        // b_{k+1} = b_k − ϱ(Qλ − λ_e): the next inner solve's gradient at this λ without a product
+        let mut g = sol.gradient;
+        g.iter_mut().zip(&ql).for_each(|(r, q)| *r += op.penalty * q);
+        gradient = Some(g);
         eps_k = eps.max(eps_k.min(feas));
     }
     Err(QpError::NoConvergence { info: Box::new(total), eps })

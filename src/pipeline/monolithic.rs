@@ -100,7 +100,15 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         ))
     }
 
-    fn iterate(&self, b: &[f64], x0: &[f64], _first: bool, params: &Params, monitor: &mut Live) -> std::result::Result<(QpSolution, ()), QpError> {
+    fn iterate(
+        &self,
+        b: &[f64],
+        x0: &[f64],
+        _first: bool,
+        _warm: Option<&()>,
+        params: &Params,
+        monitor: &mut Live,
+    ) -> std::result::Result<(QpSolution, ()), QpError> {
         qp::solve_friction(&Qp::new(&*self.dual, b, &self.set), self.coulomb, x0, params, monitor).map(|s| (s, ()))
     }
 

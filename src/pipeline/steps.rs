@@ -31,8 +31,18 @@ pub(crate) trait StepDual {
     fn norm(&self, b: &[f64]) -> f64;
     /// The load of step `k` with the last step's tangential jump: the new b.
     fn set_load(&mut self, k: usize, jump: &[f64]) -> Result<Vec<f64>>;
-    /// One solve from `x0`; `first`: the path's first solve (no step nor tightening before it).
-    fn iterate(&self, b: &[f64], x0: &[f64], first: bool, params: &Params, monitor: &mut Live) -> std::result::Result<(QpSolution, Self::Extra), QpError>;
+    /// One solve from `x0`; `first`: the path's first solve (no step nor tightening before it);
+    /// `warm`: what the solve that stopped at `x0` on the same b left beside it (the accuracy
+    /// guard's re-solve continues from it).
+    fn iterate(
+        &self,
+        b: &[f64],
+        x0: &[f64],
+        first: bool,
+        warm: Option<&Self::Extra>,
+        params: &Params,
+        monitor: &mut Live,
+    ) -> std::result::Result<(QpSolution, Self::Extra), QpError>;
     /// u (and the gap) from λ.
     fn recover(&self, sol: &QpSolution) -> Result<Recovered>;
     /// The verdict on a recovered solve at ε = `eps` (collective).
@@ -114,12 +124,13 @@ pub(crate) fn walk<C: Comm, D: StepDual>(
 /// its checks, continues from its λ at the tighter ε the guard gives.
 fn solve_step<C: Comm, D: StepDual>(comm: &C, dual: &D, b: &[f64], walk: &Walk, k: usize, what: &str, t: &mut Timings) -> Result<Solved<D>> {
     let (mut params, mut x0, mut guard, mut total) = (walk.params.clone(), walk.y.clone(), accuracy::Guard::default(), qp::Info::default());
+    let mut warm: Option<D::Extra> = None;
     let bnorm = dual.norm(b);
     loop {
         let mut monitor = t.monitor();
         let first = k == 1 && guard.tightenings.is_empty();
         let (mut sol, extra) =
-            t.phase(comm, "iterate", || dual.iterate(b, &x0, first, &params, &mut monitor).map_err(|e| Error::solver(walk.name(what, k), e)))?;
+            t.phase(comm, "iterate", || dual.iterate(b, &x0, first, warm.as_ref(), &params, &mut monitor).map_err(|e| Error::solver(walk.name(what, k), e)))?;
         let rec = t.phase(comm, "recover", || dual.recover(&sol))?;
         total.absorb(&sol.info);
         let (verdict, judged) = dual.judge(&rec, &sol, bnorm, params.common.eps);
@@ -132,6 +143,7 @@ fn solve_step<C: Comm, D: StepDual>(comm: &C, dual: &D, b: &[f64], walk: &Walk, 
                 params.common.eps = eps;
                 params.common.sigma = dual.kept_sigma(sol.info.sigma_est).filter(|s| s.is_finite() && *s > 0.0);
                 x0 = sol.lambda;
+                warm = Some(extra);
             }
         }
     }

@@ -546,7 +546,15 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         Ok(self.dual.set_load(mine, e, c, jump))
     }
 
-    fn iterate(&self, b: &[f64], x0: &[f64], first: bool, params: &Params, monitor: &mut Live) -> std::result::Result<(QpSolution, Self::Extra), QpError> {
+    fn iterate(
+        &self,
+        b: &[f64],
+        x0: &[f64],
+        first: bool,
+        warm: Option<&Self::Extra>,
+        params: &Params,
+        monitor: &mut Live,
+    ) -> std::result::Result<(QpSolution, Self::Extra), QpError> {
         let dual = &*self.dual;
         let m = dual.preconditioner();
         let qp = Qp::new(dual, b, &self.set).with_preconditioner(m.as_ref().map(|m| m as &dyn qp::Preconditioner)).with_coarse(if self.projected {
@@ -567,7 +575,8 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
                 } else {
                     x0
                 };
-                smalse::solve(dual, qp.preconditioner, &self.set, self.mu.as_deref(), x0, params, self.penalty, monitor).map(|(s, i)| (s, Some(i)))
+                smalse::solve(dual, qp.preconditioner, &self.set, self.mu.as_deref(), x0, warm.and_then(Option::as_ref), params, self.penalty, monitor)
+                    .map(|(s, i)| (s, Some(i)))
             }
             (false, true) => qp::solve_friction(&qp, self.mu.as_deref(), x0, params, monitor).map(|s| (s, None)),
             (false, false) => qp::cg::solve(&qp, x0, &params.common, monitor).map(|s| (s, None)),

@@ -46,12 +46,16 @@ pub struct Qp<'a, A: Operator> {
     /// G δ = 0 on the inner corrections (TSSN's CG and plain CG project onto Ker G ∩ W;
     /// SSN-BiCGSTAB its preconditioner).
     pub coarse: Option<&'a dyn Coarse>,
+    /// A point λ ∈ Λ with its gradient Aλ − b, known already (SMALSE-M's outer loop: the last
+    /// inner solve's result, its gradient shifted by the ν update): SSN-BiCGSTAB starting from
+    /// exactly this λ takes the gradient instead of a product.
+    pub start: Option<(&'a [f64], &'a [f64])>,
 }
 
 impl<'a, A: Operator> Qp<'a, A> {
     /// The QP of A, b and Λ, without preconditioner or coarse space.
     pub fn new(a: &'a A, b: &'a [f64], set: &'a Lambda) -> Self {
-        Qp { a, b, set, preconditioner: None, coarse: None }
+        Qp { a, b, set, preconditioner: None, coarse: None, start: None }
     }
 
     /// The same QP with the coarse space G (none: without).
@@ -64,12 +68,17 @@ impl<'a, A: Operator> Qp<'a, A> {
         Qp { preconditioner: m, ..self }
     }
 
+    /// The same QP with λ and its gradient Aλ − b known (see [`Qp::start`]).
+    pub fn with_start(self, start: Option<(&'a [f64], &'a [f64])>) -> Self {
+        Qp { start, ..self }
+    }
+
     /// The same QP over another Λ.
     pub fn with_set<'b>(&self, set: &'b Lambda) -> Qp<'b, A>
     where
         'a: 'b,
     {
-        Qp { a: self.a, b: self.b, set, preconditioner: self.preconditioner, coarse: self.coarse }
+        Qp { a: self.a, b: self.b, set, preconditioner: self.preconditioner, coarse: self.coarse, start: None }
     }
 }
 

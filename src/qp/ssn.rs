@@ -58,7 +58,11 @@ pub(crate) fn run<A: Operator>(
     let mut lambda = vec![0.0; n];
     at(lambda0).project(lambda0, &mut lambda);
     let mut r = vec![0.0; n];
-    drv.residual(&lambda, &mut r);
+    match qp.start {
+        // the caller's λ with its gradient: no product
+        Some((l, g)) if l == lambda.as_slice() => r.copy_from_slice(g),
+        _ => drv.residual(&lambda, &mut r),
+    }
     let mut rt = vec![0.0; n];
     let mut err = err_of(sp, &at(&lambda), &lambda, &r, &drv.st, &mut rt);
     let err0 = err.max(f64::MIN_POSITIVE);
