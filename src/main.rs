@@ -63,6 +63,22 @@ impl MaxMemory {
 }
 
 /// A finite value above 0 (tolerances, factors, times, bandwidths).
+/// How `bench-tfeti` starts each case: the launcher with its own arguments, the command that
+/// runs the solver, and the time a case may take.
+#[derive(clap::Args, Debug)]
+struct Launch {
+    /// The launcher with its own arguments, split shell-like, e.g. "srun --mpi=pmix" (instead of --mpirun).
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "mpirun")]
+    launcher: Option<String>,
+    /// The command that runs the solver, split shell-like, e.g. "ch-run img -- tresca-feti"
+    /// (default: this executable); each case runs `LAUNCHER -n P MPIRUN_ARGS… EXEC… solve …`.
+    #[arg(long, allow_hyphen_values = true)]
+    exec: Option<String>,
+    /// Seconds a case may run before its launcher and everything it started are stopped.
+    #[arg(long, value_parser = positive, default_value_t = 86400.0)]
+    case_timeout: f64,
+}
+
 fn positive(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
     if v > 0.0 && v.is_finite() {
@@ -179,6 +195,8 @@ enum Cmd {
         /// Extra launcher arguments, split at whitespace, e.g. "--oversubscribe" or "--bind-to core".
         #[arg(long, allow_hyphen_values = true, default_value = "")]
         mpirun_args: String,
+        #[command(flatten)]
+        launch: Launch,
         /// Runs of each case; the row is the fastest (least total time), against other load.
         #[arg(long, value_parser = at_least_one, default_value_t = 1)]
         repeat: usize,
@@ -280,6 +298,13 @@ enum Cmd {
         /// `check` runs on).
         #[arg(long, value_parser = at_least_one)]
         ranks: Option<usize>,
+        /// Print the scaling forecast of the chosen decomposition on 1 to 4096 ranks, RANKS/HOSTS
+        /// of them on each host (the network model: --network).
+        #[arg(long, value_parser = at_least_one)]
+        hosts: Option<usize>,
+        /// The network model of the forecast (TOML: latency and bandwidth between hosts and inside one).
+        #[arg(long, default_value = "run/network.toml", requires = "hosts")]
+        network: PathBuf,
         #[command(flatten)]
         memory: MaxMemory,
     },
@@ -399,6 +424,7 @@ fn bench_tfeti(
     weak: bool,
     mpirun: String,
     mpirun_args: String,
+    launch: Launch,
     repeat: usize,
     eps: f64,
     bandwidth: f64,
@@ -420,18 +446,29 @@ fn bench_tfeti(
     if sizes.is_empty() || subdomains.is_empty() {
         return Err(Error::scene(if sizes.is_empty() { "--sizes" } else { "--subdomains" }, "give at least one value"));
     }
-    if mpirun.trim().is_empty() {
-        return Err(Error::scene("--mpirun", "must name a launcher (mpirun, srun or a path)"));
-    }
+    // a command given as one string, split as a shell would (quotes kept together)
+    let words = |key: &str, text: &str| match shell_words::split(text) {
+        Ok(w) if !w.is_empty() => Ok(w),
+        Ok(_) => Err(Error::scene(key, "must name a program")),
+        Err(e) => Err(Error::scene(key, format!("\"{text}\": {e}"))),
+    };
+    let (launcher_key, launcher) = match &launch.launcher {
+        Some(l) => ("--launcher", words("--launcher", l)?),
+        None if mpirun.trim().is_empty() => return Err(Error::scene("--mpirun", "must name a launcher (mpirun, srun or a path)")),
+        None => ("--mpirun", vec![mpirun]),
+    };
+    let exec = match &launch.exec {
+        Some(e) => words("--exec", e)?,
+        None => vec![std::env::current_exe().map_err(|e| Error::io("current executable", e))?.display().to_string()],
+    };
     // a CSV that cannot be written fails now, not after the whole run
     if let Some(d) = csv.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(d).map_err(|e| Error::io(d.display().to_string(), e))?;
     }
-    let exe = std::env::current_exe().map_err(|e| Error::io("current executable", e))?;
     let mpirun_args = mpirun_args.split_whitespace().map(String::from).collect();
     let list = ranks.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(",");
     let args = tresca_feti::studies::bench::Args {
-        exe,
+        exec,
         scene,
         sets,
         sizes,
@@ -439,16 +476,18 @@ fn bench_tfeti(
         projectors,
         ranks,
         weak,
-        mpirun,
+        launcher,
+        launcher_key: launcher_key.into(),
         mpirun_args,
         repeat,
         eps,
         bandwidth,
         csv: Some(csv.clone()),
+        timeout: launch.case_timeout,
     };
     let mode = if weak { "weak scaling (N·P^{1/3}, S·P), " } else { "" };
     let best = if repeat > 1 { format!(", best of {repeat} runs") } else { String::new() };
-    println!("TFETI benchmark: {mode}ranks {list} ({}){best}, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.mpirun);
+    println!("TFETI benchmark: {mode}ranks {list} ({}){best}, ε = {eps:e}, floor = 2·8·Σnnz(L)/{bandwidth} GB/s", args.launcher.join(" "));
     println!("{}", tresca_feti::studies::bench::table_header());
     tresca_feti::studies::bench::run(&args, |r| println!("{}", r.table()))?;
     println!("wrote {}", csv.display());
@@ -467,11 +506,24 @@ fn main() -> ExitCode {
             return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
-    if let Cmd::BenchTfeti { scene: StudyScene { scene, set }, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv } =
-        cli.cmd
+    if let Cmd::BenchTfeti {
+        scene: StudyScene { scene, set },
+        sizes,
+        subdomains,
+        projectors,
+        ranks,
+        weak,
+        mpirun,
+        mpirun_args,
+        launch,
+        repeat,
+        eps,
+        bandwidth,
+        csv,
+    } = cli.cmd
     {
         // a driver of mpirun runs, not an MPI program itself
-        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, repeat, eps, bandwidth, csv) {
+        return match bench_tfeti(scene, set, sizes, subdomains, projectors, ranks, weak, mpirun, mpirun_args, launch, repeat, eps, bandwidth, csv) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("{}", e.line());
@@ -596,10 +648,15 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
             let args = tresca_feti::studies::coarse_cost::Args { scene, sets: set, subdomains, pieces, repeat };
             bench_coarse(comm, &args)
         }
-        Cmd::Check { scene: SceneFile { scene, set }, ranks, memory } => {
+        Cmd::Check { scene: SceneFile { scene, set }, ranks, hosts, network, memory } => {
             memory.apply();
+            let file = network.display().to_string();
+            let text = match hosts.map(|h| pipeline::forecast::Network::read(&network).map(|n| (h, n))).transpose() {
+                Ok(forecast) => pipeline::run_check(comm, &scene, &set, ranks.unwrap_or(comm.size()), forecast.as_ref().map(|(h, n)| (*h, n, file.as_str()))),
+                Err(e) => Err(e),
+            };
             // validation is cheap and deterministic: every rank does it, rank 0 prints
-            comm.agree(pipeline::run_check(comm, &scene, &set, ranks.unwrap_or(comm.size()))).map(|text| {
+            comm.agree(text).map(|text| {
                 if comm.is_root() {
                     println!("{text}");
                 }

@@ -6,6 +6,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
+use super::forecast::Network;
 use super::memory::{self, MeshCount};
 use super::{body_dofs, monitor, pair_notes, plan, preconditioner, report, resolve_method, DualKind, Timings};
 use crate::comm::Comm;
@@ -108,8 +109,9 @@ pub fn held_by_contact(dec: &mut crate::scene::DecompositionSettings, model: &Mo
 
 /// `tresca-feti check`: everything `solve` does before solving ([`prepare`], for `ranks` ranks),
 /// and the text to print: the resolved scene, the bodies, faces, loads and contact pairs, the
-/// subdomains, the plan's table and the memory estimate.
-pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ranks: usize) -> Result<String> {
+/// subdomains, the plan's table and the memory estimate; with `forecast` (hosts, the network
+/// model and its file) the scaling forecast of the chosen decomposition after the plan's table.
+pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ranks: usize, forecast: Option<(usize, &Network, &str)>) -> Result<String> {
     let Prepared { ls, model, plan, tfeti } = prepare(comm, scene_path, overrides, None, ranks, &mut Timings::live(false))?;
     let chosen = plan.as_deref().and_then(plan::cheapest);
     let needs = memory::after_plan(&MeshCount::of_model(&ls, &model), &model, &ls.scene.decomposition, chosen, ranks, ls.scene.solver.precision);
@@ -140,6 +142,26 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ran
     }
     if let Some(p) = &plan {
         let _ = write!(s, "{}", plan::table(p, ranks));
+    }
+    if let Some((hosts, net, file)) = forecast {
+        // the plan's choice, or the priced candidate of the subdomains the scene sets
+        let priced;
+        let c = match chosen {
+            Some(c) => c,
+            None => {
+                let dec = &ls.scene.decomposition;
+                let open = crate::scene::DecompositionSettings { subdomains: None, target_dofs: None, ..dec.clone() };
+                priced = plan::price(comm, &model, &open, &ls.scene.solver.params.common, ranks)?;
+                let parts: Vec<usize> = model.mesh.bodies.iter().map(|_| dec.subdomains.unwrap_or(0)).collect();
+                priced.iter().find(|c| c.parts == parts && c.tfeti == tfeti).ok_or_else(|| {
+                    Error::scene(
+                        "--hosts",
+                        "the forecast prices the plan's candidates; this scene's [decomposition] is not one of them (leave subdomains and target_dofs unset)",
+                    )
+                })?
+            }
+        };
+        let _ = write!(s, "{}", super::forecast::table(c, ranks, model.ndof(), ranks, hosts, net, file));
     }
     let _ = write!(s, "{}", memory::summary(&needs, ranks)?);
     let _ = write!(s, "dual: {}", if tfeti { "TFETI" } else { "monolithic" });

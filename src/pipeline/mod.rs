@@ -15,6 +15,7 @@ pub(crate) mod accuracy;
 mod check;
 mod checkpoint;
 pub(crate) mod finish;
+pub mod forecast;
 pub mod memory;
 pub(crate) mod monitor;
 mod monolithic;

@@ -1,15 +1,17 @@
 //! `tresca-feti bench-tfeti`: the TFETI benchmark of a scene over mesh sizes N, subdomain
 //! counts S (S = 0: the monolithic dual), projectors and rank counts P, and the strong and weak
-//! scaling studies built on it. Every case is a fresh `mpirun -n P tresca-feti solve` (or
-//! `srun -n P …`, so that each has its own peak memory), whose JSON report gives nA, the
+//! scaling studies built on it. Every case is a fresh `LAUNCHER -n P EXEC solve` — `mpirun -n P
+//! tresca-feti solve`, `srun --mpi=pmix -n P ch-run img -- tresca-feti solve` (so that each has
+//! its own peak memory), bounded by a time limit — whose JSON report gives nA, the
 //! iterations, the time of each phase, the peak memory and Σ nnz(L). The time of one A-product,
 //! t_A = iterate / (nA + power iterations), is set against its memory-bound floor
 //! 2·8·Σ nnz(L) / bandwidth (both triangular solves stream every factor once). Weak scaling:
 //! the sizes and subdomain counts are those of 1 rank, and P ranks get N_P = round(N₁·P^{1/3})
 //! and S_P = S₁·P (DOFs ∝ N³: constant work per rank), whether or not 1 is in the rank list.
 
-use std::path::PathBuf;
-use std::process::Command;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
 use crate::pipeline::report::Report;
@@ -18,8 +20,9 @@ use crate::scene::Projector;
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct Args {
-    /// The `tresca-feti` executable each case runs.
-    pub exe: PathBuf,
+    /// The command that runs the solver (program and its arguments, e.g. `ch-run img -- tresca-feti`),
+    /// followed by `solve …`.
+    pub exec: Vec<String>,
     /// The scene file.
     pub scene: PathBuf,
     /// `--set KEY=VALUE` overrides passed to every case.
@@ -34,8 +37,11 @@ pub struct Args {
     pub ranks: Vec<usize>,
     /// Weak scaling: `sizes` and `subdomains` are those of 1 rank.
     pub weak: bool,
-    /// The launcher (`mpirun`, `srun`, a path), called as `LAUNCHER -n P ARGS… exe solve …`.
-    pub mpirun: String,
+    /// The launcher and its own arguments (`mpirun`, `srun --mpi=pmix`, a path), called as
+    /// `LAUNCHER… -n P ARGS… EXEC… solve …`.
+    pub launcher: Vec<String>,
+    /// The option that set the launcher (`--mpirun` or `--launcher`), named in errors.
+    pub launcher_key: String,
     /// Extra launcher arguments, before the executable.
     pub mpirun_args: Vec<String>,
     /// Runs of each case; the fastest (least total) is kept, against other load on the machine.
@@ -46,6 +52,8 @@ pub struct Args {
     pub bandwidth: f64,
     /// The CSV file the rows are written to (rewritten after each case).
     pub csv: Option<PathBuf>,
+    /// Seconds a case may run before its launcher (and every process it started) is stopped.
+    pub timeout: f64,
 }
 
 /// The phases, as they appear in the CSV (`<name>_s`); `factorize` includes the monolithic
@@ -177,8 +185,8 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     let Case { ranks, n, s, projector, .. } = *c;
     let name = format!("N{n}_S{s}_{projector:?}_P{ranks}").to_lowercase();
     let out = dir.join(format!("{name}.h5"));
-    let mut cmd = Command::new(&a.mpirun);
-    cmd.arg("-n").arg(ranks.to_string()).args(&a.mpirun_args).arg(&a.exe).arg("solve").arg(&a.scene);
+    let mut cmd = Command::new(&a.launcher[0]);
+    cmd.args(&a.launcher[1..]).arg("-n").arg(ranks.to_string()).args(&a.mpirun_args).args(&a.exec).arg("solve").arg(&a.scene);
     let mut sets = a.sets.clone();
     sets.push(format!("mesh.n={n}"));
     sets.push(format!("solver.eps={:e}", a.eps));
@@ -197,9 +205,8 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
         cmd.arg("--set").arg(x);
     }
     cmd.arg("--out").arg(&out).arg("--quiet");
-    let o = cmd.output().map_err(|e| Error::io(format!("--mpirun {}", a.mpirun), e))?;
-    if !o.status.success() {
-        let err = String::from_utf8_lossy(&o.stderr);
+    let err = bounded(a, cmd, &dir.join(format!("{name}.stderr")), &name)?;
+    if let Some(err) = err {
         // our one-line error, not mpirun's banner after it; else the launcher's first line
         let line = err
             .lines()
@@ -215,7 +222,7 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     if r.ranks != ranks {
         return Err(Error::numerical(
             format!("case {name}"),
-            format!("the report says {} rank(s), not {ranks}: does --mpirun {} start one MPI job?", r.ranks, a.mpirun),
+            format!("the report says {} rank(s), not {ranks}: does {} {} start one MPI job?", r.ranks, a.launcher_key, a.launcher.join(" ")),
         ));
     }
     let t = &r.timings;
@@ -264,10 +271,64 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     })
 }
 
+/// Runs `cmd` with its stderr in the file `log`, its stdout discarded, in a process group of its
+/// own, for at most `a.timeout` seconds: past it the group is stopped (SIGTERM, then SIGKILL) and
+/// the case fails. Returns `None` on success, else the stderr of the failed run.
+fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<String>> {
+    use std::os::unix::process::CommandExt;
+    let file = std::fs::File::create(log).map_err(|e| Error::io(log.display().to_string(), e))?;
+    cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(file).process_group(0);
+    let launcher = || format!("{} {}", a.launcher_key, a.launcher.join(" "));
+    let mut child = cmd.spawn().map_err(|e| Error::io(launcher(), e))?;
+    let start = Instant::now();
+    let pgid = child.id() as libc::pid_t;
+    let group = |sig| {
+        // SAFETY: kill(2) on the child's own process group, which it leads (process_group(0))
+        unsafe { libc::kill(-pgid, sig) };
+    };
+    let status = loop {
+        if let Some(status) = child.try_wait().map_err(|e| Error::io(launcher(), e))? {
+            break status;
+        }
+        if start.elapsed().as_secs_f64() > a.timeout {
+            group(libc::SIGTERM);
+            let grace = Instant::now();
+            while child.try_wait().ok().flatten().is_none() && grace.elapsed() < Duration::from_secs(5) {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            group(libc::SIGKILL);
+            let _ = child.wait();
+            return Err(Error::numerical(format!("case {name}"), format!("no result after {} s (--case-timeout): stopped {}", a.timeout, launcher())));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    // whatever the launcher left behind in the group goes with it
+    group(libc::SIGKILL);
+    if status.success() {
+        return Ok(None);
+    }
+    Ok(Some(std::fs::read_to_string(log).unwrap_or_default()))
+}
+
+/// Whether `program` can be started: a path to a file, or a name found on `PATH`.
+pub fn found(program: &str) -> bool {
+    if program.contains('/') {
+        return Path::new(program).is_file();
+    }
+    std::env::var_os("PATH").is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(program).is_file()))
+}
+
 /// Runs every case (projectors only for S > 0) on every rank count, `repeat` times keeping the
 /// fastest, calling `each` after each;
 /// the CSV is written after each case, so an interrupted study keeps what it measured.
 pub fn run(a: &Args, mut each: impl FnMut(&Row)) -> Result<Vec<Row>> {
+    // a program that is not there fails now, in one line, not as a launcher's banner per case
+    if !found(&a.launcher[0]) {
+        return Err(Error::scene(format!("{} {}", a.launcher_key, a.launcher[0]), "program not found (not a file, not on PATH)"));
+    }
+    if !found(&a.exec[0]) {
+        return Err(Error::scene(format!("--exec {}", a.exec[0]), "program not found (not a file, not on PATH)"));
+    }
     let dir = std::env::temp_dir().join(format!("tresca-feti-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(dir.display().to_string(), e))?;
     let mut rows = Vec::new();
