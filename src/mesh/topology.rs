@@ -6,15 +6,26 @@ use std::collections::{HashMap, HashSet};
 use super::cell::{corner_key, Cell, Facet};
 
 /// All boundary facets (faces that belong to exactly one cell), keyed by their sorted corners.
+///
+/// Sort-based: every facet with its key in one vector, sorted by key, the keys met once kept
+/// (a hash map of every facet of a million-cell mesh costs seconds; the sort a fraction).
 pub fn boundary_faces(cells: &[Cell]) -> HashMap<[usize; 4], Facet> {
-    let mut count: HashMap<[usize; 4], (usize, Facet)> = HashMap::with_capacity(cells.len() * 3);
+    let total: usize = cells.iter().map(|c| c.kind.faces().len()).sum();
+    // (key, cell, local facet): small entries sort fast; the facet is rebuilt for the kept ones
+    let mut all: Vec<([usize; 4], usize, usize)> = Vec::with_capacity(total);
     for (e, c) in cells.iter().enumerate() {
         for f in 0..c.kind.faces().len() {
-            let q = c.facet(e, f);
-            count.entry(q.key()).and_modify(|c| c.0 += 1).or_insert((1, q));
+            all.push((c.facet(e, f).key(), e, f));
         }
     }
-    count.into_iter().filter(|(_, (c, _))| *c == 1).map(|(k, (_, q))| (k, q)).collect()
+    all.sort_unstable_by_key(|&(k, _, _)| k);
+    let mut boundary = HashMap::new();
+    for run in all.chunk_by(|a, b| a.0 == b.0) {
+        if let [(k, e, f)] = run {
+            boundary.insert(*k, cells[*e].facet(*e, *f));
+        }
+    }
+    boundary
 }
 
 /// Looks a facet up among the boundary facets by its corners, whatever their order.

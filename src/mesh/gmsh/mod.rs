@@ -649,13 +649,43 @@ pub(super) fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, 
 /// Refuses a cell listed twice (the same nodes, in any order, under another tag): it would be
 /// counted twice, and its faces would stop being boundary faces (a clamped face loses them).
 pub(super) fn check_listed_twice(file_nodes: &[Vec<usize>], file_cells: &[FileCell<'_>]) -> Result<(), String> {
-    let mut seen: HashMap<(CellKind, Vec<usize>), u64> = HashMap::with_capacity(file_nodes.len());
-    for (h, &(etag, kind, _)) in file_nodes.iter().zip(file_cells) {
-        let mut key = h.clone();
-        key.sort_unstable();
-        if let Some(first) = seen.insert((kind, key), etag) {
-            return Err(format!("{} {first} and {etag} have the same {} nodes (an element listed twice); remove one", plural(kind), kind.len()));
+    // sorted by (type, four smallest nodes, file order): a repeat lies in a run of equal
+    // prefixes, where the whole sorted node lists are compared; the first in file order wins
+    let sorted = |c: usize| {
+        let mut k = file_nodes[c].clone();
+        k.sort_unstable();
+        k
+    };
+    let mut order: Vec<([usize; 5], usize)> = file_nodes
+        .iter()
+        .enumerate()
+        .map(|(c, h)| {
+            let mut k = [usize::MAX; 5];
+            k[0] = file_cells[c].1.code();
+            let mut low = h.clone();
+            low.sort_unstable();
+            for (slot, v) in k[1..].iter_mut().zip(low) {
+                *slot = v;
+            }
+            (k, c)
+        })
+        .collect();
+    order.sort_unstable();
+    let mut repeat: Option<(usize, usize)> = None; // (second, first) in file order
+    for run in order.chunk_by(|a, b| a.0 == b.0).filter(|r| r.len() > 1) {
+        let full: Vec<Vec<usize>> = run.iter().map(|&(_, c)| sorted(c)).collect();
+        for j in 1..run.len() {
+            if let Some(i) = (0..j).find(|&i| full[i] == full[j]) {
+                if repeat.is_none_or(|(second, _)| run[j].1 < second) {
+                    repeat = Some((run[j].1, run[i].1));
+                }
+                break;
+            }
         }
+    }
+    if let Some((second, first)) = repeat {
+        let (first, (etag, kind, _)) = (file_cells[first].0, file_cells[second]);
+        return Err(format!("{} {first} and {etag} have the same {} nodes (an element listed twice); remove one", plural(kind), kind.len()));
     }
     Ok(())
 }
@@ -841,8 +871,11 @@ pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u6
             ));
         }
     }
-    let used: HashSet<usize> = cells.iter().flatten().copied().collect();
-    let far = used.iter().flat_map(|&v| coords[v]).fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut used = vec![false; coords.len()];
+    for &v in cells.iter().flatten() {
+        used[v] = true;
+    }
+    let far = coords.iter().zip(&used).filter(|(_, &u)| u).flat_map(|(p, _)| *p).fold(0.0f64, |a, v| a.max(v.abs()));
     if far > MAX {
         return Err(format!("coordinates up to {far:.3e} m lie outside ±{MAX:e} m; move the mesh nearer the origin or scale it"));
     }
