@@ -5,6 +5,7 @@
 //! the order is deterministic), and for every mesh node its copies — one per subdomain that
 //! touches it: interface nodes are duplicated and glued later by the B_E rows.
 
+use crate::comm::Comm;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 
@@ -49,17 +50,59 @@ pub fn decompose(mesh: &Mesh, parts: usize) -> Result<Decomposition> {
 
 /// Splits body b into `parts[b]` subdomains.
 pub fn decompose_each(mesh: &Mesh, parts: &[usize]) -> Result<Decomposition> {
-    let mut subdomains = Vec::new();
+    check_parts(mesh, parts)?;
+    let duals = DualGraphs::new(mesh);
+    let part: Vec<Vec<usize>> = (0..mesh.bodies.len()).map(|b| duals.partition(b, parts[b])).collect::<Result<_>>()?;
+    assemble(mesh, parts, |b, k| part[b][k])
+}
+
+/// [`decompose_each`] with each body's METIS partition made by one rank (body b by rank
+/// b % size) and shared with the others: every rank gets the same decomposition, and the ranks
+/// share the METIS work instead of each repeating all of it. The bodies' element graphs come
+/// from `duals` (built on first use, kept for the next count).
+pub fn decompose_shared<C: Comm>(comm: &C, duals: &DualGraphs, parts: &[usize]) -> Result<Decomposition> {
+    let mesh = duals.mesh;
+    check_parts(mesh, parts)?;
+    let (me, size) = (comm.rank(), comm.size());
+    // the part of every cell, filled by the rank that partitions its body, summed over the ranks
+    let mut part = vec![0u64; mesh.cells.len()];
+    let mut failed = Ok(());
+    for b in (me..mesh.bodies.len()).step_by(size) {
+        match duals.partition(b, parts[b]) {
+            Ok(p) => part[mesh.bodies[b].elems.clone()].iter_mut().zip(p).for_each(|(x, p)| *x = p as u64),
+            Err(e) => {
+                failed = Err(e);
+                break;
+            }
+        }
+    }
+    comm.agree(failed)?;
+    if size > 1 {
+        comm.sum_u64(&mut part);
+    }
+    assemble(mesh, parts, |b, k| part[mesh.bodies[b].elems.start + k] as usize)
+}
+
+/// Every body has at least as many elements as subdomains asked of it.
+fn check_parts(mesh: &Mesh, parts: &[usize]) -> Result<()> {
     for (b, body) in mesh.bodies.iter().enumerate() {
-        let parts = parts[b];
-        let ne = body.elems.len();
+        let (parts, ne) = (parts[b], body.elems.len());
         if parts == 0 || parts > ne {
             return Err(Error::scene("decomposition.subdomains", format!("body \"{}\" has {ne} elements; cannot split it into {parts} subdomains", body.name)));
         }
-        let part = partition(mesh, body.elems.clone(), parts).map_err(|m| Error::numerical(format!("METIS partition of body \"{}\"", body.name), m))?;
+    }
+    Ok(())
+}
+
+/// The subdomains from the part of every element (`part(b, k)`: body b's k-th element) and the
+/// copies of every node.
+fn assemble(mesh: &Mesh, parts: &[usize], part: impl Fn(usize, usize) -> usize) -> Result<Decomposition> {
+    let mut subdomains = Vec::new();
+    for (b, body) in mesh.bodies.iter().enumerate() {
+        let parts = parts[b];
         let mut elems = vec![Vec::new(); parts];
         for (k, e) in body.elems.clone().enumerate() {
-            elems[part[k]].push(e);
+            elems[part(b, k)].push(e);
         }
         for (p, es) in elems.into_iter().enumerate() {
             if es.is_empty() {
@@ -83,17 +126,56 @@ pub fn decompose_each(mesh: &Mesh, parts: &[usize]) -> Result<Decomposition> {
     Ok(Decomposition { subdomains, copies })
 }
 
-/// METIS k-way part of each element of `elems` (face-adjacency graph, contiguous parts).
-fn partition(mesh: &Mesh, elems: std::ops::Range<usize>, parts: usize) -> std::result::Result<Vec<usize>, String> {
-    let ne = elems.len();
-    if parts == 1 {
-        return Ok(vec![0; ne]);
+/// The element graphs of a mesh's bodies (elements adjacent when they share a face), each built
+/// once on first use: the graph METIS partitions for every subdomain count of the body.
+pub struct DualGraphs<'m> {
+    mesh: &'m Mesh,
+    graphs: Vec<std::sync::OnceLock<Dual>>,
+}
+
+/// One body's element graph in METIS's CSR form.
+struct Dual {
+    xadj: Vec<metis::Idx>,
+    adjncy: Vec<metis::Idx>,
+}
+
+impl<'m> DualGraphs<'m> {
+    /// No graph built yet.
+    pub fn new(mesh: &'m Mesh) -> Self {
+        DualGraphs { mesh, graphs: mesh.bodies.iter().map(|_| std::sync::OnceLock::new()).collect() }
     }
-    let idx = |v: usize| metis::Idx::try_from(v).map_err(|_| "mesh too large for 32-bit METIS indices".to_string());
-    // the body's elements with their nodes renumbered 0..nn
+
+    /// The METIS k-way part of each element of body b (in the body's element order; contiguous
+    /// parts).
+    fn partition(&self, b: usize, parts: usize) -> Result<Vec<usize>> {
+        let body = &self.mesh.bodies[b];
+        let failed = |m: String| Error::numerical(format!("METIS partition of body \"{}\"", body.name), m);
+        if parts == 1 {
+            return Ok(vec![0; body.elems.len()]);
+        }
+        let dual = match self.graphs[b].get() {
+            Some(d) => d,
+            None => {
+                let d = dual_graph(self.mesh, body.elems.clone(), body.nodes.start).map_err(failed)?;
+                self.graphs[b].get_or_init(|| d)
+            }
+        };
+        kway(dual, parts).map_err(failed)
+    }
+}
+
+/// The face-adjacency graph of the elements `elems` (METIS's dual graph: elements adjacent when
+/// they share `ncommon` corners); the body's nodes are `first..`, numbered for METIS in the order
+/// they are first met.
+fn dual_graph(mesh: &Mesh, elems: std::ops::Range<usize>, first: usize) -> std::result::Result<Dual, String> {
+    let ne = elems.len();
+    let too_large = || "mesh too large for 32-bit METIS indices".to_string();
+    // the body's elements with their nodes renumbered 0..nn (a flat array over the body's node
+    // range, not a hash map)
     let mut eptr = Vec::with_capacity(ne + 1);
     let mut eind = Vec::with_capacity(8 * ne);
-    let mut map = std::collections::HashMap::new();
+    let mut map: Vec<metis::Idx> = Vec::new();
+    let mut next: metis::Idx = 0;
     eptr.push(0);
     // corners only (a tet10's edge nodes would join cells that share an edge); cells that share a
     // face share 4 corners in a hexahedral mesh, 3 where triangles occur
@@ -101,17 +183,31 @@ fn partition(mesh: &Mesh, elems: std::ops::Range<usize>, parts: usize) -> std::r
     let ncommon = if hex_only { 4 } else { 3 };
     for e in elems {
         let c = &mesh.cells[e];
-        for v in &c.nodes()[..c.kind.corners()] {
-            let next = map.len();
-            eind.push(idx(*map.entry(v).or_insert(next))?);
+        for &v in &c.nodes()[..c.kind.corners()] {
+            let l = v.checked_sub(first).ok_or_else(|| format!("element {e} has node {v} outside its body"))?;
+            if l >= map.len() {
+                map.resize(l + 1, -1);
+            }
+            if map[l] < 0 {
+                map[l] = next;
+                next = next.checked_add(1).ok_or_else(too_large)?;
+            }
+            eind.push(map[l]);
         }
-        eptr.push(idx(eind.len())?);
+        eptr.push(metis::Idx::try_from(eind.len()).map_err(|_| too_large())?);
     }
-    let mut part = vec![0; ne];
-    crate::linalg::ordering::metis_exclusive(|| -> std::result::Result<(), String> {
+    crate::linalg::ordering::metis_exclusive(|| {
         let dual = metis::mesh_to_dual(&eptr, &eind, ncommon).map_err(|e| format!("dual graph: {e}"))?;
-        let (xadj, adjncy) = (dual.xadj().to_vec(), dual.adjncy().to_vec());
-        metis::Graph::new(1, idx(parts)?, &xadj, &adjncy)
+        Ok(Dual { xadj: dual.xadj().to_vec(), adjncy: dual.adjncy().to_vec() })
+    })
+}
+
+/// METIS k-way part of each vertex of the graph `dual` (contiguous parts, seed 1).
+fn kway(dual: &Dual, parts: usize) -> std::result::Result<Vec<usize>, String> {
+    let nparts = metis::Idx::try_from(parts).map_err(|_| "too many parts for 32-bit METIS indices".to_string())?;
+    let mut part = vec![0; dual.xadj.len() - 1];
+    crate::linalg::ordering::metis_exclusive(|| -> std::result::Result<(), String> {
+        metis::Graph::new(1, nparts, &dual.xadj, &dual.adjncy)
             .map_err(|e| format!("{e}"))?
             .set_option(metis::option::Contig(true))
             .set_option(metis::option::Seed(1))
@@ -173,6 +269,21 @@ mod tests {
                 assert_eq!(components(&mesh, &sd.elems), 1, "subdomain of body {} is split", sd.body);
             }
         }
+    }
+
+    #[test]
+    fn a_kept_element_graph_partitions_as_a_fresh_one() {
+        // one set of element graphs partitioned for several counts (built by the first), against
+        // fresh partitions of each count
+        let mesh = seed_mesh(6);
+        let duals = DualGraphs::new(&mesh);
+        for s in [4, 2, 8, 3] {
+            let kept = decompose_shared(&crate::comm::SerialComm, &duals, &vec![s; mesh.bodies.len()]).unwrap();
+            let fresh = decompose(&mesh, s).unwrap();
+            assert_eq!(kept.subdomains, fresh.subdomains, "{s} subdomains");
+            assert_eq!(kept.copies, fresh.copies);
+        }
+        assert!(duals.graphs.iter().all(|g| g.get().is_some()));
     }
 
     #[test]

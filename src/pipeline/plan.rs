@@ -37,7 +37,7 @@
 use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
-use crate::feti::decomposition::{decompose_each, Decomposition};
+use crate::feti::decomposition::{decompose_shared, Decomposition, DualGraphs};
 use crate::feti::{assign_ranks, constraints};
 use crate::linalg::ordering::{fill, nested_dissection, Fill};
 use crate::model::Model;
@@ -269,6 +269,9 @@ struct Pricing<'a, C: Comm> {
     /// 3 × nodes of each body, and the most of them.
     body_dofs: Vec<usize>,
     largest: usize,
+    /// The bodies' element graphs, built by the first partition and partitioned again by the
+    /// next counts.
+    duals: DualGraphs<'a>,
 }
 
 impl<'a, C: Comm> Pricing<'a, C> {
@@ -291,6 +294,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
             power: if solver.sigma.is_some() { 0.0 } else { solver.power_iterations as f64 },
             body_dofs,
             largest,
+            duals: DualGraphs::new(mesh),
         }
     }
 
@@ -529,7 +533,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
     fn tfeti(&self, dec: &DecompositionSettings, spec: &Spec, split: &mut Split) -> Result<(Candidate, Law, Partition)> {
         let (model, mesh) = (self.model, &self.model.mesh);
         let clock = std::time::Instant::now();
-        let d = decompose_each(mesh, &spec.parts)?;
+        let d = decompose_shared(self.comm, &self.duals, &spec.parts)?;
         split[0].1 += clock.elapsed().as_secs_f64();
         let clock = std::time::Instant::now();
         let elim = crate::feti::eliminated(mesh, &d, &model.constraints, dec.dirichlet);
@@ -819,6 +823,7 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
 mod tests {
     use super::*;
     use crate::comm::SerialComm;
+    use crate::feti::decomposition::decompose_each;
 
     #[test]
     fn the_pricing_is_balanced_and_its_samples_bounded() {

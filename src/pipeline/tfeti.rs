@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::feti::cluster::{ClusterSystem, Clustering};
 use crate::feti::coarse::{self, Coarse};
 use crate::feti::constraints::{self, LocalRhs};
-use crate::feti::decomposition::{decompose_each, Decomposition};
+use crate::feti::decomposition::{decompose_shared, Decomposition, DualGraphs};
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
 use crate::feti::smalse::{self, SmalseInfo};
@@ -205,7 +205,7 @@ pub fn setup<'c, C: Comm>(comm: &'c C, ls: &LoadedScene, model: &mut Model, t: &
         let clock = std::time::Instant::now();
         let d = match planned {
             Some((p, d)) if p == parts => d,
-            _ => decompose_each(mesh, &parts)?,
+            _ => decompose_shared(comm, &DualGraphs::new(mesh), &parts)?,
         };
         split.push(("decompose partition", clock.elapsed().as_secs_f64()));
         let clock = std::time::Instant::now();
