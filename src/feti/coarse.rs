@@ -501,6 +501,20 @@ impl Coarse {
         l
     }
 
+    /// λ = ΠGᵀ(GΠGᵀ)⁻¹e on the owned rows, with `chol` from [`Coarse::restricted`] and
+    /// `free` its contact rows (global): the least-norm solution of Gλ = e on the E rows and
+    /// the kept contact rows alone (the others 0).
+    pub fn lambda_restricted_owned<C: Comm>(&self, dist: &Distribution<'_, C>, chol: &Cholesky, free: &[bool]) -> Vec<f64> {
+        let mut a = self.e.clone();
+        Clock::time(&dist.clock.coarse_solve, || chol.solve_in_place(&mut a));
+        let mut l = vec![0.0; dist.owned.len()];
+        self.sub_gt(dist, &a, &mut l, Self::owned_rows(dist), false);
+        for (v, &r) in l.iter_mut().zip(&dist.owned) {
+            *v = if r < self.e_start && !free[r] { 0.0 } else { -*v };
+        }
+        l
+    }
+
     /// λ_e = Gᵀ(GGᵀ)⁻¹e on the local rows (every row: with bodies held by contact alone part of
     /// e is the contact's to carry): the least-norm solution of Gλ = e (orthogonal projector).
     pub fn lambda_e_local<C: Comm>(&self, dist: &Distribution<'_, C>) -> Vec<f64> {

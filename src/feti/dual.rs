@@ -169,6 +169,34 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
         b
     }
 
+    /// SMALSE-M's start where a body is held by contact alone: λ = ΠGᵀ(GΠGᵀ)⁻¹e (owned) with
+    /// Π the touching pairs (gap c ≤ 1e-9·max |c|, with their tangential rows): the load put on
+    /// the pairs that touch instead of spread over every row (a pressed sphere then grows its
+    /// contact zone from the pole instead of shedding most pairs; run/results/warm_start_floating2.txt).
+    /// `None` where those rows do not fix the rigid motions (GΠGᵀ singular on some rank).
+    pub fn touching_start(&self) -> Option<Vec<f64>> {
+        let l = self.layout;
+        let mut cmax = [(0..l.m).map(|i| self.c[l.normal(i)].abs()).fold(0.0f64, f64::max)];
+        self.dist.comm().max_f64(&mut cmax);
+        let gap = 1e-9 * cmax[0];
+        let mut free = vec![false; l.contact_dim()];
+        for i in (0..l.m).filter(|&i| self.c[l.normal(i)] <= gap) {
+            free[l.normal(i)] = true;
+            if l.friction {
+                free[l.tangent(i, 0)] = true;
+                free[l.tangent(i, 1)] = true;
+            }
+        }
+        let (free_all, _) = self.global_pi(&free, &[]);
+        let chol = self.coarse.restricted(&self.dist, &free_all, &[]);
+        let mut bad = [f64::from(u8::from(chol.is_none()))];
+        self.dist.comm().max_f64(&mut bad);
+        if bad[0] > 0.0 {
+            return None;
+        }
+        Some(self.coarse.lambda_restricted_owned(&self.dist, chol.as_ref().expect("checked"), &free_all))
+    }
+
     /// The contact rows that fix a body's rigid motion with the E rows, Π ([`Coarse::restricted`]),
     /// from this rank's free contact components and sliding directions (owned indices), summed
     /// over the ranks: (free per global contact row, sliding (global first row, t)).

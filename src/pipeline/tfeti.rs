@@ -564,13 +564,14 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
         });
         match (self.orthogonal, self.contact.is_some()) {
             (true, _) => {
-                // the first step starts from λ̂ (Gλ̂ = e; λ_e, the least-norm equilibrium,
-                // where a body is held by contact alone: its normal components give Coulomb's
-                // first bounds something to carry the load with); Coulomb is solved inside
+                // the first step starts from λ̂ (Gλ̂ = e); where a body is held by contact
+                // alone, from the least-norm equilibrium on the touching pairs (gap ≤ 0), else
+                // on every row (λ_e: its normal components give Coulomb's first bounds
+                // something to carry the load with); Coulomb is solved inside
                 // each augmented-Lagrangian step (`qp::solve_friction`)
                 let owned;
                 let x0 = if first {
-                    owned = dual.dist.owned_part(&dual.lambda_hat);
+                    owned = (!dual.coarse.held()).then(|| dual.touching_start()).flatten().unwrap_or_else(|| dual.dist.owned_part(&dual.lambda_hat));
                     &owned
                 } else {
                     x0
