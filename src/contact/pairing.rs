@@ -88,7 +88,8 @@ pub struct Contact {
     pub void: Vec<[bool; 2]>,
     /// The smoothed pressure of each row's slave node as weights on the rows of its entry:
     /// p̄ᵢ = Σ_j w_ij p_j, the area-weighted average over the node's slave facets of each
-    /// facet's mean nodal pressure ([`Contact::smooth`]).
+    /// facet's mean nodal pressure ([`Contact::smooth`]); on quadratic mortar faces the corner
+    /// hats' moments instead, edge nodes the mean of their corners (`vertex_weights`).
     pub smoothing: Vec<Vec<(usize, f64)>>,
 }
 
