@@ -26,7 +26,7 @@
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
-use crate::fem::facet::{cross, dot, facet_nodal_areas, facet_normal_area, sub};
+use crate::fem::facet::{cross, dot, edges, facet_nodal_areas, facet_normal_area, sub};
 use crate::mesh::FacetKind;
 use crate::mesh::{Face, Mesh};
 use crate::qp::cone::Coefficient;
@@ -88,7 +88,8 @@ pub struct Contact {
     pub void: Vec<[bool; 2]>,
     /// The smoothed pressure of each row's slave node as weights on the rows of its entry:
     /// p̄ᵢ = Σ_j w_ij p_j, the area-weighted average over the node's slave facets of each
-    /// facet's mean nodal pressure ([`Contact::smooth`]).
+    /// facet's mean nodal pressure ([`Contact::smooth`]); on quadratic mortar faces the corner
+    /// hats' moments instead, edge nodes the mean of their corners (`vertex_weights`).
     pub smoothing: Vec<Vec<(usize, f64)>>,
 }
 
@@ -637,7 +638,13 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             c.entry.push(k);
         }
         c.interference.push(fit);
-        smoothing_weights(mesh, slave, first_row, &mut c);
+        let quadratic_mortar =
+            c.discretization.last() == Some(&Discretization::Mortar) && slave.facets.iter().all(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+        if quadratic_mortar {
+            vertex_weights(mesh, slave, first_row, &mut c);
+        } else {
+            smoothing_weights(mesh, slave, first_row, &mut c);
+        }
     }
     Ok(c)
 }
@@ -665,6 +672,65 @@ fn smoothing_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
     }
     for (total, w) in acc {
         let mut w: Vec<(usize, f64)> = w.into_iter().map(|(j, x)| (j, x / total)).collect();
+        w.sort_unstable_by_key(|e| e.0);
+        c.smoothing.push(w);
+    }
+}
+
+/// The weights of [`Contact::smoothing`] for the rows `first..` of an entry whose slave facets are
+/// all quadratic (tri6, quad8) and mortar: the multipliers λ = p w are the moments ∫ φ̃ p of the
+/// modified basis φ̃ = T φ, so a corner c's linear hat N¹_c = N_c + ½ Σ_e N_e (e its edge nodes)
+/// carries ∫ N¹_c p = λ_c + ½ Σ_e λ_e whatever α; p̄_c is that over ∫ N¹_c, and an edge node gets
+/// the mean of its two corners. A node without a row counts as pressure 0.
+fn vertex_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
+    let row_of: HashMap<usize, usize> = (first..c.len()).map(|i| (c.slave[i], i)).collect();
+    // per corner node: ∫ N¹ over its facets, and its edge nodes (each once)
+    let mut hat: HashMap<usize, (f64, Vec<usize>)> = HashMap::new();
+    let mut corners_of: HashMap<usize, [usize; 2]> = HashMap::new();
+    for q in &slave.facets {
+        let v = q.nodes();
+        let x: Vec<[f64; 3]> = v.iter().map(|&k| mesh.nodes[k]).collect();
+        let raw = facet_nodal_areas(q.kind, &x);
+        let sign = raw.iter().sum::<f64>().signum();
+        let na: Vec<f64> = raw.iter().map(|a| sign * a).collect();
+        for k in 0..q.kind.corners() {
+            hat.entry(v[k]).or_default().0 += na[k];
+        }
+        for &(e, a, b) in edges(q.kind) {
+            for k in [a, b] {
+                let h = hat.entry(v[k]).or_default();
+                h.0 += 0.5 * na[e];
+                if !h.1.contains(&v[e]) {
+                    h.1.push(v[e]);
+                }
+            }
+            corners_of.insert(v[e], [v[a], v[b]]);
+        }
+    }
+    let corner = |node: usize| -> HashMap<usize, f64> {
+        let mut w = HashMap::new();
+        let (Some(&i), Some((n1, es))) = (row_of.get(&node), hat.get(&node)) else { return w };
+        w.insert(i, c.area[i] / n1);
+        for e in es {
+            if let Some(&j) = row_of.get(e) {
+                *w.entry(j).or_default() += 0.5 * c.area[j] / n1;
+            }
+        }
+        w
+    };
+    for i in first..c.len() {
+        let node = c.slave[i];
+        let w = match corners_of.get(&node) {
+            Some(&[a, b]) => {
+                let mut w = corner(a);
+                for (j, x) in corner(b) {
+                    *w.entry(j).or_default() += x;
+                }
+                w.into_iter().map(|(j, x)| (j, 0.5 * x)).collect()
+            }
+            None => corner(node),
+        };
+        let mut w: Vec<(usize, f64)> = w.into_iter().collect();
         w.sort_unstable_by_key(|e| e.0);
         c.smoothing.push(w);
     }
