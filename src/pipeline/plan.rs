@@ -131,7 +131,7 @@ pub struct Candidate {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Unknown {
-    /// A body held by contact alone: SMALSE-M's outer loop for Gλ = e (measured 2.0–2.3×).
+    /// A body held by contact alone: SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
     Floating,
     /// Coulomb friction: the fixed point on the normal multipliers (measured 0.3–1.0×, its
     /// Newton steps replace the Tresca solve's outer iterations).
@@ -145,7 +145,7 @@ impl Unknown {
     /// The low and high factor on the law's count.
     pub fn factors(self) -> (f64, f64) {
         match self {
-            Unknown::Floating => (1.0, 4.0),
+            Unknown::Floating => (0.6, 4.0),
             Unknown::Coulomb => (0.25, 1.1),
             Unknown::Displacement => (0.15, 1.0),
         }
