@@ -25,11 +25,15 @@
 //!   the nnz(L) term;
 //! - setup = [`SECONDS_PER_FLOP`] · Σ (column count)² + [`SECONDS_PER_DOF`] · DOFs of the
 //!   busiest rank (numeric factorization; assembly, ordering, kernels and rows of B);
-//! - nA with contact: [`PRODUCTS_PER_DIGIT`] · log10(1/ε) for the monolithic dual,
-//!   [`TFETI_PRODUCTS`] · (1 + [`TFETI_GROWTH`] · log2 S) times that for TFETI with S
-//!   subdomains on the largest body, plus the σ_max estimate's products; without contact one
-//!   solve for the monolithic dual, [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε)
-//!   product-equivalents (PCG with the Dirichlet preconditioner) for TFETI.
+//! - nA with contact: [`PRODUCTS_PER_DIGIT`] · log10(1/ε) · (m / 100)^[`PAIRS_EXPONENT`] for
+//!   the monolithic dual with m contact pairs, [`TFETI_PRODUCTS`] · (1 + [`TFETI_GROWTH`] ·
+//!   log2 S) times that for TFETI with S subdomains on the largest body, plus the σ_max
+//!   estimate's products; without contact one solve for the monolithic dual,
+//!   [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε) product-equivalents (PCG with the Dirichlet
+//!   preconditioner) for TFETI. Where the scene's products cannot be known before solving
+//!   ([`Unknown`]: a body held by contact alone, Coulomb friction, a load of prescribed
+//!   displacements alone) the count is a range, each factor's low–high times the law above, and
+//!   the candidate is priced at the range's geometric mean.
 //!
 //! The constants were fitted to the benchmark set on the development machine (docs/method.md,
 //! "The default choice"); the ranking, not the seconds, is what the choice uses.
@@ -56,10 +60,13 @@ pub const SECONDS_PER_ROW: f64 = 0.5e-6;
 pub const SECONDS_PER_FLOP: f64 = 2.5e-11;
 /// Seconds per DOF of a rank's pieces before the solve: assembly, ordering, kernels, rows of B.
 pub const SECONDS_PER_DOF: f64 = 1.0e-5;
-/// A-products per digit of ε of a contact solve on the monolithic dual.
-pub const PRODUCTS_PER_DIGIT: f64 = 18.0;
+/// A-products per digit of ε of a contact solve on the monolithic dual with 100 contact pairs
+/// (fitted on the load-driven Tresca scenes of run/results/cost_model_products.txt) …
+pub const PRODUCTS_PER_DIGIT: f64 = 14.0;
+/// … growing with the contact pairs m as (m / 100)^this.
+pub const PAIRS_EXPONENT: f64 = 0.19;
 /// TFETI's A-products with contact as a multiple of the monolithic dual's, at one subdomain …
-pub const TFETI_PRODUCTS: f64 = 1.45;
+pub const TFETI_PRODUCTS: f64 = 1.2;
 /// … growing by this fraction per doubling of the subdomains of the largest body.
 pub const TFETI_GROWTH: f64 = 0.04;
 /// Product-equivalents per digit of ε of TFETI's PCG without contact.
@@ -110,6 +117,49 @@ pub struct Candidate {
     /// Whether the figures were counted, modelled from a counted partition, or a lower bound.
     #[serde(default)]
     pub basis: Basis,
+    /// The range (low, high) of the A-products where the scene's count cannot be known before
+    /// solving; `n_a` is then its geometric mean.
+    #[serde(default)]
+    pub n_a_range: Option<(f64, f64)>,
+    /// Why the A-products are a range.
+    #[serde(default)]
+    pub unknowns: Vec<Unknown>,
+}
+
+/// What makes a scene's A-products unknown before solving: each widens the law's count by a
+/// factor between its low and high (measured on run/results/cost_model_products.txt).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Unknown {
+    /// A body held by contact alone: SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
+    Floating,
+    /// Coulomb friction: the fixed point on the normal multipliers (measured 0.3–1.0×, its
+    /// Newton steps replace the Tresca solve's outer iterations).
+    Coulomb,
+    /// Loaded by prescribed displacements alone: fewer products, as the contact set is
+    /// found in few iterations (measured 0.17–0.9×).
+    Displacement,
+}
+
+impl Unknown {
+    /// The low and high factor on the law's count.
+    pub fn factors(self) -> (f64, f64) {
+        match self {
+            Unknown::Floating => (0.6, 4.0),
+            Unknown::Coulomb => (0.25, 1.1),
+            Unknown::Displacement => (0.15, 1.0),
+        }
+    }
+
+    /// The footnote the table prints.
+    pub fn why(self) -> String {
+        let (lo, hi) = self.factors();
+        match self {
+            Unknown::Floating => format!("held by contact alone: the outer loop for Gλ = e (SMALSE-M) takes {lo}–{hi}× the law's products"),
+            Unknown::Coulomb => format!("Coulomb: × the fixed point's outer iterations, {lo}–{hi}× the Tresca law's products"),
+            Unknown::Displacement => format!("loaded by prescribed displacements alone: {lo}–{hi}× the load-driven law's products"),
+        }
+    }
 }
 
 /// Where a candidate's figures come from.
@@ -266,6 +316,10 @@ struct Pricing<'a, C: Comm> {
     digits: f64,
     /// The σ_max estimate's products (none when σ is given).
     power: f64,
+    /// Contact pairs (node pairs or mortar rows).
+    pairs: usize,
+    /// What makes the products a range.
+    unknowns: Vec<Unknown>,
     /// 3 × nodes of each body, and the most of them.
     body_dofs: Vec<usize>,
     largest: usize,
@@ -292,6 +346,14 @@ impl<'a, C: Comm> Pricing<'a, C> {
             contact_rows: contact.map_or(0, |c| c.len() * if c.has_friction() { 3 } else { 1 }),
             digits: (1.0 / eps).log10().max(1.0),
             power: if solver.sigma.is_some() { 0.0 } else { solver.power_iterations as f64 },
+            pairs: contact.map_or(0, |c| c.len()),
+            unknowns: contact.map_or(Vec::new(), |c| {
+                let loaded = model.loads.iter().any(|&f| f != 0.0);
+                [(!model.floating.is_empty(), Unknown::Floating), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
+                    .into_iter()
+                    .filter_map(|(on, u)| on.then_some(u))
+                    .collect()
+            }),
             body_dofs,
             largest,
             duals: DualGraphs::new(mesh),
@@ -308,8 +370,9 @@ impl<'a, C: Comm> Pricing<'a, C> {
         rank_of: &dyn Fn(usize) -> usize,
         dofs_of: &dyn Fn(usize) -> f64,
         rows: (usize, usize),
-        n_a: f64,
+        products: Products,
     ) -> Candidate {
+        let n_a = products.point;
         let ranks = self.ranks;
         let (mut nnz, mut flops, mut dofs) = (vec![0.0; ranks], vec![0.0; ranks], vec![0.0; ranks]);
         for (i, x) in f.iter().enumerate() {
@@ -331,6 +394,8 @@ impl<'a, C: Comm> Pricing<'a, C> {
             time: 0.0,
             explicit: false,
             basis: Basis::Counted,
+            n_a_range: products.range,
+            unknowns: if products.range.is_some() { self.unknowns.clone() } else { Vec::new() },
         };
         c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
         c.time = c.t_factor + n_a * c.t_product;
@@ -344,8 +409,9 @@ impl<'a, C: Comm> Pricing<'a, C> {
         let by_body = crate::model::constraints_by_body(mesh, &self.model.constraints);
         let f = self.body_fills(&by_body)?;
         let fills: Vec<Fill> = f.iter().map(|x| x.fill).collect();
-        let n_a = if contact.is_some() { PRODUCTS_PER_DIGIT * self.digits + self.power } else { 1.0 };
-        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), n_a);
+        let products = self.products(None);
+        let n_a = products.point;
+        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), products);
         if contact.is_some() && f.iter().all(|x| x.last) {
             self.explicit_products(&mut mono, &by_body, n_a);
         }
@@ -360,8 +426,9 @@ impl<'a, C: Comm> Pricing<'a, C> {
         let nb = mesh.bodies.len();
         let low = Law { nnz: BOUND * law.nnz, flops: BOUND * law.flops, pow: None, ..law };
         let fills: Vec<Fill> = mesh.bodies.iter().map(|b| low.fill(b.nodes.len() as f64)).collect();
-        let n_a = if self.contact.is_some() { PRODUCTS_PER_DIGIT * self.digits + self.power } else { 1.0 };
-        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), n_a);
+        let products = self.products(None);
+        let n_a = products.point;
+        let mut mono = self.candidate(vec![1; nb], None, &fills, &|b| super::owner(b, ranks), &|b| self.body_dofs[b] as f64, (0, 0), products);
         if self.contact.is_some() {
             let mut explicit = mono.clone();
             let by_body = crate::model::constraints_by_body(mesh, &self.model.constraints);
@@ -500,13 +567,24 @@ impl<'a, C: Comm> Pricing<'a, C> {
     }
 
     /// The predicted A-products of TFETI with `s` subdomains on the largest body.
-    fn tfeti_products(&self, s: usize) -> f64 {
-        let growth = 1.0 + TFETI_GROWTH * (s as f64).log2();
-        if self.contact.is_some() {
-            TFETI_PRODUCTS * growth * PRODUCTS_PER_DIGIT * self.digits + self.power
-        } else {
-            CG_PRODUCTS_PER_DIGIT * self.digits
+    fn tfeti_products(&self, s: usize) -> Products {
+        self.products(Some(s))
+    }
+
+    /// The predicted A-products: of the monolithic dual (`None`) or of TFETI with `s`
+    /// subdomains on the largest body; a range where the scene has [`Unknown`]s.
+    fn products(&self, tfeti: Option<usize>) -> Products {
+        if self.contact.is_none() {
+            let n = if tfeti.is_some() { CG_PRODUCTS_PER_DIGIT * self.digits } else { 1.0 };
+            return Products { point: n, range: None };
         }
+        let growth = tfeti.map_or(1.0, |s| TFETI_PRODUCTS * (1.0 + TFETI_GROWTH * (s as f64).log2()));
+        let law = growth * PRODUCTS_PER_DIGIT * self.digits * (self.pairs.max(1) as f64 / 100.0).powf(PAIRS_EXPONENT);
+        if self.unknowns.is_empty() {
+            return Products { point: law + self.power, range: None };
+        }
+        let (lo, hi) = range_factors(&self.unknowns);
+        Products { point: (lo * hi).sqrt() * law + self.power, range: Some((lo * law + self.power, hi * law + self.power)) }
     }
 
     /// A TFETI candidate priced from the law of a counted partition: every subdomain of body b
@@ -743,6 +821,33 @@ fn max(v: &[f64]) -> f64 {
     v.iter().copied().fold(0.0, f64::max)
 }
 
+/// A candidate's predicted A-products: the point it is priced at, and the range where unknown.
+#[derive(Clone, Copy, Debug)]
+struct Products {
+    point: f64,
+    range: Option<(f64, f64)>,
+}
+
+/// The low and high factors of several unknowns: a body held by contact alone multiplies;
+/// Coulomb friction and a displacement load, which measure the same few outer iterations,
+/// take the wider of their ranges.
+fn range_factors(unknowns: &[Unknown]) -> (f64, f64) {
+    let (mut lo, mut hi) = (1.0f64, 1.0f64);
+    let (mut slo, mut shi) = (f64::INFINITY, 0.0f64);
+    for u in unknowns {
+        let (l, h) = u.factors();
+        if *u == Unknown::Floating {
+            (lo, hi) = (lo * l, hi * h);
+        } else {
+            (slo, shi) = (slo.min(l), shi.max(h));
+        }
+    }
+    if shi > 0.0 {
+        (lo, hi) = (lo * slo, hi * shi);
+    }
+    (lo, hi)
+}
+
 /// The cheapest candidate.
 pub fn cheapest(cands: &[Candidate]) -> Option<&Candidate> {
     cands.iter().min_by(|a, b| a.time.total_cmp(&b.time))
@@ -793,14 +898,15 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
     let mut s = format!("decomposition by cost ({ranks} rank{}):\n", if ranks == 1 { "" } else { "s" });
     let _ = writeln!(
         s,
-        "  {:<16} {:>8} {:>9} {:>11} {:>11} {:>9} {:>6} {:>7} {:>9} {:>9} {:>9}",
+        "  {:<16} {:>8} {:>9} {:>11} {:>11} {:>9} {:>6} {:>9} {:>9} {:>9} {:>9}",
         "candidate", "figures", "DOFs/sub", "Σnnz(L)", "nnz(L)/rank", "dual", "Dir %", "nA", "t_A ms", "setup s", "total s"
     );
+    let mut unknowns: Vec<Unknown> = Vec::new();
     for c in cands {
         let dual = c.dual_rows();
         let _ = writeln!(
             s,
-            "  {:<16} {:>8} {:>9} {:>11.3e} {:>11.3e} {:>9} {:>6.1} {:>7.0} {:>9.2} {:>9.2} {:>9.2}{}",
+            "  {:<16} {:>8} {:>9} {:>11.3e} {:>11.3e} {:>9} {:>6.1} {:>9} {:>9.2} {:>9.2} {:>9.2}{}",
             c.label(),
             c.basis.word(),
             c.target_dofs.map_or("-".into(), |t| t.to_string()),
@@ -808,12 +914,25 @@ pub fn table(cands: &[Candidate], ranks: usize) -> String {
             c.nnz_l_rank,
             dual,
             100.0 * c.dirichlet_rows as f64 / dual.max(1) as f64,
-            c.n_a,
+            c.n_a_range.map_or(format!("{:.0}", c.n_a), |(lo, hi)| format!("{lo:.0}–{hi:.0}")),
             1e3 * c.t_product,
             c.t_factor,
             c.time,
             if Some(c.label()) == best { "  ← chosen" } else { "" }
         );
+    }
+    for c in cands {
+        for u in &c.unknowns {
+            if !unknowns.contains(u) {
+                unknowns.push(*u);
+            }
+        }
+    }
+    if let Some(c) = cands.iter().find(|c| c.n_a_range.is_some()) {
+        let _ = writeln!(s, "  nA lo–hi: not known before solving, priced at the geometric mean ({:.0} for {}):", c.n_a, c.label());
+    }
+    for u in unknowns {
+        let _ = writeln!(s, "    {}", u.why());
     }
     let _ = writeln!(s, "  (counted: partitioned, B built, fill counted on sampled subdomains or whole; model: power laws and surface law fitted on a counted partition; bound: a lower bound that loses)");
     s
