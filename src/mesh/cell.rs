@@ -293,8 +293,11 @@ impl Cell {
     /// The outward facet of local face `f`.
     pub fn facet(&self, elem: usize, f: usize) -> Facet {
         let local = self.kind.faces()[f];
-        let nodes: Vec<usize> = local.iter().map(|&l| self.nodes()[l]).collect();
-        Facet::new(elem, self.kind.facet_kind(local.len()), &nodes)
+        let (all, mut n) = (self.nodes(), [0; MAX_FACET_NODES]);
+        for (v, &l) in n.iter_mut().zip(local) {
+            *v = all[l];
+        }
+        Facet { elem, kind: self.kind.facet_kind(local.len()), n }
     }
 
     /// The coordinates of its nodes.

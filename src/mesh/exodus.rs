@@ -43,7 +43,8 @@ use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell};
+use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, renumber, singular, used_nodes, FileCell};
+use super::tags::TagIndex;
 use super::topology::{boundary_faces, facets_on_nodes, find_boundary_facet, NamedFaces};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
@@ -413,14 +414,15 @@ fn build(nc: &Nc, volume: Option<&str>) -> std::result::Result<BodyGeometry, Str
         }
     }
     let file_cells: Vec<FileCell<'_>> = conn.iter().map(|(l, k, v)| (*l, *k, v.as_slice())).collect();
-    let index: HashMap<u64, usize> = (0..coords.len()).map(|i| (i as u64 + 1, i)).collect();
+    let index = TagIndex::one_based(coords.len());
     let (file_nodes, used) = file_cell_nodes(&file_cells, &index, coords.len())?;
     check_listed_twice(&file_nodes, &file_cells)?;
     check_scale(&coords, &file_nodes, &file_cells)?;
     let (local, nodes) = used_nodes(&coords, &used);
     let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
-    for (h, &(label, kind, _)) in file_nodes.iter().zip(&file_cells) {
-        let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+    for (h, &(label, kind, _)) in file_nodes.into_iter().zip(&file_cells) {
+        let mut cell = h;
+        renumber(&mut cell, &local);
         orient(&mut cell, &nodes).map_err(|why| format!("{} {label} {why}", singular(kind)))?;
         cells.push(cell);
     }

@@ -29,7 +29,8 @@ use std::path::Path;
 
 use ::hdf5::{File, Group};
 
-use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell};
+use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, renumber, singular, used_nodes, FileCell};
+use super::tags::TagIndex;
 use super::topology::{boundary_faces, find_boundary_facet};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
@@ -265,30 +266,32 @@ impl Med {
     fn build(&self, volume: Option<&str>) -> std::result::Result<BodyGeometry, String> {
         let chosen = self.select(volume)?;
         // the program's node order, MED position + 1 as the node "tag"
-        let lists: Vec<Vec<u64>> = chosen
-            .iter()
-            .map(|&(b, c)| {
-                let Ty::Cell(_, perm) = self.blocks[b].ty else { unreachable!("selected volume cells") };
-                let cell = self.blocks[b].cell(c);
-                perm.iter().map(|&k| cell[k] + 1).collect()
-            })
-            .collect();
+        // every cell's list in one vector (a million cells: no vector each), cell i's ending at ends[i]
+        let (mut flat, mut ends): (Vec<u64>, Vec<usize>) = (Vec::new(), Vec::with_capacity(chosen.len()));
+        for &(b, c) in &chosen {
+            let Ty::Cell(_, perm) = self.blocks[b].ty else { unreachable!("selected volume cells") };
+            let cell = self.blocks[b].cell(c);
+            flat.extend(perm.iter().map(|&k| cell[k] + 1));
+            ends.push(flat.len());
+        }
         let file_cells: Vec<FileCell<'_>> = chosen
             .iter()
-            .zip(&lists)
-            .map(|(&(b, c), l)| {
+            .enumerate()
+            .map(|(i, &(b, c))| {
                 let Ty::Cell(kind, _) = self.blocks[b].ty else { unreachable!("selected volume cells") };
-                (c as u64 + 1, kind, l.as_slice())
+                let start = if i == 0 { 0 } else { ends[i - 1] };
+                (c as u64 + 1, kind, &flat[start..ends[i]])
             })
             .collect();
-        let index: HashMap<u64, usize> = (0..self.coords.len()).map(|i| (i as u64 + 1, i)).collect();
+        let index = TagIndex::one_based(self.coords.len());
         let (file_nodes, used) = file_cell_nodes(&file_cells, &index, self.coords.len())?;
         check_listed_twice(&file_nodes, &file_cells)?;
         check_scale(&self.coords, &file_nodes, &file_cells)?;
         let (local, nodes) = used_nodes(&self.coords, &used);
         let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
-        for ((h, &(label, kind, _)), &(b, _)) in file_nodes.iter().zip(&file_cells).zip(&chosen) {
-            let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+        for ((h, &(label, kind, _)), &(b, _)) in file_nodes.into_iter().zip(&file_cells).zip(&chosen) {
+            let mut cell = h;
+            renumber(&mut cell, &local);
             orient(&mut cell, &nodes).map_err(|why| format!("{} {label} of MAI/{} {why}", singular(kind), self.blocks[b].name))?;
             cells.push(cell);
         }

@@ -12,6 +12,7 @@ pub mod exodus;
 pub mod gmsh;
 pub mod med;
 pub(crate) mod rigid;
+pub(crate) mod tags;
 pub(crate) mod topology;
 
 use std::ops::Range;

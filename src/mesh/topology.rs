@@ -3,15 +3,44 @@
 
 use std::collections::{HashMap, HashSet};
 
+use rustc_hash::FxHashMap;
+
 use super::cell::{corner_key, Cell, Facet};
+
+/// One facet in the sort of [`boundary_faces`]: its corners packed into one `u128`, its cell,
+/// its place in the cell.
+pub type FacetEntry = (u128, u32, u32);
+
+/// The boundary facets keyed by their sorted corners ([`corner_key`]).
+pub type Boundary = FxHashMap<[usize; 4], Facet>;
 
 /// All boundary facets (faces that belong to exactly one cell), keyed by their sorted corners.
 ///
 /// Sort-based: every facet with its key in one vector, sorted by key, the keys met once kept
-/// (a hash map of every facet of a million-cell mesh costs seconds; the sort a fraction).
-pub fn boundary_faces(cells: &[Cell]) -> HashMap<[usize; 4], Facet> {
+/// (a hash map of every facet of a million-cell mesh costs seconds; the sort a fraction). Where
+/// every node index fits in 32 bits the key is packed into one `u128` (32-byte entries).
+pub fn boundary_faces(cells: &[Cell]) -> Boundary {
     let total: usize = cells.iter().map(|c| c.kind.faces().len()).sum();
-    // (key, cell, local facet): small entries sort fast; the facet is rebuilt for the kept ones
+    let narrow = cells.len() <= u32::MAX as usize && cells.iter().flat_map(Cell::nodes).all(|&v| v < u32::MAX as usize);
+    let mut boundary = Boundary::default();
+    if narrow {
+        // (packed key, cell, local facet): the facet is rebuilt for the kept ones
+        let pack = |k: [usize; 4]| k.iter().fold(0u128, |a, &v| (a << 32) | v.min(u32::MAX as usize) as u128);
+        let mut all: Vec<FacetEntry> = Vec::with_capacity(total);
+        for (e, c) in cells.iter().enumerate() {
+            for f in 0..c.kind.faces().len() {
+                all.push((pack(c.facet(e, f).key()), e as u32, f as u32));
+            }
+        }
+        all.sort_unstable_by_key(|&(k, _, _)| k);
+        for run in all.chunk_by(|a, b| a.0 == b.0) {
+            if let [(_, e, f)] = run {
+                let q = cells[*e as usize].facet(*e as usize, *f as usize);
+                boundary.insert(q.key(), q);
+            }
+        }
+        return boundary;
+    }
     let mut all: Vec<([usize; 4], usize, usize)> = Vec::with_capacity(total);
     for (e, c) in cells.iter().enumerate() {
         for f in 0..c.kind.faces().len() {
@@ -19,7 +48,6 @@ pub fn boundary_faces(cells: &[Cell]) -> HashMap<[usize; 4], Facet> {
         }
     }
     all.sort_unstable_by_key(|&(k, _, _)| k);
-    let mut boundary = HashMap::new();
     for run in all.chunk_by(|a, b| a.0 == b.0) {
         if let [(k, e, f)] = run {
             boundary.insert(*k, cells[*e].facet(*e, *f));
@@ -29,13 +57,13 @@ pub fn boundary_faces(cells: &[Cell]) -> HashMap<[usize; 4], Facet> {
 }
 
 /// Looks a facet up among the boundary facets by its corners, whatever their order.
-pub fn find_boundary_facet<'a>(boundary: &'a HashMap<[usize; 4], Facet>, corners: &[usize]) -> Option<&'a Facet> {
+pub fn find_boundary_facet<'a>(boundary: &'a Boundary, corners: &[usize]) -> Option<&'a Facet> {
     boundary.get(&corner_key(corners))
 }
 
 /// The boundary facets, in cell order (a deterministic order), all of whose nodes lie in `set`:
 /// the face a node set (Abaqus `*SURFACE, TYPE=NODE`, an Exodus node set) makes.
-pub fn facets_on_nodes(cells: &[Cell], boundary: &HashMap<[usize; 4], Facet>, set: &HashSet<usize>) -> Vec<Facet> {
+pub fn facets_on_nodes(cells: &[Cell], boundary: &Boundary, set: &HashSet<usize>) -> Vec<Facet> {
     let mut list = Vec::new();
     for (c, cell) in cells.iter().enumerate() {
         for f in 0..cell.kind.faces().len() {

@@ -192,7 +192,7 @@ pub fn box_counts(n: [usize; 3], kind: CellKind) -> (f64, f64, f64) {
 /// What the box generator holds only while it cuts a box of `n` nodes per direction into
 /// tetrahedra (0 for hexahedra), besides the arrays [`MeshCount::bytes`] counts: the hexahedra
 /// it cuts, the vector of every face of the tetrahedra that [`crate::mesh::topology::boundary_faces`]
-/// sorts the boundary out of (4 faces per cell, a 48-byte entry: the key, the cell, the face)
+/// sorts the boundary out of (4 faces per cell, a 32-byte entry: the packed key, the cell, the face)
 /// and, for tet10, the map of edge nodes (≈ 32 B per edge).
 pub fn tetrahedralize_bytes(n: [usize; 3], kind: CellKind) -> f64 {
     if !matches!(kind, CellKind::Tet4 | CellKind::Tet10) {
@@ -200,7 +200,7 @@ pub fn tetrahedralize_bytes(n: [usize; 3], kind: CellKind) -> f64 {
     }
     let (hex_nodes, hexes, _) = box_counts(n, CellKind::Hex8);
     let (nodes, cells, _) = box_counts(n, kind);
-    let entry = std::mem::size_of::<([usize; 4], usize, usize)>() as f64;
+    let entry = std::mem::size_of::<crate::mesh::topology::FacetEntry>() as f64;
     let edges = nodes - hex_nodes;
     std::mem::size_of::<Cell>() as f64 * hexes + entry * 4.0 * cells + 32.0 * edges
 }

@@ -7,7 +7,7 @@
 //! instance `k` (from 1) holds its part's label `L` as `k·2⁴⁰ + L`, shown as `i.L` in messages;
 //! assembly-level sets and surfaces name them `i.L` or `i.set`, or give `INSTANCE=i`.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 use super::{fields, float, param, Deck, Elem, Fail, Surface, SurfaceItem, Ty};
 use crate::mesh::{Cell, Facet};
@@ -233,7 +233,7 @@ impl Deck {
         &self,
         s: &Surface,
         cells: &[Cell],
-        boundary: &HashMap<[usize; 4], Facet>,
+        boundary: &super::super::topology::Boundary,
         to_local: &dyn Fn(&u64) -> Option<usize>,
     ) -> Result<Vec<Facet>, Fail> {
         let mut set = HashSet::new();

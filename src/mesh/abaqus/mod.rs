@@ -43,11 +43,14 @@
 mod assembly;
 
 use std::collections::{HashMap, HashSet};
+
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, singular, used_nodes, FileCell, SUPPORTED};
+use super::gmsh::{check_listed_twice, check_scale, file_cell_nodes, orient, renumber, singular, used_nodes, FileCell, SUPPORTED};
+use super::tags::TagIndex;
 use super::topology::{boundary_faces, find_boundary_facet, NamedFaces};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
@@ -404,9 +407,9 @@ enum Block {
 struct Deck {
     /// (label, coordinates) in file order.
     nodes: Vec<(u64, [f64; 3])>,
-    node_line: HashMap<u64, usize>,
+    node_line: FxHashMap<u64, usize>,
     elems: Vec<Elem>,
-    elem_index: HashMap<u64, usize>,
+    elem_index: FxHashMap<u64, usize>,
     elsets: Sets,
     nsets: Sets,
     surfaces: Vec<Surface>,
@@ -622,7 +625,7 @@ impl Deck {
 
     /// The body of element set `volume` (every volume element when `None`).
     fn build(&self, volume: Option<&str>) -> std::result::Result<BodyGeometry, Fail> {
-        let in_set: Option<HashSet<u64>> = match volume {
+        let in_set: Option<FxHashSet<u64>> = match volume {
             None => None,
             Some(name) => Some(self.elsets.get(name).ok_or_else(|| Fail::file(self.unknown_set(name)))?.labels.iter().copied().collect()),
         };
@@ -647,10 +650,11 @@ impl Deck {
         if cells_at.is_empty() {
             return Err(Fail::file(format!("{what} holds no volume elements; supported: {ABAQUS_SUPPORTED} (as {SUPPORTED})")));
         }
-        let index: HashMap<u64, usize> = self.nodes.iter().enumerate().map(|(i, (t, _))| (*t, i)).collect();
+        let tags: Vec<u64> = self.nodes.iter().map(|(t, _)| *t).collect();
+        let index = TagIndex::new(&tags).map_err(|i| Fail::file(format!("node {} is defined twice", self.show(tags[i]))))?;
         for &e in &cells_at {
             let el = &self.elems[e];
-            if let Some(t) = el.nodes.iter().find(|t| !index.contains_key(t)) {
+            if let Some(t) = el.nodes.iter().find(|&&t| !index.contains(t)) {
                 return Err(Fail::at(el.line, format!("element {} refers to node {}, which no *NODE defines", self.show(el.label), self.show(*t))));
             }
         }
@@ -668,13 +672,14 @@ impl Deck {
         check_scale(&coords, &file_nodes, &file_cells).map_err(Fail::file)?;
         let (local, nodes) = used_nodes(&coords, &used);
         let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
-        for ((h, &(label, kind, _)), &e) in file_nodes.iter().zip(&file_cells).zip(&cells_at) {
-            let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+        for ((h, &(label, kind, _)), &e) in file_nodes.into_iter().zip(&file_cells).zip(&cells_at) {
+            let mut cell = h;
+            renumber(&mut cell, &local);
             orient(&mut cell, &nodes).map_err(|why| Fail::at(self.elems[e].line, format!("{} {} {why}", singular(kind), self.show(label))))?;
             cells.push(cell);
         }
-        let cell_of: HashMap<u64, usize> = file_cells.iter().enumerate().map(|(c, (label, _, _))| (*label, c)).collect();
-        let to_local = |t: &u64| index.get(t).map(|&i| local[i]).filter(|&l| l != usize::MAX);
+        let cell_of: FxHashMap<u64, usize> = file_cells.iter().enumerate().map(|(c, (label, _, _))| (*label, c)).collect();
+        let to_local = |t: &u64| index.get(*t).map(|i| local[i]).filter(|&l| l != usize::MAX);
         let faces = self.faces(&cells, &cell_of, &to_local)?;
         Ok(BodyGeometry { nodes, cells, faces })
     }
@@ -691,7 +696,7 @@ impl Deck {
     fn faces(
         &self,
         cells: &[Cell],
-        cell_of: &HashMap<u64, usize>,
+        cell_of: &FxHashMap<u64, usize>,
         to_local: &dyn Fn(&u64) -> Option<usize>,
     ) -> std::result::Result<Vec<(String, Vec<Facet>)>, Fail> {
         let boundary = boundary_faces(cells);

@@ -27,6 +27,8 @@ use std::path::Path;
 
 use mshio::{ElementType, MshFile, MshParserError};
 
+use super::cell::MAX_CELL_NODES;
+use super::tags::TagIndex;
 use super::topology::{boundary_faces, find_boundary_facet};
 use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
@@ -494,8 +496,8 @@ fn build(msh: &Msh, names: &HashMap<(i32, i32), String>, tags: &[u64], volume: O
 
     // Cells in local numbering, each oriented (consistently inverted ones reordered).
     let mut cells: Vec<Cell> = Vec::with_capacity(file_nodes.len());
-    for (h, &(etag, kind, _)) in file_nodes.iter().zip(file_cells) {
-        let mut cell = Cell::new(kind, &h.iter().map(|&i| local[i]).collect::<Vec<_>>());
+    for (mut cell, &(etag, kind, _)) in file_nodes.into_iter().zip(file_cells) {
+        renumber(&mut cell, &local);
         orient(&mut cell, &nodes).map_err(|why| format!("{} {etag} {why}", singular(kind)))?;
         cells.push(cell);
     }
@@ -583,31 +585,29 @@ impl<'m> Elements<'m> {
 
 /// The coordinates of every node in file order, and the file index of every tag (each tag
 /// once, every coordinate finite).
-fn node_index(msh: &Msh, tags: &[u64]) -> Result<(Vec<[f64; 3]>, HashMap<u64, usize>), String> {
+fn node_index(msh: &Msh, tags: &[u64]) -> Result<(Vec<[f64; 3]>, TagIndex), String> {
     let coords: Vec<[f64; 3]> = msh.data.nodes.iter().flat_map(|n| &n.node_blocks).flat_map(|b| b.nodes.iter().map(|p| [p.x, p.y, p.z])).collect();
     if coords.len() != tags.len() {
         return Err(format!("{UNREADABLE}: malformed $Nodes section"));
     }
-    let mut index: HashMap<u64, usize> = HashMap::with_capacity(tags.len());
-    for (i, (&t, p)) in tags.iter().zip(&coords).enumerate() {
-        if index.insert(t, i).is_some() {
-            return Err(format!("node {t} is defined twice in $Nodes"));
-        }
-        if p.iter().any(|x| !x.is_finite()) {
-            return Err(format!("node {t} has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]));
-        }
+    // the first fault in file order: a tag defined twice, or a non-finite coordinate before it
+    let index = TagIndex::new(tags);
+    let twice = *index.as_ref().err().unwrap_or(&tags.len());
+    if let Some((t, p)) = tags[..twice].iter().zip(&coords).find(|(_, p)| p.iter().any(|x| !x.is_finite())) {
+        return Err(format!("node {t} has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]));
     }
+    let index = index.map_err(|i| format!("node {} is defined twice in $Nodes", tags[i]))?;
     Ok((coords, index))
 }
 
 /// Refuses surface elements that name nodes the file does not define (those of other volumes
 /// are fine: such facets are skipped in [`named_faces`]).
-fn check_surface_nodes(msh: &Msh, index: &HashMap<u64, usize>) -> Result<(), String> {
+fn check_surface_nodes(msh: &Msh, index: &TagIndex) -> Result<(), String> {
     let blocks = msh.data.elements.iter().flat_map(|e| &e.element_blocks);
     for block in blocks.filter(|b| b.entity_dim == 2) {
         let Some((_, name)) = surface_kind(block.element_type) else { continue };
         for e in &block.elements {
-            if let Some(t) = e.nodes.iter().find(|t| !index.contains_key(t)) {
+            if let Some(t) = e.nodes.iter().find(|&&t| !index.contains(t)) {
                 return Err(format!("{name} {} refers to node {t}, which is not in $Nodes", e.element_tag));
             }
         }
@@ -628,43 +628,52 @@ pub(super) fn used_nodes(coords: &[[f64; 3]], used: &[bool]) -> (Vec<usize>, Vec
 }
 
 /// The cells in file indices, and which of the `n` file nodes they use.
-pub(super) fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &HashMap<u64, usize>, n: usize) -> Result<(Vec<Vec<usize>>, Vec<bool>), String> {
-    let mut file_nodes: Vec<Vec<usize>> = Vec::with_capacity(file_cells.len());
+pub(super) fn file_cell_nodes(file_cells: &[FileCell<'_>], index: &TagIndex, n: usize) -> Result<(Vec<Cell>, Vec<bool>), String> {
+    let mut file_nodes: Vec<Cell> = Vec::with_capacity(file_cells.len());
     let mut used = vec![false; n];
+    let mut h = [0usize; MAX_CELL_NODES];
     for &(etag, kind, nodes) in file_cells {
         if nodes.len() != kind.len() {
             return Err(format!("{} {etag} has {} nodes, expected {}", singular(kind), nodes.len(), kind.len()));
         }
-        let mut h = Vec::with_capacity(nodes.len());
-        for t in nodes {
-            let i = *index.get(t).ok_or_else(|| format!("{} {etag} refers to node {t}, which is not in $Nodes", singular(kind)))?;
+        for (slot, &t) in h.iter_mut().zip(nodes) {
+            let i = index.get(t).ok_or_else(|| format!("{} {etag} refers to node {t}, which is not in $Nodes", singular(kind)))?;
             used[i] = true;
-            h.push(i);
+            *slot = i;
         }
-        file_nodes.push(h);
+        file_nodes.push(Cell::new(kind, &h[..nodes.len()]));
     }
     Ok((file_nodes, used))
 }
 
+/// A cell of file indices renumbered to the local ones `local`.
+pub(super) fn renumber(cell: &mut Cell, local: &[usize]) {
+    for v in cell.nodes_mut() {
+        *v = local[*v];
+    }
+}
+
 /// Refuses a cell listed twice (the same nodes, in any order, under another tag): it would be
 /// counted twice, and its faces would stop being boundary faces (a clamped face loses them).
-pub(super) fn check_listed_twice(file_nodes: &[Vec<usize>], file_cells: &[FileCell<'_>]) -> Result<(), String> {
+pub(super) fn check_listed_twice(file_nodes: &[Cell], file_cells: &[FileCell<'_>]) -> Result<(), String> {
     // sorted by (type, four smallest nodes, file order): a repeat lies in a run of equal
     // prefixes, where the whole sorted node lists are compared; the first in file order wins
     let sorted = |c: usize| {
-        let mut k = file_nodes[c].clone();
+        let mut k = file_nodes[c].nodes().to_vec();
         k.sort_unstable();
         k
     };
+    let mut low = [0usize; MAX_CELL_NODES];
     let mut order: Vec<([usize; 5], usize)> = file_nodes
         .iter()
         .enumerate()
         .map(|(c, h)| {
             let mut k = [usize::MAX; 5];
             k[0] = file_cells[c].1.code();
-            let mut low = h.clone();
+            let low = &mut low[..h.nodes().len()];
+            low.copy_from_slice(h.nodes());
             low.sort_unstable();
-            for (slot, v) in k[1..].iter_mut().zip(low) {
+            for (slot, &v) in k[1..].iter_mut().zip(low.iter()) {
                 *slot = v;
             }
             (k, c)
@@ -696,7 +705,7 @@ fn named_faces(
     names: &HashMap<(i32, i32), String>,
     surf_groups: &HashMap<i32, &[i32]>,
     surface_elems: &HashMap<i32, Vec<&[u64]>>,
-    index: &HashMap<u64, usize>,
+    index: &TagIndex,
     local: &[usize],
     cells: &[Cell],
 ) -> Vec<(String, Vec<Facet>)> {
@@ -830,12 +839,13 @@ fn edges(kind: CellKind) -> &'static [[usize; 2]] {
 /// within what double precision carries through element volumes (∝ h³) and the stiffness
 /// (∝ E·h): [`crate::scene::range`]. (An element collapsed to a point is left to the
 /// orientation check, which calls it degenerate.)
-pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u64, CellKind, &[u64])]) -> Result<(), String> {
+pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Cell], tags: &[(u64, CellKind, &[u64])]) -> Result<(), String> {
     use crate::scene::range::{MAX, MIN};
     // (edge, element tag, type) of the shortest and the longest longest-edge
     let mut lo: Option<(f64, u64, CellKind)> = None;
     let mut hi: Option<(f64, u64, CellKind)> = None;
     for (h, &(etag, kind, _)) in cells.iter().zip(tags) {
+        let h = h.nodes();
         let len = |[a, b]: [usize; 2]| {
             let (p, q) = (coords[h[a]], coords[h[b]]);
             // scaled first: the squares of 1e-200 or 1e200 do not survive
@@ -872,7 +882,7 @@ pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u6
         }
     }
     let mut used = vec![false; coords.len()];
-    for &v in cells.iter().flatten() {
+    for &v in cells.iter().flat_map(Cell::nodes) {
         used[v] = true;
     }
     let far = coords.iter().zip(&used).filter(|(_, &u)| u).flat_map(|(p, _)| *p).fold(0.0f64, |a, v| a.max(v.abs()));
@@ -884,9 +894,9 @@ pub(super) fn check_scale(coords: &[[f64; 3]], cells: &[Vec<usize>], tags: &[(u6
 
 /// Local nodes of the corners of a file surface element (its first three or four nodes), or
 /// `None` if one of them is not a node of the body.
-fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Option<Vec<usize>> {
+fn corners_local(q: &[u64], index: &TagIndex, local: &[usize]) -> Option<Vec<usize>> {
     let n = if q.len() == 3 || q.len() == 6 { 3 } else { 4 };
-    q.get(..n)?.iter().map(|t| local.get(*index.get(t)?).copied().filter(|&l| l != usize::MAX)).collect()
+    q.get(..n)?.iter().map(|&t| local.get(index.get(t)?).copied().filter(|&l| l != usize::MAX)).collect()
 }
 
 /// Orients `cell` (coordinates `x`): a cell whose corner Jacobians are all positive is kept,
@@ -894,14 +904,27 @@ fn corners_local(q: &[u64], index: &HashMap<u64, usize>, local: &[usize]) -> Opt
 /// error (the reason, to follow the cell's name). (A 10-node tetrahedron whose edge nodes are
 /// out of place, inverted between its corners, is refused by the assembly's Jacobian check.)
 pub(super) fn orient(cell: &mut Cell, x: &[[f64; 3]]) -> Result<(), String> {
-    let p = cell.coords(x);
-    let j: Vec<f64> = match cell.kind {
+    // no allocation for hexahedra and tetrahedra (a million cells)
+    let mut buf = [[0.0; 3]; MAX_CELL_NODES];
+    let p = cell.coords_in(x, &mut buf);
+    let (hex, tet, other): ([f64; 8], [f64; 1], Vec<f64>);
+    let j: &[f64] = match cell.kind {
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => {
-            corner_jacobians(p.get(..8).and_then(|c| c.try_into().ok()).ok_or("has a wrong node count")?).to_vec()
+            hex = corner_jacobians(p.get(..8).and_then(|c| c.try_into().ok()).ok_or("has a wrong node count")?);
+            &hex
         }
-        CellKind::Tet4 | CellKind::Tet10 => vec![scaled_triple(p[0], p[1], p[2], p[3])],
-        CellKind::Wedge6 | CellKind::Wedge15 => wedge_corner_jacobians(&p),
-        CellKind::Pyr5 => pyramid_corner_jacobians(&p),
+        CellKind::Tet4 | CellKind::Tet10 => {
+            tet = [scaled_triple(p[0], p[1], p[2], p[3])];
+            &tet
+        }
+        CellKind::Wedge6 | CellKind::Wedge15 => {
+            other = wedge_corner_jacobians(p);
+            &other
+        }
+        CellKind::Pyr5 => {
+            other = pyramid_corner_jacobians(p);
+            &other
+        }
     };
     if j.iter().any(|&d| d <= 0.0) {
         if !j.iter().all(|&d| d < 0.0) {
