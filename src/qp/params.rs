@@ -211,8 +211,8 @@ pub struct Tssn {
     /// many directions of the earlier steps' solves. 0: off.
     pub recycle: usize,
     /// Damped active set, θ ∈ [0, 1): a normal row changes between the free and the fixed set
-    /// of the last Newton step only where |yᵢ| = |λᵢ − ρrᵢ| exceeds θ·ρ‖r̃_ρ‖ (the largest
-    /// violator always changes, so the iteration cannot stall). 0, the default: off.
+    /// of the last Newton step only where |yᵢ| = |λᵢ − ρrᵢ| is at least θ times the largest
+    /// |yᵢ| of the rows that would change (that one always changes: no stall). 0, the default: off.
     pub damping: f64,
 }
 

@@ -71,14 +71,14 @@ struct System {
 impl System {
     /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere);
     /// sliding pairs with cᵢ > `cap` stay at x (no σᵢ). `damp` = (the last step's free
-    /// components, t): a normal row keeps its last state where |yᵢ| ≤ t ([`Tssn::damping`]).
+    /// components, t): a normal row keeps its last state where |yᵢ| < t ([`Tssn::damping`]).
     fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, cap: f64, damp: Option<(&[bool], f64)>, x0: &mut [f64]) -> System {
         let n = x.len();
         let y: Vec<f64> = (0..n).map(|i| x[i] - rho * r[i]).collect();
         let mut sets = set.active_sets(x, r, rho);
         if let Some((last, t)) = damp.filter(|d| d.0.len() == n) {
             for i in 0..set.layout.m {
-                if sets.free[i] != last[i] && y[i].abs() <= t {
+                if sets.free[i] != last[i] && y[i].abs() < t {
                     sets.free[i] = last[i];
                     if last[i] {
                         sets.normal_active += 1;
@@ -207,7 +207,12 @@ pub(crate) fn run<A: Operator>(
             Some((f, _)) => Cow::Borrowed(f),
             None => at(&x),
         };
-        let damp = (p.damping > 0.0).then(|| (held.as_slice(), p.damping * rho * err * bnorm));
+        // the damped active set: rows may change state where |yᵢ| > θ·(the largest |yᵢ| of the rows that would)
+        let damp = (p.damping > 0.0 && held.len() == n).then(|| {
+            let want = set_k.active_sets(&x, &r, rho);
+            let largest = (0..set_k.layout.m).filter(|&i| want.free[i] != held[i]).map(|i| (x[i] - rho * r[i]).abs()).fold(0.0, f64::max);
+            (held.as_slice(), p.damping * sp.max(largest))
+        });
         let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, damp, &mut x0);
         if p.damping > 0.0 {
             held.clone_from(&sys.sets.free);
