@@ -207,12 +207,7 @@ pub(crate) fn run<A: Operator>(
             Some((f, _)) => Cow::Borrowed(f),
             None => at(&x),
         };
-        // the damped active set: rows may change state where |yᵢ| > θ·(the largest |yᵢ| of the rows that would)
-        let damp = (p.damping > 0.0 && held.len() == n).then(|| {
-            let want = set_k.active_sets(&x, &r, rho);
-            let largest = (0..set_k.layout.m).filter(|&i| want.free[i] != held[i]).map(|i| (x[i] - rho * r[i]).abs()).fold(0.0, f64::max);
-            (held.as_slice(), p.damping * sp.max(largest))
-        });
+        let damp = (p.damping > 0.0 && held.len() == n).then(|| (held.as_slice(), damping_threshold(sp, &set_k, &x, &r, rho, &held, p.damping)));
         let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, damp, &mut x0);
         if p.damping > 0.0 {
             held.clone_from(&sys.sets.free);
@@ -296,6 +291,14 @@ pub(crate) fn run<A: Operator>(
         drv.record(step);
     }
     unreachable!("the outer loop returns")
+}
+
+/// The damped active set's threshold ([`Tssn::damping`]): θ times the largest |yᵢ| = |λᵢ − ρrᵢ|
+/// over the normal rows whose state at y differs from `held`, the last step's free components.
+fn damping_threshold<S: Space>(sp: &S, set: &Lambda, x: &[f64], r: &[f64], rho: f64, held: &[bool], theta: f64) -> f64 {
+    let want = set.active_sets(x, r, rho);
+    let largest = (0..set.layout.m).filter(|&i| want.free[i] != held[i]).map(|i| (x[i] - rho * r[i]).abs()).fold(0.0, f64::max);
+    theta * sp.max(largest)
 }
 
 /// An error rise of this factor over the best so far ends the lagged bounds: they are frozen
