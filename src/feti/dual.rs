@@ -317,6 +317,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     pub fn set_preconditioner(&mut self, kind: PreconditionerKind, cons: &Constraints, weight: Vec<f64>) -> Result<()> {
         let form = match kind {
             PreconditionerKind::Lumped => Form::Lumped,
+            PreconditionerKind::Superlumped => Form::Superlumped,
             PreconditionerKind::Dirichlet => Form::MatrixFree,
             PreconditionerKind::DirichletDense => Form::Dense,
             PreconditionerKind::None | PreconditionerKind::Auto => {

@@ -210,12 +210,16 @@ pub struct Tssn {
     /// (the same components free, the same pairs sliding), its CG is deflated by up to this
     /// many directions of the earlier steps' solves. 0: off.
     pub recycle: usize,
+    /// Damped active set, θ ∈ [0, 1): a normal row changes between the free and the fixed set
+    /// of the last Newton step only where |yᵢ| = |λᵢ − ρrᵢ| is at least θ times the largest
+    /// |yᵢ| of the rows that would change (that one always changes: no stall). 0, the default: off.
+    pub damping: f64,
 }
 
 impl Default for Tssn {
     fn default() -> Self {
         let Inexact { rtol, inner_floor, .. } = Inexact::default();
-        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0, recycle: 0 }
+        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0, recycle: 0, damping: 0.0 }
     }
 }
 
@@ -388,6 +392,9 @@ impl Params {
                 positive("forcing", m.forcing)?;
                 if !(m.slide_cap > 0.0) {
                     return Err(Invalid { key: "slide_cap", msg: format!("must be > 0 (inf: never), got {}", m.slide_cap) });
+                }
+                if !(0.0..1.0).contains(&m.damping) {
+                    return Err(Invalid { key: "damping", msg: format!("must lie in [0, 1), got {}", m.damping) });
                 }
                 floor(m.inner_floor)
             }

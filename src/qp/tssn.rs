@@ -70,11 +70,24 @@ struct System {
 
 impl System {
     /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere);
-    /// sliding pairs with cᵢ > `cap` stay at x (no σᵢ).
-    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, cap: f64, x0: &mut [f64]) -> System {
+    /// sliding pairs with cᵢ > `cap` stay at x (no σᵢ). `damp` = (the last step's free
+    /// components, t): a normal row keeps its last state where |yᵢ| < t ([`Tssn::damping`]).
+    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, cap: f64, damp: Option<(&[bool], f64)>, x0: &mut [f64]) -> System {
         let n = x.len();
         let y: Vec<f64> = (0..n).map(|i| x[i] - rho * r[i]).collect();
-        let sets = set.active_sets(x, r, rho);
+        let mut sets = set.active_sets(x, r, rho);
+        if let Some((last, t)) = damp.filter(|d| d.0.len() == n) {
+            for i in 0..set.layout.m {
+                if sets.free[i] != last[i] && y[i].abs() < t {
+                    sets.free[i] = last[i];
+                    if last[i] {
+                        sets.normal_active += 1;
+                    } else {
+                        sets.normal_active -= 1;
+                    }
+                }
+            }
+        }
         set.project(x, x0);
         for i in 0..set.layout.m {
             if !sets.free[i] {
@@ -179,6 +192,8 @@ pub(crate) fn run<A: Operator>(
     let inexact_possible = a.allow_error(f64::INFINITY);
     a.allow_error(0.0);
     let mut moving: Vec<bool> = vec![];
+    // the last Newton step's free components (the damped active set's reference)
+    let mut held: Vec<bool> = vec![];
     for k in 0.. {
         drv.check(k, err, "the reduced gradient")?;
         if drv.met(err) {
@@ -192,7 +207,11 @@ pub(crate) fn run<A: Operator>(
             Some((f, _)) => Cow::Borrowed(f),
             None => at(&x),
         };
-        let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, &mut x0);
+        let damp = (p.damping > 0.0 && held.len() == n).then(|| (held.as_slice(), damping_threshold(sp, &set_k, &x, &r, rho, &held, p.damping)));
+        let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, damp, &mut x0);
+        if p.damping > 0.0 {
+            held.clone_from(&sys.sets.free);
+        }
         drv.residual(&x0, &mut g0);
         let q0 = drv.q(&x0, &g0);
         if !q0.is_finite() {
@@ -272,6 +291,14 @@ pub(crate) fn run<A: Operator>(
         drv.record(step);
     }
     unreachable!("the outer loop returns")
+}
+
+/// The damped active set's threshold ([`Tssn::damping`]): θ times the largest |yᵢ| = |λᵢ − ρrᵢ|
+/// over the normal rows whose state at y differs from `held`, the last step's free components.
+fn damping_threshold<S: Space>(sp: &S, set: &Lambda, x: &[f64], r: &[f64], rho: f64, held: &[bool], theta: f64) -> f64 {
+    let want = set.active_sets(x, r, rho);
+    let largest = (0..set.layout.m).filter(|&i| want.free[i] != held[i]).map(|i| (x[i] - rho * r[i]).abs()).fold(0.0, f64::max);
+    theta * sp.max(largest)
 }
 
 /// An error rise of this factor over the best so far ends the lagged bounds: they are frozen
@@ -406,6 +433,37 @@ pub(crate) mod tests {
             assert!(slides > 0, "the problem has sliding pairs");
             assert!(t.info.history.iter().all(|h| h.kind == StepKind::Tangent), "no safeguard step at ρ = 1.9/σ");
         }
+    }
+
+    /// The damped active set reaches SSN's solution (KKT, in Λ) for θ = 0.5 and 0.9, and it
+    /// acts: the normal active counts of some problem's history differ from the undamped run.
+    #[test]
+    fn the_damped_active_set_reaches_the_same_solution() {
+        let mut seed = 7;
+        let mut acted = false;
+        for _ in 0..5 {
+            let (a, b, set) = problem(12, &mut seed);
+            let zero = vec![0.0; a.dim()];
+            let qp = Qp::new(&a, &b, &set);
+            let p = Params::default().with_eps(1e-11);
+            let reference = solve(&qp, &zero, &p, &mut Silent).expect("SSN converges");
+            let scale = reference.lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let counts = |s: &QpSolution| s.info.history.iter().map(|h| h.normal_active).collect::<Vec<_>>();
+            let plain = counts(&solve(&qp, &zero, &p.with_method(Method::Tssn), &mut Silent).expect("TSSN converges"));
+            for theta in [0.5, 0.9] {
+                let mut pd = Params::new(Method::Tssn).with_eps(1e-11);
+                if let crate::qp::MethodParams::Tssn(t) = &mut pd.method {
+                    t.damping = theta;
+                }
+                let t = solve(&qp, &zero, &pd, &mut Silent).unwrap_or_else(|e| panic!("damped TSSN (θ = {theta}) converges: {e}"));
+                let d = t.lambda.iter().zip(&reference.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+                assert!(d <= 1e-8 * scale, "θ = {theta}: differs from SSN by {d:e} of {scale:e}");
+                let k = kkt::residuals(&set, &t.lambda, &t.gradient, Replicated.norm(&b));
+                assert!(k.worst() <= 1e-9, "θ = {theta}: KKT {k:?}");
+                acted |= counts(&t) != plain;
+            }
+        }
+        assert!(acted, "the damping never changed an active set");
     }
 
     /// M = diag(A)⁻¹ on every component.

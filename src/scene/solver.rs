@@ -20,6 +20,8 @@ pub enum Preconditioner {
     None,
     /// K_s's block on the DOFs the rows touch.
     Lumped,
+    /// The diagonal of that block (superlumped).
+    Superlumped,
     /// The Schur complement of K_s onto those DOFs, applied through a K_ii solve.
     Dirichlet,
     /// The same Schur complement held as a dense matrix (from a partial factorization).
@@ -33,6 +35,7 @@ impl Preconditioner {
             Preconditioner::Auto => "auto",
             Preconditioner::None => "none",
             Preconditioner::Lumped => "lumped",
+            Preconditioner::Superlumped => "superlumped",
             Preconditioner::Dirichlet => "dirichlet",
             Preconditioner::DirichletDense => "dirichlet-dense",
         }
