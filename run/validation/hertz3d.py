@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Hertz 3D check of run/validation/hertz3d.toml (quarter model, non-matching meshes, mortar).
 
-Usage: run/validation/hertz3d.py [--cap hex8|tet4|tet10|hex20] [--flat hex8|hex20] [--friction none|coulomb] [--levels 17,25,33]
+Usage: run/validation/hertz3d.py [--cap hex8|tet4|tet10|hex20|hex27] [--flat hex8|hex20|hex27] [--friction none|coulomb] [--levels 17,25,33]
                                  [--bin target/release/tresca-feti] [--keep DIR] [RESULT.h5 …]
 Solves the scene at each refinement (the cap with n×n×(n+1)/2 nodes, the flat block with a
 different count, ≈ 0.85 n, so the contact faces never match; n counts the cells' corners: hex20
@@ -139,8 +139,8 @@ def table(results, label):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("results", nargs="*")
-    ap.add_argument("--cap", default="hex8", choices=["hex8", "tet4", "tet10", "hex20"])
-    ap.add_argument("--flat", default="hex8", choices=["hex8", "hex20"])
+    ap.add_argument("--cap", default="hex8", choices=["hex8", "tet4", "tet10", "hex20", "hex27"])
+    ap.add_argument("--flat", default="hex8", choices=["hex8", "hex20", "hex27"])
     ap.add_argument("--friction", default="none", choices=["none", "coulomb"])
     ap.add_argument("--mu", type=float, default=0.3)
     ap.add_argument("--levels", default="17,25,33")

@@ -485,23 +485,13 @@ fn interface_rows(
     search: Option<f64>,
     outside: bool,
 ) -> Result<Interface> {
-    for face in [slave, master] {
-        if face.facets.iter().any(|q| q.kind == FacetKind::Quad9) {
-            return Err(Error::scene(
-                key,
-                format!(
-                    "face {} has 9-node quadrilaterals (of 27-node hexahedra): contact and ties have no dual mortar basis for them (the modified quadratic basis is built for 6-node triangles and 8-node quadrilaterals only); mesh that body with 20-node hexahedra",
-                    face.name
-                ),
-            ));
-        }
-    }
     let search = search.unwrap_or_else(|| default_search_distance(diagonal(slave.nodes().iter().map(|&v| &mesh.nodes[v]))));
     let mortar = || mortar_rows(mesh, key, slave, master, search, outside);
     let nodal = |rows| Ok(Interface { rows, how: Discretization::NodeToNode, outside: vec![], search });
     // a quadratic facet's corner nodes carry no area (∫ N dA = 0 on a tri6's corners): nodal
-    // pairs there would hold no force; the mortar's modified dual basis gives every node one
-    let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+    // pairs there would hold no force; the mortar's modified dual basis gives every node one (quad9:
+    // mortar too, for the weighted gap on the true geometry and the vertex-recovered pressure)
+    let quadratic = slave.facets.iter().any(|q| is_quadratic(q.kind));
     if quadratic && discretization == Some(Discretization::NodeToNode) {
         return Err(Error::scene(
             key,
@@ -527,6 +517,12 @@ fn interface_rows(
             Err(NodeToNode::Fail(e)) => Err(e),
         },
     }
+}
+
+/// Whether a slave facet is quadratic (tri6, quad8, quad9): it is paired by mortar only, its
+/// weighted gap is taken on the true geometry and its smoothed pressure from its vertices.
+fn is_quadratic(kind: FacetKind) -> bool {
+    matches!(kind, FacetKind::Tri6 | FacetKind::Quad8 | FacetKind::Quad9)
 }
 
 /// The gaps within this fraction of the model's extent (its diagonal, or its farthest
@@ -555,7 +551,7 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
         c.outside.push(Outside::new(mesh, slave, master, outside, search));
         // on quadratic slave facets the weighted gap is T⁻¹ of the nodal gaps, below the true
         // one on a curved face: the constraint takes the gap on the true geometry there
-        let quadratic = slave.facets.iter().any(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+        let quadratic = slave.facets.iter().any(|q| is_quadratic(q.kind));
         let fraction = p.max_overlap.unwrap_or(crate::scene::DEFAULT_MAX_OVERLAP);
         let mut fit = Interference::default();
         let first_row = c.len();
@@ -638,8 +634,7 @@ pub fn pair(mesh: &Mesh, pairs: &[ContactPair], faces: &[(usize, usize)]) -> Res
             c.entry.push(k);
         }
         c.interference.push(fit);
-        let quadratic_mortar =
-            c.discretization.last() == Some(&Discretization::Mortar) && slave.facets.iter().all(|q| matches!(q.kind, FacetKind::Tri6 | FacetKind::Quad8));
+        let quadratic_mortar = c.discretization.last() == Some(&Discretization::Mortar) && slave.facets.iter().all(|q| is_quadratic(q.kind));
         if quadratic_mortar {
             vertex_weights(mesh, slave, first_row, &mut c);
         } else {
@@ -678,15 +673,23 @@ fn smoothing_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
 }
 
 /// The weights of [`Contact::smoothing`] for the rows `first..` of an entry whose slave facets are
-/// all quadratic (tri6, quad8) and mortar: the multipliers λ = p w are the moments ∫ φ̃ p of the
-/// modified basis φ̃ = T φ, so a corner c's linear hat N¹_c = N_c + ½ Σ_e N_e (e its edge nodes)
-/// carries ∫ N¹_c p = λ_c + ½ Σ_e λ_e whatever α; p̄_c is that over ∫ N¹_c, and an edge node gets
-/// the mean of its two corners. A node without a row counts as pressure 0.
+/// all quadratic (tri6, quad8, quad9) and mortar: the multipliers λ = p w are the moments ∫ φ̃ p of
+/// the slave basis φ̃ (= T φ on tri6 and quad8, φ on quad9), so a corner c's linear hat
+/// N¹_c = N_c + ½ Σ_e N_e (+ ¼ N_m of a quad9's centre m) carries ∫ N¹_c p = λ_c + ½ Σ_e λ_e
+/// (+ ¼ λ_m) whatever α; p̄_c is that over ∫ N¹_c, and an edge node (a quad9's centre) gets the
+/// mean of its two (four) corners. A node without a row counts as pressure 0.
 fn vertex_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
     let row_of: HashMap<usize, usize> = (first..c.len()).map(|i| (c.slave[i], i)).collect();
-    // per corner node: ∫ N¹ over its facets, and its edge nodes (each once)
-    let mut hat: HashMap<usize, (f64, Vec<usize>)> = HashMap::new();
-    let mut corners_of: HashMap<usize, [usize; 2]> = HashMap::new();
+    // per corner node: ∫ N¹ over its facets, and its higher-order nodes with their shares (each once)
+    let mut hat: HashMap<usize, (f64, Vec<(usize, f64)>)> = HashMap::new();
+    let mut corners_of: HashMap<usize, Vec<usize>> = HashMap::new();
+    let share = |hat: &mut HashMap<usize, (f64, Vec<(usize, f64)>)>, k: usize, e: usize, s: f64, a: f64| {
+        let h = hat.entry(k).or_default();
+        h.0 += s * a;
+        if !h.1.iter().any(|x| x.0 == e) {
+            h.1.push((e, s));
+        }
+    };
     for q in &slave.facets {
         let v = q.nodes();
         let x: Vec<[f64; 3]> = v.iter().map(|&k| mesh.nodes[k]).collect();
@@ -698,22 +701,24 @@ fn vertex_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
         }
         for &(e, a, b) in edges(q.kind) {
             for k in [a, b] {
-                let h = hat.entry(v[k]).or_default();
-                h.0 += 0.5 * na[e];
-                if !h.1.contains(&v[e]) {
-                    h.1.push(v[e]);
-                }
+                share(&mut hat, v[k], v[e], 0.5, na[e]);
             }
-            corners_of.insert(v[e], [v[a], v[b]]);
+            corners_of.insert(v[e], vec![v[a], v[b]]);
+        }
+        if q.kind == FacetKind::Quad9 {
+            for k in 0..4 {
+                share(&mut hat, v[k], v[8], 0.25, na[8]);
+            }
+            corners_of.insert(v[8], v[..4].to_vec());
         }
     }
     let corner = |node: usize| -> HashMap<usize, f64> {
         let mut w = HashMap::new();
         let (Some(&i), Some((n1, es))) = (row_of.get(&node), hat.get(&node)) else { return w };
         w.insert(i, c.area[i] / n1);
-        for e in es {
-            if let Some(&j) = row_of.get(e) {
-                *w.entry(j).or_default() += 0.5 * c.area[j] / n1;
+        for &(e, s) in es {
+            if let Some(&j) = row_of.get(&e) {
+                *w.entry(j).or_default() += s * c.area[j] / n1;
             }
         }
         w
@@ -721,12 +726,15 @@ fn vertex_weights(mesh: &Mesh, slave: &Face, first: usize, c: &mut Contact) {
     for i in first..c.len() {
         let node = c.slave[i];
         let w = match corners_of.get(&node) {
-            Some(&[a, b]) => {
-                let mut w = corner(a);
-                for (j, x) in corner(b) {
-                    *w.entry(j).or_default() += x;
+            Some(cs) => {
+                let mut w = corner(cs[0]);
+                for &b in &cs[1..] {
+                    for (j, x) in corner(b) {
+                        *w.entry(j).or_default() += x;
+                    }
                 }
-                w.into_iter().map(|(j, x)| (j, 0.5 * x)).collect()
+                let mean = 1.0 / cs.len() as f64;
+                w.into_iter().map(|(j, x)| (j, mean * x)).collect()
             }
             None => corner(node),
         };

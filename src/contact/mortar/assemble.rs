@@ -10,7 +10,7 @@ use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::RTree;
 
 use super::clip::{clip_polygon, cross2, dedup, polygon_area, sub2};
-use super::dual_basis::{add_outer, add_scaled, SlaveFacet};
+use super::dual_basis::{add_outer, add_scaled, is_modified, SlaveFacet};
 use super::{Facet, Mat, MortarError, MortarInfo, MortarParams, MortarRows, Plane, SurfaceFacet, ALPHA, FULL_COVER, PRUNE_FRACTION, SLIVER_FRACTION, V2, V3};
 use crate::fem::facet::{axpy, cross, dot, dunavant7, edges, is_tri, norm, scale, shape, sub, MAX_NODES};
 use crate::mesh::FacetKind;
@@ -99,7 +99,7 @@ fn node_accumulators(slaves: &[SlaveFacet]) -> BTreeMap<usize, NodeAcc> {
             axpy(&mut node.normal, 1.0, s.weighted_normal);
             node.neighbours.extend(s.f.nodes[..s.f.n()].iter().filter(|&&v| v != s.f.nodes[a]));
         }
-        for &(e, a, b) in edges(s.f.kind) {
+        for &(e, a, b) in edges(s.f.kind).iter().filter(|_| is_modified(s.f.kind)) {
             let edge = Some((s.f.nodes[a].min(s.f.nodes[b]), s.f.nodes[a].max(s.f.nodes[b])));
             acc.get_mut(&s.f.nodes[e]).expect("slave node accumulator").edge = edge;
         }

@@ -1,6 +1,6 @@
 //! The slave side's dual (biorthogonal) basis: per slave facet ψᵢ = Σ_j a_ij φ_j with
 //! A = D M⁻¹ on the whole facet or, for a partly covered facet, on its covered part; the modified
-//! quadratic basis φ̃ = T φ; and the small dense n × n algebra (n ≤ 8) that builds them,
+//! quadratic basis φ̃ = T φ; and the small dense n × n algebra (n ≤ 9) that builds them,
 //! including the hand-written Gauss–Jordan inverse (nalgebra is not a dependency).
 
 use super::assemble::fan_points;
@@ -10,11 +10,15 @@ use crate::fem::facet::{cross, dot, edges, fine_rule, norm, scale, shape, Shape,
 use crate::mesh::FacetKind;
 
 /// The modified slave basis φ̃ = T φ of Popp et al. (2012): per edge node e between corners
-/// a, b: φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e; identity for linear facets.
+/// a, b: φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e on tri6 and quad8 ([`is_modified`]);
+/// identity for linear facets and quad9.
 pub(super) fn transformation(kind: FacetKind) -> Mat {
     let mut t = [[0.0; MAX_NODES]; MAX_NODES];
     for (i, row) in t.iter_mut().enumerate().take(kind.len()) {
         row[i] = 1.0;
+    }
+    if !is_modified(kind) {
+        return t;
     }
     for &(e, a, b) in edges(kind) {
         t[a][e] += ALPHA;
@@ -22,6 +26,16 @@ pub(super) fn transformation(kind: FacetKind) -> Mat {
         t[e][e] = 1.0 - 2.0 * ALPHA;
     }
     t
+}
+
+/// Whether the slave basis is modified (φ̃ = T φ): tri6 and quad8, whose standard D_e has a
+/// zero (tri6 corners) or negative (quad8 corners, −1/12 of the area) entry. quad9 keeps the
+/// standard dual basis: its ∫ φᵢ are all positive (corners 1/36, edges 1/9, centre 4/9 of the
+/// area on a parallelogram), and its dual basis is the tensor product of the 1D quadratic one
+/// (Wohlmuth, Popp, Gee, Wall 2012, Comput. Mech. 49; Popp et al. 2012 modify only the bases
+/// whose integrals are not positive).
+pub(super) fn is_modified(kind: FacetKind) -> bool {
+    matches!(kind, FacetKind::Tri6 | FacetKind::Quad8)
 }
 
 /// A slave facet with its auxiliary plane and dual basis.

@@ -57,15 +57,19 @@
 //! [`MortarInfo::nodes_uncovered`]). A covered node with D_ii ≤ `min_coverage` · ∫ φᵢ dA (a
 //! sliver) gets no row and is counted in [`MortarInfo::rows_dropped`].
 //!
-//! **Facets.** tri3, quad4 (bilinear, may be warped), tri6 and quad8 (serendipity), each with a
-//! convex projected corner polygon; the clipping uses the corner polygons (exact for
+//! **Facets.** tri3, quad4 (bilinear, may be warped), tri6, quad8 (serendipity) and quad9
+//! (biquadratic), each with a convex projected corner polygon; the clipping uses the corner polygons (exact for
 //! straight-edged facets), the integration the true facet maps. Quadratic slave facets use the
 //! modified basis φ̃ = T φ of Popp, Wohlmuth, Gee, Wall 2012 ("Dual quadratic mortar finite
 //! element methods for 3D finite deformation contact", SIAM J. Sci. Comput. 34): per edge node
 //! e between corners a, b, φ̃_a += α φ_e, φ̃_b += α φ_e, φ̃_e = (1 − 2α) φ_e, α = 1/5 (for quad8
 //! too, where it makes ∫ φ̃_corner > 0), and the dual basis is built on φ̃. The slave part of
 //! row i is then (T⁻¹)_ki: +1 at a corner, and 1/(1 − 2α), −α/(1 − 2α), −α/(1 − 2α) at an edge
-//! node and its two corners.
+//! node and its two corners. quad9 slave facets keep the standard dual basis (T = I): every
+//! ∫ φᵢ is positive there (corners 1/36, edges 1/9, centre 4/9 of a parallelogram's area; the
+//! tensor product of the 1D quadratic dual basis, Wohlmuth, Popp, Gee, Wall 2012, "An abstract
+//! framework for a priori estimates for contact problems in 3D with quadratic finite elements",
+//! Comput. Mech. 49), so the slave part of each of their rows is +1 at the node alone.
 //!
 //! **Layout.** This file holds the public API (the facet view, parameters, rows, counters and
 //! errors) and the facet geometry shared by the parts: [`Facet`] (a facet with its node
@@ -93,7 +97,7 @@ type V2 = [f64; 2];
 type V3 = [f64; 3];
 type Mat = [[f64; MAX_NODES]; MAX_NODES];
 
-/// α of the modified quadratic slave basis (tri6 and quad8).
+/// α of the modified quadratic slave basis (tri6 and quad8; quad9 keeps the standard one).
 const ALPHA: f64 = 0.2;
 /// Master entries with |M_ij| at most this fraction of D_ii are round-off and left out.
 const PRUNE_FRACTION: f64 = 1e-14;
@@ -105,7 +109,7 @@ const SLIVER_FRACTION: f64 = 1e-12;
 /// A facet of a surface mesh: node ids into the global coordinate array, ordered so the
 /// right-hand rule gives the body's outward normal. tri3: 3 nodes; quad4: 4 (bilinear, may be
 /// warped); tri6: corners 0–2, then edge nodes (0,1), (1,2), (2,0); quad8: corners 0–3, then
-/// edges (0,1), (1,2), (2,3), (3,0).
+/// edges (0,1), (1,2), (2,3), (3,0); quad9: as quad8, then the centre.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceFacet<'a> {
     pub nodes: &'a [usize],
@@ -209,7 +213,7 @@ impl MortarRows {
 /// Why the mortar rows could not be built.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum MortarError {
-    #[error("{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6) or 8 (quad8)")]
+    #[error("{side} facet {facet} has {nodes} nodes; expected 3 (tri3), 4 (quad4), 6 (tri6), 8 (quad8) or 9 (quad9)")]
     FacetNodes { side: &'static str, facet: usize, nodes: usize },
     #[error("{side} facet {facet} names node {node}, beyond the {len} coordinates")]
     NodeOutOfRange { side: &'static str, facet: usize, node: usize, len: usize },

@@ -516,3 +516,107 @@ fn quadratic_slaves_reproduce_linear_gap() {
         assert_eq!(edge_rows, if stri { 33 } else { 24 }, "{case}");
     }
 }
+
+/// [`patch2`]'s quad8 patch with each cell's centre as a ninth node (quad9).
+fn patch9(coords: &mut Vec<V3>, nx: usize, ny: usize, up: bool, map: &dyn Fn(f64, f64) -> V3) -> Patch {
+    let mut p = patch2(coords, nx, ny, false, up, map);
+    // the centre lies midway in the lattice between the facet's edge nodes 4 and 6
+    for f in &mut p.facets {
+        let c = (f[4] + f[6]) / 2;
+        f.push(c);
+    }
+    let ids = p.facets.iter().flatten().copied().collect::<std::collections::BTreeSet<_>>();
+    Patch { ids: ids.into_iter().collect(), facets: p.facets }
+}
+
+/// quad9 keeps the standard dual basis (T = I): D = ∫ φᵢ dA, 1/36 of the area at the corners,
+/// 1/9 at the edge nodes, 4/9 at the centre, and ∫ ψᵢ φ_k dA = δ_ik D_kk on a parallelogram.
+#[test]
+fn quad9_standard_dual_basis() {
+    let mut coords = Vec::new();
+    let p = patch9(&mut coords, 1, 1, true, &|u, v| [2.0 * u + 0.3 * v, 1.5 * v, 0.1 * u]);
+    let f = Facet::new(&SurfaceFacet { nodes: &p.facets[0] }, &coords, "slave", 0).unwrap();
+    let s = SlaveFacet::new(f, 0).unwrap();
+    let (n, area) = (s.f.n(), s.f.area());
+    assert_eq!(n, 9);
+    let t = transformation(s.f.kind);
+    for (i, row) in t.iter().enumerate().take(n) {
+        for (k, tik) in row.iter().enumerate().take(n) {
+            assert_eq!(*tik, if i == k { 1.0 } else { 0.0 });
+        }
+    }
+    for k in 0..n {
+        let want = [1.0 / 36.0, 1.0 / 9.0, 4.0 / 9.0][usize::from(k >= 4) + usize::from(k == 8)];
+        assert!((s.d[k] / area - want).abs() < 1e-14, "D_{k}/A = {}", s.d[k] / area);
+    }
+    let mut g = [[0.0; MAX_NODES]; MAX_NODES];
+    for (xi, w) in fine_rule(s.f.kind) {
+        let sh = shape(s.f.kind, xi);
+        let (psi, wj) = (s.psi(&s.a, &sh), w * norm(s.f.jacobian(xi)));
+        add_outer(&mut g, wj, &psi[..n], &sh.phi[..n]);
+    }
+    for (i, row) in g.iter().enumerate().take(n) {
+        for (k, gik) in row.iter().enumerate().take(n) {
+            let want = if i == k { s.d[k] } else { 0.0 };
+            assert!((gik - want).abs() < 1e-13, "∫ψ{i}φ{k} = {gik}");
+        }
+    }
+}
+
+/// ∫ φ_j dA of every node of a patch, by the facets' fine rule.
+fn primal_areas(coords: &[V3], p: &Patch) -> BTreeMap<usize, f64> {
+    let mut out = BTreeMap::new();
+    for (k, nodes) in p.facets.iter().enumerate() {
+        let f = Facet::new(&SurfaceFacet { nodes }, coords, "master", k).unwrap();
+        for (xi, w) in fine_rule(f.kind) {
+            let sh = shape(f.kind, xi);
+            let wj = w * norm(f.jacobian(xi));
+            for (a, &v) in nodes.iter().enumerate() {
+                *out.entry(v).or_insert(0.0) += wj * sh.phi[a];
+            }
+        }
+    }
+    out
+}
+
+/// Non-matching quad9 faces: a 3 × 3 quad9 slave on a 4 × 4 quad9 master at z = f_lin and on a
+/// wobbly quad4 master (7 × 7): every row is +1 at its slave node alone, its master part sums to
+/// −1 and its gap is f_lin at the node. On a flat parallel 4 × 4 quad9 master (gap 0.01) the
+/// uniform slave pressure 1 (λᵢ = D_ii) puts the force ∫ φ_j dA on every master node j: a
+/// constant pressure is transferred exactly.
+#[test]
+fn quad9_faces_reproduce_linear_gap_and_transfer_a_constant_pressure() {
+    for master in ["quad9", "quad4", "flat"] {
+        let mut coords = Vec::new();
+        let s = patch9(&mut coords, 3, 3, true, &flat(0.0));
+        let m = match master {
+            "quad9" => patch9(&mut coords, 4, 4, false, &|u, v| [u, v, f_lin(u, v)]),
+            "quad4" => patch(&mut coords, 7, 7, false, false, &wobbly(0.2 / 7.0, f_lin)),
+            _ => patch9(&mut coords, 4, 4, false, &flat(0.01)),
+        };
+        let rows = run(&coords, &s, &m, &params(0.05)).unwrap();
+        assert_eq!(rows.len(), s.ids.len(), "{master}");
+        let total: f64 = rows.area.iter().sum();
+        assert!((total - 1.0).abs() < 1e-13, "{master}: Σ D_ii = {total}");
+        let mut force: BTreeMap<usize, f64> = BTreeMap::new();
+        for r in 0..rows.len() {
+            let row = &rows.coupling[r];
+            assert_eq!(row[0], (rows.node[r], 1.0), "{master}, row {r}");
+            assert!(row[1..].iter().all(|(k, _)| !s.ids.contains(k)), "{master}, row {r}: a second slave node");
+            let cm: f64 = row[1..].iter().map(|e| e.1).sum();
+            assert!((cm + 1.0).abs() < 1e-12, "{master}, row {r}: master part {cm}");
+            let x = coords[rows.node[r]];
+            let want = if master == "flat" { 0.01 } else { f_lin(x[0], x[1]) };
+            assert!((rows.gap[r] - want).abs() < 1e-12, "{master}, row {r} at {x:?}: gap {}", rows.gap[r]);
+            for &(k, c) in &row[1..] {
+                *force.entry(k).or_insert(0.0) -= rows.area[r] * c;
+            }
+        }
+        if master == "flat" {
+            for (j, a) in primal_areas(&coords, &m) {
+                let f = force.get(&j).copied().unwrap_or(0.0);
+                assert!((f - a).abs() < 1e-13, "master node {j} at {:?}: force {f}, ∫φ dA {a}", coords[j]);
+            }
+        }
+    }
+}
