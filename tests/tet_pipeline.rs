@@ -364,9 +364,9 @@ fn the_memory_estimate_follows_the_cell_type() {
             mono.nnz_l
         );
         // the estimate counts every body's arrays twice (only the body being appended is
-        // doubled at a time): measured 1.50 (hex8), 1.45 (tet4), 1.65 (tet10) since the boundary is sorted rather than hashed — an estimate that
+        // doubled at a time): measured 1.50 (hex8), 1.52 (tet4), 1.73 (tet10) since the boundary is sorted rather than hashed and the readers keep no vector per cell (the build's peak fell faster than the estimate's transient terms) — an estimate that
         // errs high, never below what the build takes
-        assert!((0.8..=1.7).contains(&mesh_ratio), "{cells}: mesh estimate / measured peak = {mesh_ratio:.2}");
+        assert!((0.8..=1.8).contains(&mesh_ratio), "{cells}: mesh estimate / measured peak = {mesh_ratio:.2}");
         assert!((0.6..=1.6).contains(&nnz_ratio), "{cells}: nnz(L) estimate / count = {nnz_ratio:.2}");
     }
 }
