@@ -496,8 +496,13 @@ fn interface_rows(
         return Err(Error::scene(
             key,
             format!(
-                "face {} has quadratic facets, whose corner nodes carry no area: node-to-node cannot use them (discretization = \"mortar\" can)",
-                slave.name
+                "face {} has quadratic facets ({}): node-to-node cannot use them (discretization = \"mortar\" can)",
+                slave.name,
+                if slave.facets.iter().any(|q| q.kind == FacetKind::Quad9) {
+                    "9-node quadrilaterals: nodal pairs would ignore the curved geometry between the nodes"
+                } else {
+                    "their corner nodes carry no area, so nodal pairs there would hold no force"
+                }
             ),
         ));
     }
