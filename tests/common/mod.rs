@@ -22,8 +22,16 @@ pub fn tmpdir(name: &str) -> PathBuf {
     d
 }
 
+/// `mpirun -n N BIN ARGS` for a test. Each launch gets its own Open MPI session folder:
+/// Open MPI 4.1 creates `/tmp/ompi.HOST.UID` with a racy mkdir, and two `mpirun`s started at
+/// the same instant (tests run in parallel threads) fail one of them with "File exists".
 pub fn mpirun_cmd(n: usize, args: &[&str]) -> Command {
+    static LAUNCH: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = LAUNCH.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let session = std::env::temp_dir().join("tresca-feti-ompi").join(format!("{}-{k}", std::process::id()));
+    std::fs::create_dir_all(&session).unwrap();
     let mut c = Command::new("mpirun");
+    c.env("OMPI_MCA_orte_tmpdir_base", &session);
     // a rank waiting on a collective the others skipped fails the test instead of hanging it
     c.args(["-n", &n.to_string(), "--oversubscribe", "--timeout", "300", BIN])
         .args(args)
