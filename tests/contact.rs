@@ -136,7 +136,7 @@ fn orthotropic_with_equal_bounds_is_isotropic() {
 /// top face, in plane strain (two nodes across y, u_y = 0 on both y faces) so that every slip is
 /// exactly along x. Returns (pairs, the contact report).
 fn dragged_block(drag: f64) -> (usize, tresca_feti::pipeline::report::ContactReport) {
-    let dir = std::env::temp_dir().join(format!("tresca-feti-drag-{}-{drag:e}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("tresca-feti-drag-{}-{drag:e}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("drag.toml");
     std::fs::write(
@@ -273,7 +273,7 @@ fn coulomb_equals_tresca_with_the_bounds_at_its_solution() {
 #[test]
 fn the_report_names_the_law_the_states_and_the_units_as_solved() {
     let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("run/seed.toml");
-    let dir = std::env::temp_dir().join(format!("tresca-feti-contact-{}-truth", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("tresca-feti-contact-{}-truth", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let run = |sets: &[&str], name: &str| {
         let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();

@@ -15,7 +15,7 @@ fn root() -> PathBuf {
 }
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tresca-feti-{}-{name}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("tresca-feti-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -11,7 +11,7 @@ use tresca_feti::studies::bench::PHASES;
 const BIN: &str = env!("CARGO_BIN_EXE_tresca-feti");
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tresca-feti-scaling-{}-{name}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("tresca-feti-scaling-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d

@@ -14,9 +14,10 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A fresh, empty scratch folder, named after the test binary, the process and `name`.
+/// A fresh, empty scratch folder, named after the test binary, the process and `name`, under
+/// cargo's `target/tmp` (what the tests leave there goes with `cargo clean`, not into /tmp).
 pub fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tresca-feti-{}-{}-{name}", env!("CARGO_CRATE_NAME"), std::process::id()));
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("tresca-feti-{}-{}-{name}", env!("CARGO_CRATE_NAME"), std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d

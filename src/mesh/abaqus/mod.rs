@@ -827,10 +827,26 @@ mod tests {
         p
     }
 
-    fn tmp(tag: &str) -> PathBuf {
+    /// A scratch folder of its own, removed when dropped.
+    struct Tmp(PathBuf);
+
+    impl std::ops::Deref for Tmp {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for Tmp {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn tmp(tag: &str) -> Tmp {
         let d = std::env::temp_dir().join(format!("abaqus-unit-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
-        d
+        Tmp(d)
     }
 
     /// Two hexahedra stacked in z (unit cubes), nodes 1…12, with a surface on the top.
