@@ -32,8 +32,10 @@
 //!   [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε) product-equivalents (PCG with the Dirichlet
 //!   preconditioner) for TFETI. Where the scene's products cannot be known before solving
 //!   ([`Unknown`]: a body held by contact alone, Coulomb friction, a load of prescribed
-//!   displacements alone) the count is a range, each factor's low–high times the law above, and
-//!   the candidate is priced at the range's geometric mean.
+//!   displacements alone, and the features read off the model: a stiff slave, a soft slave on
+//!   a stiff master, ν near ½, a thin body, Tresca bounds small against the load) the count is
+//!   a range, each factor's low–high times the law above, and the candidate is priced at the
+//!   range's geometric mean.
 //!
 //! The constants were fitted to the benchmark set on the development machine (docs/method.md,
 //! "The default choice"); the ranking, not the seconds, is what the choice uses.
@@ -143,7 +145,7 @@ pub enum Unknown {
     /// A stiff slave over a soft master: the slave's E·h (Young's modulus × facet size) this
     /// many times the master's (above [`crate::model::STIFF_SLAVE`], the criterion of the
     /// warning `check` prints). The contact rows are nearly dependent and nodes stay open
-    /// (measured 18.9× at E·h ratio 1e6, 3.5× at 4.7 and 15× at 470 on a flat punch).
+    /// (measured 18.9× at E·h ratio 1e6, 2.3× at 302, 3.7× at 4.7 and 15× at 470 on flat punches).
     StiffSlave(f64),
     /// A soft slave over a master with this many times its E·h (above [`CONTRAST`]): F's
     /// spectrum spreads with the contrast (measured 1.38× at 1e6).
