@@ -768,11 +768,14 @@ fn overlapping_rows(mesh: &Mesh, ties: &[(usize, usize)], contact: &[(usize, usi
 }
 
 /// E·h of a face: its body's Young's modulus times its mean facet size √(area/facets).
-fn stiffness_size(mesh: &Mesh, e: &[f64], f: usize) -> (f64, f64) {
+pub(crate) fn stiffness_size(mesh: &Mesh, e: &[f64], f: usize) -> (f64, f64) {
     let face = &mesh.faces[f];
     let h = (crate::fem::cell::face_area(face, &mesh.nodes) / face.facets.len().max(1) as f64).sqrt();
     (e[face.body] * h, h)
 }
+
+/// The ratio of the slave's E·h to the master's above which a slave is stiff ([`stiff_slave`]).
+pub(crate) const STIFF_SLAVE: f64 = 2.0;
 
 /// A warning where the named slave `s` has more than twice the master's E·h: a stiff slave over
 /// a soft master makes the contact rows nearly dependent (measured on a flat punch over a block,
@@ -780,7 +783,7 @@ fn stiffness_size(mesh: &Mesh, e: &[f64], f: usize) -> (f64, f64) {
 /// 470× left 91 open in 1 084; the block as slave: none open, 64–74 products).
 fn stiff_slave(mesh: &Mesh, e: &[f64], s: usize, m: usize, i: usize) -> Option<String> {
     let ((ks, _), (km, _)) = (stiffness_size(mesh, e, s), stiffness_size(mesh, e, m));
-    (ks > 2.0 * km).then(|| {
+    (ks > STIFF_SLAVE * km).then(|| {
         format!(
             "warning: contact pair {i}: the slave {} has {:.1}× the E·h (Young's modulus × facet size) of the master {}: a stiff slave over a soft master leaves nodes open and costs many products; swap them, or give `faces` and let the rule choose",
             mesh.faces[s].name,

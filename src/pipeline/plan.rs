@@ -32,8 +32,10 @@
 //!   [`CG_PRODUCTS_PER_DIGIT`] · log10(1/ε) product-equivalents (PCG with the Dirichlet
 //!   preconditioner) for TFETI. Where the scene's products cannot be known before solving
 //!   ([`Unknown`]: a body held by contact alone, Coulomb friction, a load of prescribed
-//!   displacements alone) the count is a range, each factor's low–high times the law above, and
-//!   the candidate is priced at the range's geometric mean.
+//!   displacements alone, and the features read off the model: a stiff slave, a soft slave on
+//!   a stiff master, ν near ½, a thin body, Tresca bounds small against the load) the count is
+//!   a range, each factor's low–high times the law above, and the candidate is priced at the
+//!   range's geometric mean.
 //!
 //! The constants were fitted to the benchmark set on the development machine (docs/method.md,
 //! "The default choice"); the ranking, not the seconds, is what the choice uses.
@@ -127,8 +129,9 @@ pub struct Candidate {
 }
 
 /// What makes a scene's A-products unknown before solving: each widens the law's count by a
-/// factor between its low and high (measured on run/results/cost_model_products.txt).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// factor between its low and high (measured on run/results/cost_model_products.txt). The
+/// features that carry a number are read off the model before solving.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Unknown {
     /// A body held by contact alone: SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
@@ -139,7 +142,38 @@ pub enum Unknown {
     /// Loaded by prescribed displacements alone: fewer products, as the contact set is
     /// found in few iterations (measured 0.17–0.9×).
     Displacement,
+    /// A stiff slave over a soft master: the slave's E·h (Young's modulus × facet size) this
+    /// many times the master's (above [`crate::model::STIFF_SLAVE`], the criterion of the
+    /// warning `check` prints). The contact rows are nearly dependent and nodes stay open
+    /// (measured 18.9× at E·h ratio 1e6, 2.3× at 302, 3.7× at 4.7 and 15× at 470 on flat punches).
+    StiffSlave(f64),
+    /// A soft slave over a master with this many times its E·h (above [`CONTRAST`]): F's
+    /// spectrum spreads with the contrast (measured 1.38× at 1e6).
+    Contrast(f64),
+    /// Nearly incompressible: 1/(1 − 2ν) = 1 + λ/μ of the most incompressible body (above
+    /// [`INCOMPRESSIBLE`]): K's condition grows with it (measured 1.68× at ν = 0.4999).
+    Incompressible(f64),
+    /// A thin body: the largest ratio of a body's longest to shortest bounding-box extent
+    /// (above [`THIN`]): bending makes K's condition grow with its square, CG's iterations
+    /// with its first power (measured 2.3× at 100).
+    Thin(f64),
+    /// Friction that lets nearly everything slip: the Tresca bounds Σ g·w (the smaller axis of
+    /// an ellipse) over the load's resultant |Σ F| (below [`SLIPPING`]): the tangential
+    /// multipliers sit on their bounds and the active set is found early (measured 0.48× at
+    /// 7e-9, 0.61× at an ellipse's minor axis 6e-4).
+    Slipping(f64),
 }
+
+/// E·h ratio (master over slave) above which a soft slave's contrast widens the range.
+pub const CONTRAST: f64 = 10.0;
+/// 1/(1 − 2ν) above which a body is nearly incompressible (ν > 0.45).
+pub const INCOMPRESSIBLE: f64 = 10.0;
+/// Extent ratio above which a body is thin: below it the widening r/25 < 2 stays within the
+/// law's scatter (plane_strain_rollers' and thin_clamped_plate's slabs at 40 measure 0.69× and
+/// 1.97×, no trend).
+pub const THIN: f64 = 50.0;
+/// Ratio of the Tresca bounds to the load's resultant below which nearly everything slips.
+pub const SLIPPING: f64 = 0.01;
 
 impl Unknown {
     /// The low and high factor on the law's count.
@@ -148,6 +182,11 @@ impl Unknown {
             Unknown::Floating => (0.6, 4.0),
             Unknown::Coulomb => (0.25, 1.1),
             Unknown::Displacement => (0.15, 1.0),
+            Unknown::StiffSlave(r) => (1.0, 5.0 * (1.0 + r.log10())),
+            Unknown::Contrast(_) => (1.0, 2.0),
+            Unknown::Incompressible(x) => (1.0, 1.0 + 0.25 * x.log10()),
+            Unknown::Thin(r) => (1.0, (r / 25.0).max(1.0)),
+            Unknown::Slipping(_) => (0.3, 1.0),
         }
     }
 
@@ -158,8 +197,65 @@ impl Unknown {
             Unknown::Floating => format!("held by contact alone: the outer loop for Gλ = e (SMALSE-M) takes {lo}–{hi}× the law's products"),
             Unknown::Coulomb => format!("Coulomb: × the fixed point's outer iterations, {lo}–{hi}× the Tresca law's products"),
             Unknown::Displacement => format!("loaded by prescribed displacements alone: {lo}–{hi}× the load-driven law's products"),
+            Unknown::StiffSlave(r) => format!("stiff slave (E·h ratio {r:.3}× the master's): nodes stay open, × {lo}–{hi:.1}"),
+            Unknown::Contrast(r) => format!("soft slave on a stiff master (E·h ratio {r:.3}): × {lo}–{hi}"),
+            Unknown::Incompressible(x) => format!("nearly incompressible (1/(1 − 2ν) = {x:.3}): × {lo}–{hi:.2}"),
+            Unknown::Thin(r) => format!("thin body (extent ratio {r:.0}): × {lo}–{hi:.1}"),
+            Unknown::Slipping(q) => format!("nearly all slip (Tresca bounds {q:.1e} × the load): × {lo}–{hi}"),
         }
     }
+}
+
+/// The features of `model` known before solving that widen its products' range: the stiffness
+/// contrast across each pair, the most incompressible and the thinnest body, and Tresca bounds
+/// small against a load. Each is listed once, at its worst.
+fn features(model: &Model, contact: &crate::contact::pairing::Contact) -> Vec<Unknown> {
+    use crate::contact::pairing::SlipBound;
+    let mesh = &model.mesh;
+    let young: Vec<f64> = model.lame.iter().map(crate::fem::material::Lame::young).collect();
+    let ratios = model.contact.iter().map(|&(s, m)| crate::model::stiffness_size(mesh, &young, s).0 / crate::model::stiffness_size(mesh, &young, m).0);
+    let (stiff, soft) = ratios.fold((0.0f64, 0.0f64), |(a, b), r| (a.max(r), b.max(1.0 / r)));
+    let incompressible = model.lame.iter().map(|l| 1.0 + l.lambda / l.mu).fold(0.0, f64::max);
+    let thin = mesh
+        .bodies
+        .iter()
+        .map(|b| {
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for x in &mesh.nodes[b.nodes.clone()] {
+                for k in 0..3 {
+                    (lo[k], hi[k]) = (lo[k].min(x[k]), hi[k].max(x[k]));
+                }
+            }
+            let e: Vec<f64> = (0..3).map(|k| hi[k] - lo[k]).collect();
+            e.iter().copied().fold(0.0, f64::max) / e.iter().copied().fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max);
+    let mut resultant = [0.0; 3];
+    for (i, f) in model.loads.iter().enumerate() {
+        resultant[i % 3] += f;
+    }
+    let load = resultant.iter().map(|f| f * f).sum::<f64>().sqrt();
+    let tresca = !contact.is_coulomb();
+    let bounds: f64 = contact
+        .bound
+        .iter()
+        .map(|b| match *b {
+            SlipBound::None => f64::INFINITY,
+            SlipBound::Disc(g) => g,
+            SlipBound::Ellipse(a, b) => a.min(b),
+        })
+        .sum();
+    let slipping = bounds / load;
+    [
+        (stiff > crate::model::STIFF_SLAVE, Unknown::StiffSlave(stiff)),
+        (soft > CONTRAST, Unknown::Contrast(soft)),
+        (incompressible > INCOMPRESSIBLE, Unknown::Incompressible(incompressible)),
+        (thin > THIN && thin.is_finite(), Unknown::Thin(thin)),
+        (tresca && load > 0.0 && slipping < SLIPPING, Unknown::Slipping(slipping)),
+    ]
+    .into_iter()
+    .filter_map(|(on, u)| on.then_some(u))
+    .collect()
 }
 
 /// Where a candidate's figures come from.
@@ -349,10 +445,13 @@ impl<'a, C: Comm> Pricing<'a, C> {
             pairs: contact.map_or(0, |c| c.len()),
             unknowns: contact.map_or(Vec::new(), |c| {
                 let loaded = model.loads.iter().any(|&f| f != 0.0);
-                [(!model.floating.is_empty(), Unknown::Floating), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
-                    .into_iter()
-                    .filter_map(|(on, u)| on.then_some(u))
-                    .collect()
+                let mut u: Vec<Unknown> =
+                    [(!model.floating.is_empty(), Unknown::Floating), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
+                        .into_iter()
+                        .filter_map(|(on, u)| on.then_some(u))
+                        .collect();
+                u.extend(features(model, c));
+                u
             }),
             body_dofs,
             largest,
@@ -828,18 +927,18 @@ struct Products {
     range: Option<(f64, f64)>,
 }
 
-/// The low and high factors of several unknowns: a body held by contact alone multiplies;
-/// Coulomb friction and a displacement load, which measure the same few outer iterations,
-/// take the wider of their ranges.
+/// The low and high factors of several unknowns: a body held by contact alone and each feature
+/// of [`features`] multiply; Coulomb friction and a displacement load, which measure the same
+/// few outer iterations, take the wider of their ranges.
 fn range_factors(unknowns: &[Unknown]) -> (f64, f64) {
     let (mut lo, mut hi) = (1.0f64, 1.0f64);
     let (mut slo, mut shi) = (f64::INFINITY, 0.0f64);
     for u in unknowns {
         let (l, h) = u.factors();
-        if *u == Unknown::Floating {
-            (lo, hi) = (lo * l, hi * h);
-        } else {
+        if matches!(u, Unknown::Coulomb | Unknown::Displacement) {
             (slo, shi) = (slo.min(l), shi.max(h));
+        } else {
+            (lo, hi) = (lo * l, hi * h);
         }
     }
     if shi > 0.0 {
