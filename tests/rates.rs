@@ -132,3 +132,35 @@ fn a_cached_rate_prices_the_plan() {
         assert!(b.2 > a.2, "{a:?} → {b:?}");
     }
 }
+
+#[test]
+fn every_rank_prices_with_the_rates_of_rank_0() {
+    // rank 0 has the factorization 1000× slower (TFETI 8/8 is chosen on 2 ranks, the monolithic
+    // dual with the built-in rates), rank 1 a corrupt cache: were the ranks to price with their
+    // own, they would decompose differently and the run fail
+    let dir = common::tmpdir("ranks");
+    let (slow, bad) = (dir.join("slow"), dir.join("bad"));
+    std::fs::create_dir_all(&slow).unwrap();
+    std::fs::create_dir_all(&bad).unwrap();
+    let mut rates = BUILT_IN;
+    rates[3] *= 1000.0;
+    write_cache(&slow, &cpu(), rates);
+    std::fs::write(bad.join("rates.json"), "garbage").unwrap();
+    let seed = common::root().join("run/seed.toml");
+    let out = dir.join("seed.h5");
+    let solve = ["solve", seed.to_str().unwrap(), "--set", "mesh.n=14", "--out", out.to_str().unwrap(), "-q"];
+    let rank1 = format!("TRESCA_FETI_CACHE={}", bad.display());
+    let mut args: Vec<&str> = solve.to_vec();
+    args.extend([":", "-n", "1", "-x", &rank1, BIN]);
+    args.extend(solve);
+    let o = common::mpirun_cmd(1, &args).env("TRESCA_FETI_CACHE", &slow).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("warning: rates cache"), "{err}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
+    assert_eq!(report["ranks"].as_u64(), Some(2));
+    let chosen =
+        report["decomposition_plan"].as_array().unwrap().iter().min_by(|a, b| a["time"].as_f64().unwrap().total_cmp(&b["time"].as_f64().unwrap())).unwrap();
+    assert_eq!((chosen["tfeti"].as_bool(), chosen["parts"].as_array().map(|p| p.len())), (Some(true), Some(2)), "{chosen}");
+    assert!(report.get("tfeti").is_some_and(|t| !t.is_null()), "solved by TFETI");
+}
