@@ -110,6 +110,16 @@ fn at_least_one(s: &str) -> Result<usize, String> {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Time this machine's kernels and cache the rates that price the plan.
+    ///
+    /// A self-test of about ten seconds on one core: assembly and ordering, the numeric
+    /// factorization, the solves, the dense solves of the explicit products and the dual rows'
+    /// work, timed on a clamped box. Prints the kernels' times against those of the development
+    /// machine and the rates they give, and writes them with this CPU's model to
+    /// `$TRESCA_FETI_CACHE/rates.json` (default `$XDG_CACHE_HOME/tresca-feti` or
+    /// `~/.cache/tresca-feti`; `TRESCA_FETI_CACHE=off` writes nothing). `solve` and `check` then
+    /// price the plan with them on hosts with the same CPU model. Run it once per node type.
+    Calibrate,
     /// Solve a scene and write its results: HDF5 + XDMF (ParaView) + JSON report.
     ///
     /// Run it under `mpirun -n P` to spread the bodies or subdomains over P ranks. Prints each phase as it starts and one line per Newton iteration,
@@ -593,7 +603,12 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
         // one rank per core: faer must not start threads of its own
         faer::set_global_parallelism(faer::Par::Seq);
     }
+    if matches!(cmd, Cmd::Solve { .. } | Cmd::Check { .. }) {
+        // the plan's rates: rank 0 reads the cache, every rank takes its choice
+        pipeline::rates::install(comm);
+    }
     let result = match cmd {
+        Cmd::Calibrate => calibrate(comm),
         Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, checkpoint, resume, memory } => {
             memory.apply();
             if let Some(p) = export_fclib {
@@ -672,6 +687,17 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `calibrate`: rank 0 times the kernels on one core and writes the cache.
+fn calibrate<C: Comm>(comm: &C) -> tresca_feti::Result<()> {
+    if !comm.is_root() {
+        return Ok(());
+    }
+    faer::set_global_parallelism(faer::Par::Seq);
+    let dir = pipeline::rates::cache_dir();
+    println!("{}", pipeline::rates::calibrate(dir.as_deref())?);
+    Ok(())
 }
 
 /// `bench-coarse`: one table row per subdomain count, printed as it is measured (rank 0 runs it).

@@ -140,6 +140,9 @@ pub fn run_check<C: Comm>(comm: &C, scene_path: &Path, overrides: &[String], ran
     if tfeti {
         subdomains(&mut s, &ls, &model)?;
     }
+    if plan.is_some() || forecast.is_some() {
+        let _ = writeln!(s, "{}", super::rates::current().line);
+    }
     if let Some(p) = &plan {
         let _ = write!(s, "{}", plan::table(p, ranks));
     }

@@ -21,7 +21,7 @@
 use std::fmt::Write;
 use std::path::Path;
 
-use super::plan::{Candidate, SECONDS_PER_ROW};
+use super::plan::Candidate;
 use crate::error::{Error, Result};
 
 /// Seconds per DOF of the decompose phase (METIS partition, subdomain meshes, rows of B), done
@@ -133,8 +133,10 @@ pub fn forecast(c: &Candidate, priced: usize, dofs: usize, per_host: usize, net:
     let pieces: usize = c.parts.iter().sum::<usize>().max(1);
     let busy = |p: usize| pieces.div_ceil(p.max(1)) as f64;
     let rows = c.dual_rows() as f64;
+    // the row rate that priced the candidate
+    let row_rate = super::rates::current().rates.row;
     let factor_piece = c.t_factor / busy(priced);
-    let solve_piece = (c.t_product - SECONDS_PER_ROW * rows / priced.max(1) as f64).max(0.0) / busy(priced);
+    let solve_piece = (c.t_product - row_rate * rows / priced.max(1) as f64).max(0.0) / busy(priced);
     let coarse_dim = if c.tfeti { 6.0 * pieces as f64 } else { 0.0 };
     let interface = (c.gluing_rows + c.contact_rows) as f64;
     let mut out: Vec<Row> = RANKS
@@ -162,7 +164,7 @@ pub fn forecast(c: &Candidate, priced: usize, dofs: usize, per_host: usize, net:
                 decompose: if c.tfeti { DECOMPOSE_SECONDS_PER_DOF * dofs as f64 } else { 0.0 },
                 factorize: factor_piece * busy(p),
                 coarse,
-                products: c.n_a * (solve_piece * busy(p) + SECONDS_PER_ROW * rows / pf),
+                products: c.n_a * (solve_piece * busy(p) + row_rate * rows / pf),
                 reductions: c.n_a * (dots + exchange),
                 ..Row::default()
             };

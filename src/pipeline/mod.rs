@@ -21,6 +21,7 @@ pub(crate) mod monitor;
 mod monolithic;
 pub(crate) mod path;
 pub mod plan;
+pub mod rates;
 pub mod report;
 mod steps;
 pub mod tfeti;

@@ -38,8 +38,11 @@
 //!   range's geometric mean.
 //!
 //! The constants were fitted to the benchmark set on the development machine (docs/method.md,
-//! "The default choice"); the ranking, not the seconds, is what the choice uses.
+//! "The default choice"); the ranking, not the seconds, is what the choice uses. The five
+//! machine rates are these constants unless `tresca-feti calibrate` cached rates for this CPU
+//! ([`super::rates`]).
 
+use super::rates::Rates;
 use crate::comm::Comm;
 use crate::error::Result;
 use crate::fem::assembly::{node_graph, DofMap};
@@ -399,9 +402,11 @@ struct Spec {
     parts: Vec<usize>,
 }
 
-/// What every candidate's pricing shares: the model, the ranks and the solve's figures.
+/// What every candidate's pricing shares: the model, the ranks, the machine's rates and the
+/// solve's figures.
 struct Pricing<'a, C: Comm> {
     comm: &'a C,
+    rates: Rates,
     model: &'a Model,
     ranks: usize,
     me: usize,
@@ -434,6 +439,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
         let largest = body_dofs.iter().copied().max().unwrap_or(0);
         Pricing {
             comm,
+            rates: super::rates::current().rates,
             model,
             ranks: ranks.max(1),
             me: comm.rank(),
@@ -489,14 +495,14 @@ impl<'a, C: Comm> Pricing<'a, C> {
             dirichlet_rows: rows.1,
             n_a,
             t_product: 0.0,
-            t_factor: SECONDS_PER_FLOP * max(&flops) + SECONDS_PER_DOF * max(&dofs),
+            t_factor: self.rates.flop * max(&flops) + self.rates.dof * max(&dofs),
             time: 0.0,
             explicit: false,
             basis: Basis::Counted,
             n_a_range: products.range,
             unknowns: if products.range.is_some() { self.unknowns.clone() } else { Vec::new() },
         };
-        c.t_product = SECONDS_PER_NNZ * c.nnz_l_rank + SECONDS_PER_ROW * c.dual_rows() as f64 / ranks as f64;
+        c.t_product = self.rates.nnz * c.nnz_l_rank + self.rates.row * c.dual_rows() as f64 / ranks as f64;
         c.time = c.t_factor + n_a * c.t_product;
         c
     }
@@ -582,7 +588,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
                 as f64;
             dense[super::owner(b, ranks)] += n * n;
         }
-        mono.t_product = SECONDS_PER_DENSE * max(&dense) + SECONDS_PER_ROW * mono.dual_rows() as f64 / ranks as f64;
+        mono.t_product = self.rates.dense * max(&dense) + self.rates.row * mono.dual_rows() as f64 / ranks as f64;
         mono.time = mono.t_factor + n_a * mono.t_product;
         mono.explicit = true;
     }
