@@ -16,13 +16,18 @@ use super::dual::TfetiDual;
 use super::smalse::Penalized;
 use crate::comm::Comm;
 use crate::linalg::cholesky::Cholesky;
-use crate::qp::cone::Coefficient;
 use crate::qp::params::{MethodParams, Tssn};
 use crate::qp::{self, CoarseProjector, Lambda, Monitor, Operator, Params, ProductCounter, Qp, QpError, QpSolution, Space, SIGMA_SAFETY};
 
 /// The smallest residual, relative to σ‖λ_e‖, that double precision reaches on the dual
 /// gradient: the stop test's scale is kept at least this over ε (as SMALSE-M's).
 const REACHABLE: f64 = 1e3 * f64::EPSILON;
+
+/// The forcing exponent θ where the scene's method is not TSSN.
+const FORCING: f64 = 2.0;
+
+/// The Krylov directions kept across Newton steps where the scene's method is not TSSN.
+const RECYCLE: usize = 20;
 
 /// One Newton step's W: GΠGᵀ factorized and Π on this rank's owned rows.
 struct Step {
@@ -35,7 +40,7 @@ struct Step {
 /// coarse space).
 pub struct Held<'a, 'c, C: Comm> {
     dual: &'a TfetiDual<'c, C>,
-    /// d̃ on the owned rows, the QP's b.
+    /// d̃ − Fλ_e on the owned rows, the QP's b.
     d: Vec<f64>,
     /// λ_e = Gᵀ(GGᵀ)⁻¹e on the owned rows.
     lambda_e: Vec<f64>,
@@ -45,12 +50,10 @@ pub struct Held<'a, 'c, C: Comm> {
 
 impl<'a, 'c, C: Comm> Held<'a, 'c, C> {
     /// The operator of `dual` (built with the orthogonal projector, a body held by contact
-    /// alone) and its b = d̃ = (d̃ − Fλ_e) + Fλ_e (one product, not counted here).
+    /// alone) and its b = d̃ − Fλ_e (the dual's, no product).
     pub fn new(dual: &'a TfetiDual<'c, C>) -> Self {
         let lambda_e = dual.dist.owned_part(&dual.lambda_hat);
-        let mut f = vec![0.0; lambda_e.len()];
-        dual.apply_f(&lambda_e, &mut f);
-        let d = dual.d_hat.iter().zip(&f).map(|(a, b)| a + b).collect();
+        let d = dual.d_hat.clone();
         Held { dual, d, lambda_e, current: RefCell::new(None), counter: ProductCounter::default() }
     }
 
@@ -88,11 +91,13 @@ impl<'c, C: Comm> Operator for Held<'_, 'c, C> {
         self.dual.dim()
     }
 
-    /// P̃_W(Fx − d̃) + d̃: the residual y − b is then the Lagrangian's gradient (affine in x; the
-    /// solver's products of directions go through `apply_kernel`).
+    /// P̃_W(Fx − d̃) + b with Fx − d̃ = F(x − λ_e) − b: the residual y − b is then the
+    /// Lagrangian's gradient (affine in x; the solver's products of directions go through
+    /// `apply_kernel`).
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.counter.tick();
-        self.dual.apply_f(x, y);
+        let dx: Vec<f64> = x.iter().zip(&self.lambda_e).map(|(a, b)| a - b).collect();
+        self.dual.apply_f(&dx, y);
         y.iter_mut().zip(&self.d).for_each(|(a, b)| *a -= b);
         self.lagrangian(y);
         y.iter_mut().zip(&self.d).for_each(|(a, b)| *a += b);
@@ -119,7 +124,8 @@ impl<C: Comm> qp::Coarse for Held<'_, '_, C> {
     fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn CoarseProjector + 'a>> {
         let (free_all, slides_all) = self.dual.global_pi(free, slides);
         let clock = &self.dist().clock;
-        let chol = Clock::time(&clock.restricted, || Clock::time(&clock.restricted_factor, || self.dual.coarse.restricted(self.dist(), &free_all, &slides_all)));
+        let chol =
+            Clock::time(&clock.restricted, || Clock::time(&clock.restricted_factor, || self.dual.coarse.restricted(self.dist(), &free_all, &slides_all)));
         // every rank must agree: a rank without the factor makes all of them fail
         let mut bad = [f64::from(u8::from(chol.is_none()))];
         self.dist().comm().max_f64(&mut bad);
@@ -157,18 +163,11 @@ impl<C: Comm> CoarseProjector for Projector<'_, '_, '_, C> {
 }
 
 /// Solves the TFETI dual of a body held by contact alone by TSSN on [`Held`] from λ = `x0`
-/// (TSSN's settings from `p` when its method is TSSN, else the defaults; with `coulomb`
-/// coefficients: lagged bounds). The stop test ‖r̃_ρ‖ ≤ ε·s has SMALSE-M's scale s =
+/// (TSSN's settings from `p` when its method is TSSN, else θ = 2 and 20 recycled directions; frictionless or
+/// Tresca: Coulomb stays with SMALSE-M). The stop test ‖r̃_ρ‖ ≤ ε·s has SMALSE-M's scale s =
 /// max(‖P(d̃ − Fλ_e)‖, 1000 ε_mach/ε·σ‖λ_e‖), σ = σ_max(PFP) (`p.common.sigma` when given).
 /// [`QpError::SingularCoarse`] when a Newton step's rows do not fix the rigid motions.
-pub fn solve<C: Comm>(
-    dual: &TfetiDual<'_, C>,
-    set: &Lambda,
-    coulomb: Option<&[Coefficient]>,
-    x0: &[f64],
-    p: &Params,
-    monitor: &mut dyn Monitor,
-) -> Result<QpSolution, QpError> {
+pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
     let sp = dual.space();
     let held = Held::new(dual);
     let pfp = Penalized::new(dual, 0.0);
@@ -186,14 +185,16 @@ pub fn solve<C: Comm>(
     inner.common.eps = eps * scale / dnorm;
     inner.common.sigma = Some(SIGMA_SAFETY * sigma);
     inner.common.power_iterations = 0;
+    // TSSN's own settings where the scene chose it, else superlinear forcing and recycled
+    // Krylov directions (the traction sphere of run/bench: 128 products with TSSN's defaults,
+    // 89 with these; run/results/floating_restricted.txt)
     let tssn = match &p.method {
         MethodParams::Tssn(t) => t.clone(),
-        _ => Tssn::default(),
+        _ => Tssn { forcing: FORCING, recycle: RECYCLE, ..Tssn::default() },
     };
     let qp = Qp::new(&held, &held.d, set).with_coarse(Some(&held as &dyn qp::Coarse));
-    let mut sol = qp::tssn::run(&qp, coulomb, x0, &inner.common, &tssn, monitor)?;
-    // b = d̃ is one product (Fλ_e); the σ estimate's are counted apart
-    sol.info.n_a += 1;
+    let mut sol = qp::tssn::run(&qp, None, x0, &inner.common, &tssn, monitor)?;
+    // the σ estimate's products are counted apart
     sol.info.n_a_power = n_power;
     sol.info.sigma_est = sigma;
     sol.info.err *= dnorm / scale;
