@@ -200,7 +200,7 @@ impl<'c, C: Comm> TfetiDual<'c, C> {
     /// The contact rows that fix a body's rigid motion with the E rows, Π ([`Coarse::restricted`]),
     /// from this rank's free contact components and sliding directions (owned indices), summed
     /// over the ranks: (free per global contact row, sliding (global first row, t)).
-    fn global_pi(&self, free: &[bool], slides: &[(usize, [f64; 2])]) -> (Vec<bool>, Vec<(usize, [f64; 2])>) {
+    pub(crate) fn global_pi(&self, free: &[bool], slides: &[(usize, [f64; 2])]) -> (Vec<bool>, Vec<(usize, [f64; 2])>) {
         let ni = self.e_start;
         let owned = &self.dist.owned;
         let mut w = vec![0.0; 3 * ni];

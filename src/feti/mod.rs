@@ -15,6 +15,7 @@ pub(crate) mod decomposition;
 pub(crate) mod distribution;
 pub(crate) mod dual;
 pub(crate) mod precond;
+pub(crate) mod restricted;
 pub(crate) mod smalse;
 pub(crate) mod subdomain;
 

@@ -21,6 +21,7 @@ use crate::feti::constraints::{self, LocalRhs};
 use crate::feti::decomposition::{decompose_shared, Decomposition, DualGraphs};
 use crate::feti::distribution::Distribution;
 use crate::feti::dual::TfetiDual;
+use crate::feti::restricted;
 use crate::feti::smalse::{self, SmalseInfo};
 use crate::feti::subdomain::{SubdomainMesh, SubdomainSystem};
 use crate::feti::{assign_ranks, eliminated, subdomain_loads};
@@ -488,6 +489,7 @@ pub(crate) fn solve_from<C: Comm>(
         orthogonal,
         projected,
         penalty: ls.scene.decomposition.penalty,
+        restricted: ls.scene.decomposition.restricted,
         what,
     };
     steps::walk(comm, ls, model, &s.params, &mut steps, b, dim, resume, t)
@@ -522,6 +524,9 @@ struct Steps<'a, 'c, C: Comm> {
     /// The solver runs on the projected system (the dual is its coarse space).
     projected: bool,
     penalty: f64,
+    /// `decomposition.restricted`: bodies held by contact alone by TSSN with Gλ = e on each
+    /// Newton step's subspace (SMALSE-M where a step's rows cannot hold them).
+    restricted: bool,
     what: String,
 }
 
@@ -576,6 +581,15 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
                 } else {
                     x0
                 };
+                // `decomposition.restricted`: TSSN keeps Gλ = e on each Newton step's W; where a
+                // step's rows cannot hold the body (GΠGᵀ singular), SMALSE-M takes over (and
+                // for Coulomb, whose lagged bounds break the restricted CG's curvature)
+                if self.restricted && !dual.coarse.held() && self.contact.is_some() && self.mu.is_none() {
+                    match restricted::solve(dual, &self.set, x0, params, monitor) {
+                        Err(QpError::SingularCoarse { .. }) => {}
+                        other => return other.map(|s| (s, None)),
+                    }
+                }
                 smalse::solve(dual, qp.preconditioner, &self.set, self.mu.as_deref(), x0, warm.and_then(Option::as_ref), params, self.penalty, monitor)
                     .map(|(s, i)| (s, Some(i)))
             }

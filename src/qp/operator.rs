@@ -110,6 +110,13 @@ pub trait Coarse {
     /// free components; `slides` lists (first component, unit tangent t) of the pairs that move
     /// along t only. `None` when G Π Gᵀ is singular.
     fn restrict<'a>(&'a self, free: &[bool], slides: &[(usize, [f64; 2])]) -> Option<Box<dyn CoarseProjector + 'a>>;
+
+    /// Whether the QP keeps Gλ = e itself (its unknowns are λ, not a vector of Ker G): a
+    /// Newton step then restricts first, closes its start onto Gλ = e ([`CoarseProjector::close`])
+    /// and the operator's gradient is the Lagrangian's on that step's W. Default false.
+    fn keeps_equality(&self) -> bool {
+        false
+    }
 }
 
 /// One restriction of a [`Coarse`] space.
@@ -117,6 +124,12 @@ pub trait CoarseProjector {
     /// x ← x − Gᵀ(GΠGᵀ)⁻¹G x: for x ∈ W, Π of the result is x's orthogonal projection onto
     /// Ker G ∩ W.
     fn apply(&self, x: &mut [f64]);
+
+    /// Where the QP keeps Gλ = e ([`Coarse::keeps_equality`]): −Gᵀ(GΠGᵀ)⁻¹(Gx − e), whose Π
+    /// part added to x closes Gx = e on W. `None` (the default): nothing to close.
+    fn close(&self, _x: &[f64]) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// A counter of A-products for the implementations of [`Operator`].

@@ -146,8 +146,8 @@ pub fn solve<A: Operator>(qp: &Qp<'_, A>, lambda0: &[f64], c: &Common, p: &Tssn,
 /// outer step takes Λ(λᵏ), the cones cut at the iterate's normals, as fixed for its Newton
 /// system (symmetric: the bound's dependence on λν is left out of the derivative), and the stop
 /// test is made on Λ(λ) at the result ([`super::coulomb::lagged`]).
-pub(crate) fn run<A: Operator>(
-    qp: &Qp<'_, A>,
+pub(crate) fn run<'q, A: Operator>(
+    qp: &Qp<'q, A>,
     mu: Option<&[Coefficient]>,
     lambda0: &[f64],
     c: &Common,
@@ -212,6 +212,20 @@ pub(crate) fn run<A: Operator>(
         if p.damping > 0.0 {
             held.clone_from(&sys.sets.free);
         }
+        let restrict = |g: &'q dyn super::Coarse| {
+            let slides: Vec<(usize, [f64; 2])> = sys.slides.iter().map(|s| (s.k, s.t)).collect();
+            g.restrict(&sys.sets.free, &slides).ok_or(QpError::SingularCoarse { outer: k })
+        };
+        // a QP that keeps Gλ = e itself: restricted first (its gradient is the Lagrangian's on
+        // this W), the start closed onto Gλ = e by W's least-norm correction
+        let mut coarse = match qp.coarse.filter(|g| g.keeps_equality()) {
+            Some(g) => Some(restrict(g)?),
+            None => None,
+        };
+        if let Some(corr) = coarse.as_deref().and_then(|p| p.close(&x0)) {
+            sys.apply(&corr, None, &mut g0);
+            x0.iter_mut().zip(&g0).for_each(|(a, b)| *a += b);
+        }
         drv.residual(&x0, &mut g0);
         let q0 = drv.q(&x0, &g0);
         if !q0.is_finite() {
@@ -244,13 +258,12 @@ pub(crate) fn run<A: Operator>(
         // CG on the subspace from x⁰ (σ = 0 there)
         x.copy_from_slice(&x0);
         r.copy_from_slice(&g0);
-        let coarse = match qp.coarse {
-            Some(g) => {
-                let slides: Vec<(usize, [f64; 2])> = sys.slides.iter().map(|s| (s.k, s.t)).collect();
-                Some(g.restrict(&sys.sets.free, &slides).ok_or(QpError::SingularCoarse { outer: k })?)
-            }
-            None => None,
-        };
+        if coarse.is_none() {
+            coarse = match qp.coarse {
+                Some(g) => Some(restrict(g)?),
+                None => None,
+            };
+        }
         let opts = Pcg {
             system: &sys,
             preconditioner: qp.preconditioner.map(|m| (m, rho)),

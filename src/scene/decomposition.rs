@@ -35,6 +35,11 @@ pub struct DecompositionSettings {
     /// SMALSE-M's penalty ϱ as a multiple of σ_max(PFP) (orthogonal projector only).
     #[serde(default = "unit")]
     pub penalty: f64,
+    /// A body held by contact alone: TSSN keeps Gλ = e itself on each Newton step's subspace W
+    /// (the start closed onto it, the Lagrangian's gradient with the rigid amplitudes α the free
+    /// rows fix) instead of SMALSE-M's augmented-Lagrangian loop. Default false (SMALSE-M).
+    #[serde(default)]
+    pub restricted: bool,
     /// The inner CG (TSSN's, plain CG's) runs projected onto Ker G ∩ W, W a Newton step's
     /// subspace, with the orthogonal projector of G = RᵀBᵀ restricted to W (oblique projector
     /// only); the FETI preconditioner acts there. Default true.
@@ -66,6 +71,7 @@ impl Default for DecompositionSettings {
             dirichlet: Default::default(),
             projector: Default::default(),
             penalty: 1.0,
+            restricted: false,
             projected_cg: true,
             subdomains_per_cluster: 1,
             coarse_solve: CoarseSolve::Factor,
