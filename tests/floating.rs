@@ -183,12 +183,13 @@ fn a_one_hexahedron_body_held_by_contact_alone_is_solved() {
 fn the_guards_re_solve_continues_smalse_from_its_multipliers() {
     let scene = root().join("run/bench/hertz_sphere_traction.toml");
     let dir = tmpdir("warm-guard");
-    let coarse = ["body.0.box.nodes=[11, 11, 5]", "body.1.box.nodes=[9, 9, 5]"];
+    // SMALSE-M asked for: the restricted TSSN path (the default) has no outer loop to continue
+    let coarse = ["body.0.box.nodes=[11, 11, 5]", "body.1.box.nodes=[9, 9, 5]", "decomposition.restricted=false"];
     let warm = solve(&scene, &coarse, &dir.join("warm.h5"));
     let ws = warm.report.solver.as_ref().unwrap();
     let eps = ws.eps_tightened.last().expect("ε = 1e-8 misses the equilibrium check here").to_eps;
     let tight = format!("solver.eps={eps}");
-    let cold = solve(&scene, &[coarse[0], coarse[1], &tight], &dir.join("cold.h5"));
+    let cold = solve(&scene, &[coarse[0], coarse[1], coarse[2], &tight], &dir.join("cold.h5"));
     let cs = cold.report.solver.as_ref().unwrap();
     assert!(cs.eps_tightened.is_empty(), "the cold solve at ε = {eps:.1e} passes its checks");
     let products = |r: &tresca_feti::pipeline::Summary| r.report.tfeti.as_ref().unwrap().smalse.as_ref().unwrap().n_a;

@@ -137,8 +137,12 @@ pub struct Candidate {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Unknown {
-    /// A body held by contact alone: SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
+    /// A body held by contact alone with Coulomb friction (or `decomposition.restricted =
+    /// false`): SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
     Floating,
+    /// A body held by contact alone, frictionless or Tresca: TSSN keeps Gλ = e on each Newton
+    /// step's subspace (measured 0.1–0.5×: fewer than a load-driven supported body).
+    HeldRestricted,
     /// Coulomb friction: the fixed point on the normal multipliers (measured 0.3–1.0×, its
     /// Newton steps replace the Tresca solve's outer iterations).
     Coulomb,
@@ -183,6 +187,7 @@ impl Unknown {
     pub fn factors(self) -> (f64, f64) {
         match self {
             Unknown::Floating => (0.6, 4.0),
+            Unknown::HeldRestricted => (0.1, 1.0),
             Unknown::Coulomb => (0.25, 1.1),
             Unknown::Displacement => (0.15, 1.0),
             Unknown::StiffSlave(r) => (1.0, 5.0 * (1.0 + r.log10())),
@@ -198,6 +203,7 @@ impl Unknown {
         let (lo, hi) = self.factors();
         match self {
             Unknown::Floating => format!("held by contact alone: the outer loop for Gλ = e (SMALSE-M) takes {lo}–{hi}× the law's products"),
+            Unknown::HeldRestricted => format!("held by contact alone, Gλ = e kept by each Newton step: {lo}–{hi}× the law's products"),
             Unknown::Coulomb => format!("Coulomb: × the fixed point's outer iterations, {lo}–{hi}× the Tresca law's products"),
             Unknown::Displacement => format!("loaded by prescribed displacements alone: {lo}–{hi}× the load-driven law's products"),
             Unknown::StiffSlave(r) => format!("stiff slave (E·h ratio {r:.3}× the master's): nodes stay open, × {lo}–{hi:.1}"),
@@ -331,7 +337,7 @@ fn price_split<C: Comm>(
     ranks: usize,
     split: &mut Split,
 ) -> Result<(Vec<Candidate>, Option<Partition>)> {
-    let pricing = Pricing::new(comm, model, solver, ranks);
+    let pricing = Pricing::new(comm, model, solver, ranks, dec.restricted);
     let specs = pricing.tfeti_specs(dec.tfeti);
     let (tfeti, law, partition) = pricing.tfeti_candidates(dec, specs, split)?;
     let mut out = Vec::new();
@@ -431,7 +437,9 @@ struct Pricing<'a, C: Comm> {
 
 impl<'a, C: Comm> Pricing<'a, C> {
     /// The shared figures of a pricing for `ranks` ranks with the solver settings `solver`.
-    fn new(comm: &'a C, model: &'a Model, solver: &Common, ranks: usize) -> Self {
+    /// `restricted`: bodies held by contact alone are solved by TSSN keeping Gλ = e
+    /// (`decomposition.restricted`) where the friction is not Coulomb.
+    fn new(comm: &'a C, model: &'a Model, solver: &Common, ranks: usize, restricted: bool) -> Self {
         let eps = solver.eps;
         let mesh = &model.mesh;
         let contact = model.pairs.as_ref();
@@ -451,11 +459,11 @@ impl<'a, C: Comm> Pricing<'a, C> {
             pairs: contact.map_or(0, |c| c.len()),
             unknowns: contact.map_or(Vec::new(), |c| {
                 let loaded = model.loads.iter().any(|&f| f != 0.0);
-                let mut u: Vec<Unknown> =
-                    [(!model.floating.is_empty(), Unknown::Floating), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
-                        .into_iter()
-                        .filter_map(|(on, u)| on.then_some(u))
-                        .collect();
+                let held = if restricted && !c.is_coulomb() { Unknown::HeldRestricted } else { Unknown::Floating };
+                let mut u: Vec<Unknown> = [(!model.floating.is_empty(), held), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
+                    .into_iter()
+                    .filter_map(|(on, u)| on.then_some(u))
+                    .collect();
                 u.extend(features(model, c));
                 u
             }),

@@ -37,8 +37,9 @@ pub struct DecompositionSettings {
     pub penalty: f64,
     /// A body held by contact alone: TSSN keeps Gλ = e itself on each Newton step's subspace W
     /// (the start closed onto it, the Lagrangian's gradient with the rigid amplitudes α the free
-    /// rows fix) instead of SMALSE-M's augmented-Lagrangian loop. Default false (SMALSE-M).
-    #[serde(default)]
+    /// rows fix) instead of SMALSE-M's augmented-Lagrangian loop (Coulomb, and a step whose
+    /// rows cannot hold the body, go to SMALSE-M). Default true; false: SMALSE-M always.
+    #[serde(default = "yes")]
     pub restricted: bool,
     /// The inner CG (TSSN's, plain CG's) runs projected onto Ker G ∩ W, W a Newton step's
     /// subspace, with the orthogonal projector of G = RᵀBᵀ restricted to W (oblique projector
@@ -71,7 +72,7 @@ impl Default for DecompositionSettings {
             dirichlet: Default::default(),
             projector: Default::default(),
             penalty: 1.0,
-            restricted: false,
+            restricted: true,
             projected_cg: true,
             subdomains_per_cluster: 1,
             coarse_solve: CoarseSolve::Factor,
