@@ -312,11 +312,15 @@ fn a_failing_launcher_or_exec_gives_one_telling_line() {
     for (args, expect) in [
         (
             &["--launcher", &unreachable][..],
-            format!("{p}the launcher failed (exit 1; {unreachable} -n 1 {BIN} solve …): ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"),
+            format!(
+                "{p}the launcher failed (exit 1; {unreachable} -n 1 {BIN} solve …): ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"
+            ),
         ),
         (
             &["--exec", no_binary],
-            format!("{p}the launcher failed (exit 1; mpirun -n 1 {no_binary} solve …): ch-run[4242]: error: cant execve(2): tresca-feti: No such file or directory"),
+            format!(
+                "{p}the launcher failed (exit 1; mpirun -n 1 {no_binary} solve …): ch-run[4242]: error: cant execve(2): tresca-feti: No such file or directory"
+            ),
         ),
         (&["--launcher", hung, "--case-timeout", "2"], format!("{p}no result after 2 s (--case-timeout): stopped --launcher sh -c sleep 60 hung-launcher")),
     ] {
@@ -335,7 +339,8 @@ fn the_telling_line_of_a_launcher() {
     use tresca_feti::studies::bench::telling_line;
     assert_eq!(telling_line(UNREACHABLE), Some("ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"));
     // ssh's line last: still the one that names the host
-    let late = UNREACHABLE.replacen("ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known\n", "", 1) + "ssh: connect to host h9 port 22: No route to host\n";
+    let late = UNREACHABLE.replacen("ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known\n", "", 1)
+        + "ssh: connect to host h9 port 22: No route to host\n";
     assert_eq!(telling_line(&late), Some("ssh: connect to host h9 port 22: No route to host"));
     // no ssh line: ORTE's own
     let orte = UNREACHABLE.lines().skip(1).collect::<Vec<_>>().join("\n");
