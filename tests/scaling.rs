@@ -295,6 +295,9 @@ This usually is caused by:
 --------------------------------------------------------------------------
 ";
 
+/// ch-run's line for an image without the program it is to run.
+const CH_RUN: &str = "ch-run[27235]: error: can't execve(2): tresca-feti: No such file or directory (ch_core.c:410 2)";
+
 #[test]
 fn a_failing_launcher_or_exec_gives_one_telling_line() {
     let dir = tmpdir("launcher");
@@ -304,8 +307,12 @@ fn a_failing_launcher_or_exec_gives_one_telling_line() {
     let banner = dir.join("banner.txt");
     std::fs::write(&banner, UNREACHABLE).unwrap();
     let unreachable = format!("sh -c 'cat {} >&2; exit 1' fake-mpirun", banner.display());
-    // an exec that fails as ch-run does on an image without the binary, under the real mpirun
-    let no_binary = "sh -c 'echo \"ch-run[4242]: error: cant execve(2): tresca-feti: No such file or directory (ch_core.c:1203 2)\" >&2; exit 1' fake-ch-run";
+    // an exec that fails as ch-run does on an image without the binary (its line as ch-run 0.31
+    // printed it in run/cluster-verify --container), under the real mpirun
+    let fake = dir.join("fake-ch-run");
+    std::fs::write(&fake, format!("#!/bin/sh\necho \"{CH_RUN}\" >&2\nexit 1\n")).unwrap();
+    std::fs::set_permissions(&fake, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let no_binary = fake.to_str().unwrap();
     // a launcher that never returns: stopped at the case timeout
     let hung = "sh -c 'sleep 60' hung-launcher";
     let p = "error: case n3_s1_oblique_p1: ";
@@ -316,12 +323,7 @@ fn a_failing_launcher_or_exec_gives_one_telling_line() {
                 "{p}the launcher failed (exit 1; {unreachable} -n 1 {BIN} solve …): ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"
             ),
         ),
-        (
-            &["--exec", no_binary],
-            format!(
-                "{p}the launcher failed (exit 1; mpirun -n 1 {no_binary} solve …): ch-run[4242]: error: cant execve(2): tresca-feti: No such file or directory"
-            ),
-        ),
+        (&["--exec", no_binary], format!("{p}the launcher failed (exit 1; mpirun -n 1 {no_binary} solve …): {CH_RUN}")),
         (&["--launcher", hung, "--case-timeout", "2"], format!("{p}no result after 2 s (--case-timeout): stopped --launcher sh -c sleep 60 hung-launcher")),
     ] {
         let start = std::time::Instant::now();
