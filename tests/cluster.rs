@@ -57,7 +57,20 @@ fn docs_cluster_section_matches_the_scripts() {
     }
     // the checked commands, verbatim in the script that checks them
     let verify = read("run/cluster-verify");
-    for cmd in ["sbatch --wait --ntasks=2", "run/scaling.slurm", "srun --mpi=pmix", "ch-convert", "unshare --uts", "btl_tcp_if_include", "oob_tcp_if_include"] {
+    for cmd in [
+        "sbatch --wait --ntasks=2",
+        "run/scaling.slurm",
+        "srun --mpi=pmix",
+        "srun --mpi=list",
+        "ch-convert",
+        "unshare --uts",
+        "btl_tcp_if_include",
+        "oob_tcp_if_include",
+        "mpirun --hostfile",
+        "No route to host",
+        "No such file or directory",
+        "mpi/pmix",
+    ] {
         assert!(docs.contains(cmd), "docs/containers.md no longer says `{cmd}`");
         assert!(verify.contains(cmd), "docs/containers.md says `{cmd}`, run/cluster-verify does not run it");
     }
@@ -85,7 +98,8 @@ fn docs_cluster_section_matches_the_scripts() {
     assert!(def.contains("docker-archive"), "run/apptainer.def must build from the podman docker-archive");
 }
 
-/// `run/cluster-verify` end to end where it can run: as root, with Slurm, munge, PMIx and
+/// `run/cluster-verify` end to end where it can run (its bad inputs included: an unreachable and
+/// an unresolvable host in a hostfile, a Slurm job without PMIx): as root, with Slurm, munge, PMIx and
 /// iproute2 installed (it installs nothing then) and the release binary built. Elsewhere the test
 /// says why it did not run.
 #[test]
@@ -113,10 +127,26 @@ fn cluster_verify_slurm_and_several_hosts() {
     assert!(out.status.success(), "run/cluster-verify failed ({:?}):\n{}\n{}", out.status.code(), &stdout[stdout.len().saturating_sub(4000)..], stderr);
     let last = stdout.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("");
     assert!(last.starts_with("cluster-verify:"), "the summary line comes last: {last:?}");
-    for part in ["slurm ok", "srun --mpi=pmix -n 2 u bitwise", "2 hosts x1 ok", "2 hosts x2 ok", "3 hosts x1 ok", "memory per host ok"] {
+    for part in [
+        "slurm ok",
+        "srun --mpi=pmix -n 2 u bitwise",
+        "2 hosts x1 ok",
+        "2 hosts x2 ok",
+        "3 hosts x1 ok",
+        "memory per host ok",
+        "bad inputs one line each (unreachable host, unresolved host, slurm without pmix)",
+    ] {
         assert!(last.contains(part), "summary lacks {part:?}: {last}");
     }
-    for part in ["2 hosts x 1 rank: solved", "bitwise equal"] {
+    // the bad inputs' lines as the script printed them: the cause named, not a banner
+    for part in [
+        "2 hosts x 1 rank: solved",
+        "bitwise equal",
+        "hostfile, unreachable host (exit 1): error: case n4_s2_oblique_p2: the launcher failed",
+        "No route to host",
+        "Could not resolve hostname h8",
+        "Couldn't find the specified plugin name for mpi/pmix",
+    ] {
         assert!(stdout.contains(part) || stderr.contains(part), "cluster-verify's log lacks {part:?}");
     }
 }

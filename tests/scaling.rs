@@ -278,3 +278,78 @@ fn a_malformed_network_file_names_the_key() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.starts_with(&format!("error: {}: network.bandwidth_gb_s: must be a positive number, got 0", bad.display())), "{stderr}");
 }
+
+/// Open MPI 4.1's stderr when the rsh launcher cannot reach a host of the hostfile, as mpirun
+/// printed it here for `--host nosuchhost-xyz` (ssh's line first, then ORTE's banner).
+const UNREACHABLE: &str = "ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known
+--------------------------------------------------------------------------
+ORTE was unable to reliably start one or more daemons.
+This usually is caused by:
+
+* not finding the required libraries and/or binaries on
+  one or more nodes. Please check your PATH and LD_LIBRARY_PATH
+  settings, or configure OMPI with --enable-orterun-prefix-by-default
+
+* lack of authority to execute on one or more specified nodes.
+  Please verify your allocation and authorities.
+--------------------------------------------------------------------------
+";
+
+/// ch-run's line for an image without the program it is to run.
+const CH_RUN: &str = "ch-run[27235]: error: can't execve(2): tresca-feti: No such file or directory (ch_core.c:410 2)";
+
+#[test]
+fn a_failing_launcher_or_exec_gives_one_telling_line() {
+    let dir = tmpdir("launcher");
+    let csv = dir.join("l.csv");
+    let csv = csv.to_str().unwrap();
+    // a launcher that fails as mpirun does on an unreachable host: the banner on stderr, exit 1
+    let banner = dir.join("banner.txt");
+    std::fs::write(&banner, UNREACHABLE).unwrap();
+    let unreachable = format!("sh -c 'cat {} >&2; exit 1' fake-mpirun", banner.display());
+    // an exec that fails as ch-run does on an image without the binary (its line as ch-run 0.31
+    // printed it in run/cluster-verify --container), under the real mpirun
+    let fake = dir.join("fake-ch-run");
+    std::fs::write(&fake, format!("#!/bin/sh\necho \"{CH_RUN}\" >&2\nexit 1\n")).unwrap();
+    std::fs::set_permissions(&fake, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let no_binary = fake.to_str().unwrap();
+    // a launcher that never returns: stopped at the case timeout
+    let hung = "sh -c 'sleep 60' hung-launcher";
+    let p = "error: case n3_s1_oblique_p1: ";
+    for (args, expect) in [
+        (
+            &["--launcher", &unreachable][..],
+            format!(
+                "{p}the launcher failed (exit 1; {unreachable} -n 1 {BIN} solve …): ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"
+            ),
+        ),
+        (&["--exec", no_binary], format!("{p}the launcher failed (exit 1; mpirun -n 1 {no_binary} solve …): {CH_RUN}")),
+        (&["--launcher", hung, "--case-timeout", "2"], format!("{p}no result after 2 s (--case-timeout): stopped --launcher sh -c sleep 60 hung-launcher")),
+    ] {
+        let start = std::time::Instant::now();
+        let o = bench(&[args, &["--sizes", "3", "--subdomains", "1", "--ranks", "1", "--csv", csv]].concat());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.starts_with(&expect), "{args:?}:\n{stderr}\nexpected\n{expect}");
+        assert!(start.elapsed().as_secs_f64() < 30.0, "{args:?}: {:?}", start.elapsed());
+    }
+}
+
+#[test]
+fn the_telling_line_of_a_launcher() {
+    use tresca_feti::studies::bench::telling_line;
+    assert_eq!(telling_line(UNREACHABLE), Some("ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known"));
+    // ssh's line last: still the one that names the host
+    let late = UNREACHABLE.replacen("ssh: Could not resolve hostname nosuchhost-xyz: Name or service not known\n", "", 1)
+        + "ssh: connect to host h9 port 22: No route to host\n";
+    assert_eq!(telling_line(&late), Some("ssh: connect to host h9 port 22: No route to host"));
+    // no ssh line: ORTE's own
+    let orte = UNREACHABLE.lines().skip(1).collect::<Vec<_>>().join("\n");
+    assert_eq!(telling_line(&orte), Some("ORTE was unable to reliably start one or more daemons."));
+    // srun without its pmix plugin: the first error, which names the plugin
+    let srun = "srun: error: Couldn't find the specified plugin name for mpi/pmix looking at all files\nsrun: error: cannot find mpi plugin for mpi/pmix\n";
+    assert_eq!(telling_line(srun), Some("srun: error: Couldn't find the specified plugin name for mpi/pmix looking at all files"));
+    assert_eq!(telling_line("----\n\n  something odd  \n"), Some("something odd"));
+    assert_eq!(telling_line("\n-----\n"), None);
+}

@@ -10,7 +10,7 @@
 //! and S_P = S₁·P (DOFs ∝ N³: constant work per rank), whether or not 1 is in the rank list.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
@@ -205,15 +205,8 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
         cmd.arg("--set").arg(x);
     }
     cmd.arg("--out").arg(&out).arg("--quiet");
-    let err = bounded(a, cmd, &dir.join(format!("{name}.stderr")), &name)?;
-    if let Some(err) = err {
-        // our one-line error, not mpirun's banner after it; else the launcher's first line
-        let line = err
-            .lines()
-            .find_map(|l| l.strip_prefix("error: "))
-            .or_else(|| err.lines().map(str::trim).find(|l| !l.is_empty() && !l.chars().all(|c| c == '-')))
-            .unwrap_or("failed without an error message");
-        return Err(Error::numerical(format!("case {name}"), line.to_string()));
+    if let Some((err, status)) = bounded(a, cmd, &dir.join(format!("{name}.stderr")), &name)? {
+        return Err(Error::numerical(format!("case {name}"), failure(a, ranks, status, &err)));
     }
     let json = out.with_extension("json");
     let text = std::fs::read_to_string(&json).map_err(|e| Error::io(json.display().to_string(), e))?;
@@ -273,8 +266,8 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
 
 /// Runs `cmd` with its stderr in the file `log`, its stdout discarded, in a process group of its
 /// own, for at most `a.timeout` seconds: past it the group is stopped (SIGTERM, then SIGKILL) and
-/// the case fails. Returns `None` on success, else the stderr of the failed run.
-fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<String>> {
+/// the case fails. Returns `None` on success, else the stderr and the status of the failed run.
+fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<(String, ExitStatus)>> {
     use std::os::unix::process::CommandExt;
     let file = std::fs::File::create(log).map_err(|e| Error::io(log.display().to_string(), e))?;
     cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(file).process_group(0);
@@ -307,7 +300,52 @@ fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<
     if status.success() {
         return Ok(None);
     }
-    Ok(Some(std::fs::read_to_string(log).unwrap_or_default()))
+    Ok(Some((std::fs::read_to_string(log).unwrap_or_default(), status)))
+}
+
+/// The one line a failed case ends with: the solver's own `error: …` line where it wrote one;
+/// else the launcher's exit status, the command (launcher and exec) and the launcher's most
+/// telling line ([`telling_line`]), not its whole banner.
+fn failure(a: &Args, ranks: usize, status: ExitStatus, stderr: &str) -> String {
+    if let Some(own) = stderr.lines().find_map(|l| l.strip_prefix("error: ")) {
+        return own.to_string();
+    }
+    use std::os::unix::process::ExitStatusExt;
+    let exit = match (status.code(), status.signal()) {
+        (Some(c), _) => format!("exit {c}"),
+        (None, Some(s)) => format!("signal {s}"),
+        (None, None) => "exit ?".into(),
+    };
+    let command = shell_words::join([&a.launcher[..], &["-n".into(), ranks.to_string()], &a.mpirun_args, &a.exec].concat());
+    let line = telling_line(stderr).unwrap_or("no message on stderr");
+    format!("the launcher failed ({exit}; {command} solve …): {line}")
+}
+
+/// What names a launcher's failure, most telling first: the failing system call of a missing
+/// program (`ch-run`, `execve`), a host that does not resolve or answer (ssh under Open MPI's
+/// rsh launcher), then any error line (`srun: error: …` of an absent MPI plugin), then Open
+/// MPI's own words about its daemons and hosts.
+const CAUSES: [&str; 13] = [
+    "no such file",
+    "could not resolve",
+    "no route to host",
+    "connection refused",
+    "connection timed out",
+    "ssh:",
+    "error",
+    "unable to",
+    "orte",
+    "host",
+    "pmix",
+    "plugin",
+    "not found",
+];
+
+/// The most telling line of a failed launcher's stderr: the first line holding the earliest of
+/// [`CAUSES`] (case-insensitive); else its first line that is neither blank nor a rule of dashes.
+pub fn telling_line(stderr: &str) -> Option<&str> {
+    let lines = || stderr.lines().map(str::trim).filter(|l| !l.is_empty() && !l.chars().all(|c| c == '-' || c == '='));
+    CAUSES.iter().find_map(|key| lines().find(|l| l.to_lowercase().contains(key))).or_else(|| lines().next())
 }
 
 /// Whether `program` can be started: a path to a file, or a name found on `PATH`.
