@@ -309,6 +309,22 @@ impl<C: Comm> Operator for MonolithicDual<'_, C> {
         self.single_now.set(self.single.is_some_and(|eta| eta <= rel));
         self.single_now.get()
     }
+
+    /// dᵢ = Σ over the bodies of Σ_j Bᵢⱼ² / (K_ff)_jj, summed over the ranks.
+    fn diagonal_estimate(&self) -> Option<Vec<f64>> {
+        let mut d = vec![0.0; self.layout.dim()];
+        for blk in &self.blocks {
+            let k = &blk.local.sys.k;
+            for &(i, j, c) in &blk.b {
+                let kjj = k.position(j, j).map_or(0.0, |q| k.values[q]);
+                if kjj > 0.0 {
+                    d[i] += c * c / kjj;
+                }
+            }
+        }
+        self.comm.sum_f64(&mut d);
+        Some(d)
+    }
 }
 
 impl<C: Comm> MonolithicDual<'_, C> {

@@ -480,6 +480,28 @@ impl<'c, C: Comm> Operator for TfetiDual<'c, C> {
         self.single_now.get()
     }
 
+    /// dᵢ = Σ_s Σ_j (B_s)ᵢⱼ² / (K_s)_jj on the owned rows (the projection P̃ left out).
+    fn diagonal_estimate(&self) -> Option<Vec<f64>> {
+        let v: Vec<Vec<f64>> = self
+            .pieces
+            .iter()
+            .map(|s| {
+                let k = s.sys.k_free();
+                let mut v = vec![0.0; s.nrows];
+                for &(p, j, c) in &s.entries {
+                    let kjj = k.position(j, j).map_or(0.0, |q| k.values[q]);
+                    if kjj > 0.0 {
+                        v[p] += c * c / kjj;
+                    }
+                }
+                v
+            })
+            .collect();
+        let mut d = vec![0.0; self.layout.dim()];
+        self.dist.assemble(&v, &mut d);
+        Some(d)
+    }
+
     /// y ← P̃ y.
     fn finish_kernel(&self, y: &mut [f64]) {
         Clock::time(&self.dist.clock.apply, || {

@@ -159,11 +159,18 @@ impl Lambda {
 
     /// The sets (12)–(13) at λ with gradient r.
     pub fn active_sets(&self, lambda: &[f64], r: &[f64], rho: f64) -> ActiveSets {
+        self.active_sets_with(lambda, r, rho, None)
+    }
+
+    /// The sets (12)–(13) with ρᵢ = `normal_rho[i]` in the normal rows' decision λᵢ − ρᵢrᵢ ≥ 0
+    /// (ρ when None; the tangential components keep ρ).
+    pub fn active_sets_with(&self, lambda: &[f64], r: &[f64], rho: f64, normal_rho: Option<&[f64]>) -> ActiveSets {
         let n = self.layout.dim();
         let mut s = ActiveSets { free: vec![false; n], ..Default::default() };
         s.free[self.free_range()].fill(true);
+        let rho_n = |i: usize| normal_rho.map_or(rho, |v| v[i]);
         for i in 0..self.layout.m {
-            if lambda[i] - rho * r[i] >= 0.0 {
+            if lambda[i] - rho_n(i) * r[i] >= 0.0 {
                 s.free[i] = true;
                 s.normal_active += 1;
             }
@@ -172,7 +179,7 @@ impl Lambda {
             let k = self.layout.tangent(i, 0);
             let y = [lambda[k] - rho * r[k], lambda[k + 1] - rho * r[k + 1]];
             // an open pair's tangential state is not counted (the Tresca bound acts there too)
-            let closed = lambda[i] - rho * r[i] >= 0.0;
+            let closed = lambda[i] - rho_n(i) * r[i] >= 0.0;
             if set.is_outside(&y) {
                 s.slip += usize::from(closed);
             } else {
@@ -230,5 +237,26 @@ impl Lambda {
             })
             .collect();
         SlantDerivative { layout: self.layout, normal, tangent }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// λᵢ − ρᵢrᵢ ≥ 0 decides each normal row with its own ρᵢ: row 0 (λ 1, r 0.5) is active at
+    /// ρ = 1 and fixed at ρ₀ = 4; row 1 (λ 0, r −1) is active either way; the tangential pair of
+    /// row 0 is counted only while the row is closed.
+    #[test]
+    fn a_per_row_rho_decides_each_normal_row() {
+        let set = Lambda::new(2, Some(vec![TangentSet::Disc(crate::qp::sets::Disc::new(1.0)); 2]));
+        let lambda = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let r = [0.5, -1.0, 0.0, 0.0, 0.0, 0.0];
+        let scalar = set.active_sets(&lambda, &r, 1.0);
+        assert_eq!((scalar.normal_active, scalar.stick), (2, 2));
+        assert_eq!(&scalar.free[..2], &[true, true]);
+        let per_row = set.active_sets_with(&lambda, &r, 1.0, Some(&[4.0, 1.0]));
+        assert_eq!((per_row.normal_active, per_row.stick), (1, 1));
+        assert_eq!(&per_row.free[..2], &[false, true]);
     }
 }

@@ -30,7 +30,7 @@ pub(crate) mod tssn;
 pub use driver::{estimate_sigma, lanczos_sigma, power_sigma, Monitor, Silent, SIGMA_SAFETY};
 pub use lambda::{Lambda, Layout};
 pub use operator::{Coarse, CoarseProjector, Operator, Preconditioner, ProductCounter, Replicated, Space};
-pub use params::{CgStop, Common, Method, MethodParams, Params, SigmaEstimate};
+pub use params::{CgStop, Common, Method, MethodParams, Params, RhoRule, SigmaEstimate};
 
 /// The QP: A, b, Λ and, for the solvers that take one, a preconditioner of A.
 pub struct Qp<'a, A: Operator> {

@@ -88,6 +88,12 @@ pub trait Operator {
     fn allow_error(&self, _rel: f64) -> bool {
         false
     }
+    /// An estimate of diag(A) on this rank's components without a product (the dual operators:
+    /// dᵢ = Σ_j Bᵢⱼ²/K_jj, the diagonal of B diag(K)⁻¹ Bᵀ), for a per-row ρ ([`super::params::RhoRule`]).
+    /// Default: none.
+    fn diagonal_estimate(&self) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// y = M x with M ≈ A⁻¹ symmetric positive semidefinite on the components [`Preconditioner::block`]

@@ -70,6 +70,27 @@ pub enum SigmaEstimate {
     Lanczos,
 }
 
+/// TSSN's ρ in the active-set decision yᵢ = λᵢ − ρᵢ rᵢ of the normal rows (the Newton system and the
+/// stop test keep the scalar ρ).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RhoRule {
+    /// One ρ = rho_factor/(1.1 σ_est) for every row (the default).
+    #[default]
+    Scalar,
+    /// ρᵢ = ρ · max_j dⱼ / dᵢ with dᵢ = Σ_j Bᵢⱼ² / K_jj, the operator's estimate of Aᵢᵢ
+    /// ([`super::Operator::diagonal_estimate`]; no product): rows of small compliance get a larger ρᵢ.
+    /// Scalar where the operator has no estimate.
+    Diagonal,
+}
+
+impl RhoRule {
+    /// Whether this is the default rule (not written out).
+    pub fn is_scalar(&self) -> bool {
+        *self == RhoRule::Scalar
+    }
+}
+
 /// How Coulomb friction is solved.
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -214,12 +235,15 @@ pub struct Tssn {
     /// of the last Newton step only where |yᵢ| = |λᵢ − ρrᵢ| is at least θ times the largest
     /// |yᵢ| of the rows that would change (that one always changes: no stall). 0, the default: off.
     pub damping: f64,
+    /// ρ in the active-set decision: one scalar (the default) or one per normal row.
+    #[serde(skip_serializing_if = "RhoRule::is_scalar")]
+    pub rho: RhoRule,
 }
 
 impl Default for Tssn {
     fn default() -> Self {
         let Inexact { rtol, inner_floor, .. } = Inexact::default();
-        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0, recycle: 0, damping: 0.0 }
+        Tssn { rtol, forcing: 1.0, inner_floor, slide_cap: 0.5, patience: 0, recycle: 0, damping: 0.0, rho: RhoRule::Scalar }
     }
 }
 

@@ -49,7 +49,7 @@ use super::gimssn;
 use super::krylov::{pcg, Coefficients, InnerSystem, Pcg, Recycle};
 use super::lambda::Lambda;
 use super::operator::{Operator, Space};
-use super::params::{Common, Tssn};
+use super::params::{Common, RhoRule, Tssn};
 use super::sets::ConvexSet;
 use super::{Qp, QpError, QpSolution, StepKind};
 
@@ -72,10 +72,12 @@ impl System {
     /// Sets and frames at y = x − ρ r; writes the start x⁰ (fixed values, P_Λ(x) elsewhere);
     /// sliding pairs with cᵢ > `cap` stay at x (no σᵢ). `damp` = (the last step's free
     /// components, t): a normal row keeps its last state where |yᵢ| < t ([`Tssn::damping`]).
-    fn new(set: &Lambda, x: &[f64], r: &[f64], rho: f64, cap: f64, damp: Option<(&[bool], f64)>, x0: &mut [f64]) -> System {
+    /// `rho_n`: ρᵢ of the normal rows' decision yᵢ = xᵢ − ρᵢrᵢ ([`Tssn::rho`]; ρ when None).
+    fn new(set: &Lambda, x: &[f64], r: &[f64], (rho, rho_n): (f64, Option<&[f64]>), cap: f64, damp: Option<(&[bool], f64)>, x0: &mut [f64]) -> System {
         let n = x.len();
-        let y: Vec<f64> = (0..n).map(|i| x[i] - rho * r[i]).collect();
-        let mut sets = set.active_sets(x, r, rho);
+        let m = set.layout.m;
+        let y: Vec<f64> = (0..n).map(|i| x[i] - rho_n.filter(|_| i < m).map_or(rho, |v| v[i]) * r[i]).collect();
+        let mut sets = set.active_sets_with(x, r, rho, rho_n);
         if let Some((last, t)) = damp.filter(|d| d.0.len() == n) {
             for i in 0..set.layout.m {
                 if sets.free[i] != last[i] && y[i].abs() < t {
@@ -160,6 +162,7 @@ pub(crate) fn run<'q, A: Operator>(
     let n = a.dim();
     let mut drv = Driver::new(qp, Setup::new(a, qp.b, c)?, c, monitor);
     let (rho, bnorm) = (drv.st.rho, drv.st.bnorm);
+    let rho_n = normal_rho(a, set.layout.m, rho, p.rho);
     let mut x = vec![0.0; n];
     at(lambda0).project(lambda0, &mut x);
     let mut r = vec![0.0; n];
@@ -208,7 +211,7 @@ pub(crate) fn run<'q, A: Operator>(
             None => at(&x),
         };
         let damp = (p.damping > 0.0 && held.len() == n).then(|| (held.as_slice(), damping_threshold(sp, &set_k, &x, &r, rho, &held, p.damping)));
-        let sys = System::new(&set_k, &x, &r, rho, p.slide_cap * drv.st.sigma, damp, &mut x0);
+        let sys = System::new(&set_k, &x, &r, (rho, rho_n.as_deref()), p.slide_cap * drv.st.sigma, damp, &mut x0);
         if p.damping > 0.0 {
             held.clone_from(&sys.sets.free);
         }
@@ -304,6 +307,17 @@ pub(crate) fn run<'q, A: Operator>(
         drv.record(step);
     }
     unreachable!("the outer loop returns")
+}
+
+/// ρᵢ of the normal rows for [`RhoRule::Diagonal`]: ρ · max_j dⱼ / dᵢ over the m normal rows of all
+/// ranks, d the operator's estimate of diag(A) (no product); None for the scalar rule or without an estimate.
+fn normal_rho<A: Operator>(a: &A, m: usize, rho: f64, rule: RhoRule) -> Option<Vec<f64>> {
+    if rule == RhoRule::Scalar {
+        return None;
+    }
+    let d = a.diagonal_estimate()?;
+    let dmax = a.space().max(d[..m].iter().fold(0.0f64, |s, &v| s.max(v)));
+    (dmax > 0.0).then(|| d[..m].iter().map(|&di| if di > 0.0 { rho * dmax / di } else { rho }).collect())
 }
 
 /// The damped active set's threshold ([`Tssn::damping`]): θ times the largest |yᵢ| = |λᵢ − ρrᵢ|
@@ -409,6 +423,9 @@ pub(crate) mod tests {
         fn products(&self) -> usize {
             self.counter.get()
         }
+        fn diagonal_estimate(&self) -> Option<Vec<f64>> {
+            Some((0..self.n).map(|i| self.a[i * self.n + i]).collect())
+        }
     }
 
     pub(crate) fn lcg(seed: &mut u64) -> f64 {
@@ -477,6 +494,45 @@ pub(crate) mod tests {
             }
         }
         assert!(acted, "the damping never changed an active set");
+    }
+
+    /// The per-row ρ of the active-set decision ([`RhoRule::Diagonal`]) on rows scaled over three
+    /// decades (A ← S A S): the same solution as SSN (KKT, in Λ), and it acts — another
+    /// sequence of active sets than the scalar ρ's on some problem.
+    #[test]
+    fn the_diagonal_rho_reaches_the_same_solution_on_badly_scaled_rows() {
+        let mut seed = 11;
+        let mut acted = false;
+        for _ in 0..5 {
+            let (mut a, b, set) = problem(12, &mut seed);
+            let n = a.dim();
+            let scale: Vec<f64> = (0..n).map(|_| 10f64.powf(1.5 * (1.0 + lcg(&mut seed)))).collect();
+            for i in 0..n {
+                for j in 0..n {
+                    a.a[i * n + j] *= scale[i] * scale[j];
+                }
+            }
+            let b: Vec<f64> = b.iter().zip(&scale).map(|(v, s)| v * s).collect();
+            let zero = vec![0.0; n];
+            let qp = Qp::new(&a, &b, &set);
+            let p = Params::default().with_eps(1e-11);
+            let reference = solve(&qp, &zero, &p, &mut Silent).expect("SSN converges");
+            let norm = reference.lambda.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let counts = |s: &QpSolution| s.info.history.iter().map(|h| h.normal_active).collect::<Vec<_>>();
+            let plain = counts(&solve(&qp, &zero, &p.with_method(Method::Tssn), &mut Silent).expect("TSSN converges"));
+            let mut pd = Params::new(Method::Tssn).with_eps(1e-11);
+            if let crate::qp::MethodParams::Tssn(t) = &mut pd.method {
+                t.rho = RhoRule::Diagonal;
+            }
+            let t = solve(&qp, &zero, &pd, &mut Silent).unwrap_or_else(|e| panic!("TSSN with the diagonal ρ converges: {e}"));
+            let d = t.lambda.iter().zip(&reference.lambda).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            assert!(d <= 1e-7 * norm, "differs from SSN by {d:e} of {norm:e}");
+            let k = kkt::residuals(&set, &t.lambda, &t.gradient, Replicated.norm(&b));
+            assert!(k.worst() <= 1e-9, "KKT {k:?}");
+            assert!(set.contains(&t.lambda, 1e-12 * norm), "the result lies in Λ");
+            acted |= counts(&t) != plain;
+        }
+        assert!(acted, "the diagonal ρ never changed an active set");
     }
 
     /// M = diag(A)⁻¹ on every component.
