@@ -269,3 +269,36 @@ fn the_restricted_path_starts_from_the_pressed_pairs() {
     assert!(n <= 12, "the restricted path takes {n} products");
     assert!(d <= 10.0 * 1e-8, "u differs by {d:.1e} relative to max |u|");
 }
+
+/// Coulomb bodies held by contact alone go through the restricted path with TSSN's lagged bounds:
+/// the floating block of run/validation and the tied lap joint take fewer products than
+/// SMALSE-M at ε = 1e-8 (72 → 37 and 65 → 39; run/results/floating_restricted2.txt) and u stays
+/// within 10 ε of SMALSE-M's at 1e-12. The block dragged by a displacement, whose first Newton
+/// step fixes every pair's tangents (GΠGᵀ singular to round-off: the CG broke down on it), hands
+/// over to SMALSE-M.
+#[test]
+fn coulomb_bodies_held_by_contact_alone_take_the_restricted_path() {
+    let dir = tmpdir("restricted_coulomb");
+    let block = root().join("run/validation/floating_block.toml");
+    let lap = root().join("run/validation/tied_lap_joint.toml");
+    for (k, scene) in [&block, &lap].into_iter().enumerate() {
+        let reference = solve(scene, &["decomposition.restricted=false", "solver.eps=1e-12"], &dir.join(format!("{k}_ref.h5")));
+        let smalse = solve(scene, &["decomposition.restricted=false"], &dir.join(format!("{k}_smalse.h5")));
+        let restricted = solve(scene, &[], &dir.join(format!("{k}_restricted.h5")));
+        assert!(restricted.report.tfeti.as_ref().unwrap().smalse.is_none(), "case {k}: the restricted path ran");
+        let n = |r: &tresca_feti::pipeline::Summary| r.report.solver.as_ref().unwrap().info.n_a;
+        let (us, ur) = (&reference.solution.displacement, &restricted.solution.displacement);
+        let d = us.iter().flatten().zip(ur.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / max_abs(us);
+        eprintln!("case {k}: SMALSE-M {} products, restricted TSSN {}; u differs by {d:.1e} relative", n(&smalse), n(&restricted));
+        assert!(n(&restricted) < n(&smalse), "case {k}: restricted {} products, SMALSE-M {}", n(&restricted), n(&smalse));
+        assert!(d <= 10.0 * 1e-8, "case {k}: u differs by {d:.1e} relative to max |u|");
+    }
+    let dragged = std::fs::read_to_string(&block).unwrap().replace(
+        "[[traction]]\nface = \"upper.xmin\"\np = [0.3, 0.0, 0.0]\n",
+        "[[dirichlet]]\nface = \"upper.xmin\"\ncomponents = [\"x\"]\nvalue = [0.001, 0.0, 0.0]\n",
+    );
+    let path = dir.join("dragged.toml");
+    std::fs::write(&path, dragged).unwrap();
+    let r = solve(&path, &[], &dir.join("dragged.h5"));
+    assert!(r.report.tfeti.as_ref().unwrap().smalse.is_some(), "the dragged block hands over to SMALSE-M");
+}
