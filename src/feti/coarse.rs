@@ -308,7 +308,7 @@ impl Coarse {
     }
 
     /// x ← (GGᵀ)⁻¹ x.
-    fn full_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
+    pub(crate) fn full_solve<C: Comm>(&self, dist: &Distribution<'_, C>, x: &mut [f64]) {
         let inv = self.full.as_ref().expect("coarse problem built for the orthogonal projector");
         self.inverse(dist, inv, x);
     }

@@ -5,8 +5,8 @@
 //! Lagrangian, r = Fλ − d̃ − Gᵀα with α = (GΠGᵀ)⁻¹GΠ(Fλ − d̃) the rigid amplitudes W's rows fix
 //! (the oblique projector P̃_W = I − Gᵀ(GΠGᵀ)⁻¹GΠ on Fλ − d̃); its coarse space is G restricted
 //! to W, factorized once per Newton step, which also closes the step's start onto Gλ = e by the
-//! least-norm correction on W. Before the first step (no W yet) the gradient is P(Fλ − d̃), P
-//! the orthogonal projector (W = every row).
+//! least-norm correction on W. Before the first step W is the pairs the start presses (else
+//! every row: the gradient P(Fλ − d̃), P the orthogonal projector). Coulomb: TSSN's lagged bounds.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -26,8 +26,20 @@ const REACHABLE: f64 = 1e3 * f64::EPSILON;
 /// The forcing exponent θ where the scene's method is not TSSN.
 const FORCING: f64 = 2.0;
 
+/// The forcing exponent for Coulomb (lagged bounds converge linearly once the sets settle: θ = 2
+/// over-solved the tied stack's steps, 240 products against θ = 1.5's 54;
+/// run/results/floating_restricted2.txt).
+const FORCING_COULOMB: f64 = 1.5;
+
 /// The Krylov directions kept across Newton steps where the scene's method is not TSSN.
 const RECYCLE: usize = 20;
+
+/// The inner CG's floor, relative to ε·‖b‖, where the scene's method is not TSSN: the last
+/// Newton step stops near ε instead of a decade below it (traction sphere 84 → 77 products).
+const INNER_FLOOR: f64 = 0.5;
+
+/// W's GΠGᵀ is taken as singular where its inverse exceeds GGᵀ's by this factor.
+const SINGULAR: f64 = 1e12;
 
 /// One Newton step's W: GΠGᵀ factorized and Π on this rank's owned rows.
 struct Step {
@@ -55,6 +67,20 @@ impl<'a, 'c, C: Comm> Held<'a, 'c, C> {
         let lambda_e = dual.dist.owned_part(&dual.lambda_hat);
         let d = dual.d_hat.clone();
         Held { dual, d, lambda_e, current: RefCell::new(None), counter: ProductCounter::default() }
+    }
+
+    /// Whether W's GΠGᵀ is singular to round-off (its rows hold a rigid motion by nothing, e.g.
+    /// Coulomb pairs whose tangents are all fixed: the factorization then succeeds on round-off
+    /// pivots): ‖(GΠGᵀ)⁻¹v‖ over ‖(GGᵀ)⁻¹v‖ beyond [`SINGULAR`] for a fixed v.
+    fn singular(&self, chol: &Cholesky) -> bool {
+        let n = chol.n();
+        let v: Vec<f64> = (0..n).map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0).collect();
+        let (mut x, mut y) = (v.clone(), v);
+        chol.solve_in_place(&mut x);
+        self.dual.coarse.full_solve(self.dist(), &mut y);
+        let norm = |a: &[f64]| a.iter().map(|t| t * t).sum::<f64>().sqrt();
+        let ratio = norm(&x) / norm(&y).max(f64::MIN_POSITIVE);
+        !(ratio <= SINGULAR)
     }
 
     fn dist(&self) -> &Distribution<'c, C> {
@@ -133,6 +159,9 @@ impl<C: Comm> qp::Coarse for Held<'_, '_, C> {
             return None;
         }
         let chol = Rc::new(chol.expect("checked"));
+        if self.singular(&chol) {
+            return None;
+        }
         let nc = self.dual.layout.contact_dim();
         *self.current.borrow_mut() = Some(Rc::new(Step { chol: chol.clone(), free: free[..nc].to_vec(), slides: slides.to_vec() }));
         Some(Box::new(Projector { held: self, chol }))
@@ -163,11 +192,18 @@ impl<C: Comm> CoarseProjector for Projector<'_, '_, '_, C> {
 }
 
 /// Solves the TFETI dual of a body held by contact alone by TSSN on [`Held`] from λ = `x0`
-/// (TSSN's settings from `p` when its method is TSSN, else θ = 2 and 20 recycled directions; frictionless or
-/// Tresca: Coulomb stays with SMALSE-M). The stop test ‖r̃_ρ‖ ≤ ε·s has SMALSE-M's scale s =
+/// (TSSN's settings from `p` when its method is TSSN, else θ = 2 (1.5 for Coulomb), 20 recycled
+/// directions and the inner floor 0.5; Coulomb coefficients `mu`: TSSN's lagged bounds). The stop test ‖r̃_ρ‖ ≤ ε·s has SMALSE-M's scale s =
 /// max(‖P(d̃ − Fλ_e)‖, 1000 ε_mach/ε·σ‖λ_e‖), σ = σ_max(PFP) (`p.common.sigma` when given).
-/// [`QpError::SingularCoarse`] when a Newton step's rows do not fix the rigid motions.
-pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Params, monitor: &mut dyn Monitor) -> Result<QpSolution, QpError> {
+/// [`QpError::SingularCoarse`] when a Newton step's rows do not fix the rigid motions (also to round-off).
+pub fn solve<C: Comm>(
+    dual: &TfetiDual<'_, C>,
+    set: &Lambda,
+    mu: Option<&[crate::qp::cone::Coefficient]>,
+    x0: &[f64],
+    p: &Params,
+    monitor: &mut dyn Monitor,
+) -> Result<QpSolution, QpError> {
     let sp = dual.space();
     let held = Held::new(dual);
     let pfp = Penalized::new(dual, 0.0);
@@ -190,13 +226,33 @@ pub fn solve<C: Comm>(dual: &TfetiDual<'_, C>, set: &Lambda, x0: &[f64], p: &Par
     // 89 with these; run/results/floating_restricted.txt)
     let tssn = match &p.method {
         MethodParams::Tssn(t) => t.clone(),
-        _ => Tssn { forcing: FORCING, recycle: RECYCLE, ..Tssn::default() },
+        _ => Tssn { forcing: if mu.is_some() { FORCING_COULOMB } else { FORCING }, recycle: RECYCLE, inner_floor: INNER_FLOOR, ..Tssn::default() },
     };
+    // the first step's W from the pressed pairs (traction sphere 89 → 84 products, 10 → 8 Newton
+    // steps; run/results/floating_restricted2.txt)
+    first_w(&held, x0);
     let qp = Qp::new(&held, &held.d, set).with_coarse(Some(&held as &dyn qp::Coarse));
-    let mut sol = qp::tssn::run(&qp, None, x0, &inner.common, &tssn, monitor)?;
+    let mut sol = qp::tssn::run(&qp, mu, x0, &inner.common, &tssn, monitor)?;
     // the σ estimate's products are counted apart
     sol.info.n_a_power = n_power;
     sol.info.sigma_est = sigma;
     sol.info.err *= dnorm / scale;
     Ok(sol)
+}
+
+/// The first Newton step's W: the pairs the start presses (λν > 0: the touching start's, or
+/// the last load step's solution's) with the E rows, where they hold the body; else every row.
+fn first_w<C: Comm>(held: &Held<'_, '_, C>, x0: &[f64]) {
+    let l = held.dual.layout;
+    let mut free = vec![true; x0.len()];
+    for i in 0..l.m {
+        let on = x0[l.normal(i)] > 0.0;
+        free[l.normal(i)] = on;
+        if l.friction {
+            free[l.tangent(i, 0)] = on;
+            free[l.tangent(i, 1)] = on;
+        }
+    }
+    // a singular GΠGᵀ leaves W at every row
+    let _ = qp::Coarse::restrict(held, &free, &[]);
 }

@@ -582,10 +582,10 @@ impl<C: Comm> StepDual for Steps<'_, '_, C> {
                     x0
                 };
                 // `decomposition.restricted`: TSSN keeps Gλ = e on each Newton step's W; where a
-                // step's rows cannot hold the body (GΠGᵀ singular), SMALSE-M takes over (and
-                // for Coulomb, whose lagged bounds break the restricted CG's curvature)
-                if self.restricted && !dual.coarse.held() && self.contact.is_some() && self.mu.is_none() {
-                    match restricted::solve(dual, &self.set, x0, params, monitor) {
+                // step's rows cannot hold the body (GΠGᵀ singular, also to round-off: Coulomb
+                // pairs whose tangents are all fixed), SMALSE-M takes over
+                if self.restricted && !dual.coarse.held() && self.contact.is_some() {
+                    match restricted::solve(dual, &self.set, self.mu.as_deref(), x0, params, monitor) {
                         Err(QpError::SingularCoarse { .. }) => {}
                         other => return other.map(|s| (s, None)),
                     }
