@@ -906,7 +906,7 @@ impl Model {
                         .map(|(i, _)| i.to_string())
                         .collect();
                     let free = if free.len() == 6 { "all six rigid motions".to_string() } else { free.join(", ") };
-                    format!("{name}: held by contact alone (pair {}) in {free}; solved by TFETI, Gλ = e kept by each Newton step (SMALSE-M with Coulomb friction or decomposition.restricted = false)", pairs.join(", "))
+                    format!("{name}: held by contact alone (pair {}) in {free}; solved by TFETI, Gλ = e kept by each Newton step (SMALSE-M where a step's pairs cannot hold it, or with decomposition.restricted = false)", pairs.join(", "))
                 } else {
                     let held: Vec<String> = g.iter().filter(|&&b| !by_body[b].is_empty()).map(|&b| format!("\"{}\"", self.mesh.bodies[b].name)).collect();
                     format!("{name}: held by Dirichlet conditions on {}", held.join(", "))

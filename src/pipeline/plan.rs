@@ -137,11 +137,11 @@ pub struct Candidate {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Unknown {
-    /// A body held by contact alone with Coulomb friction (or `decomposition.restricted =
-    /// false`): SMALSE-M's outer loop for Gλ = e (measured 0.7–2.3×).
+    /// A body held by contact alone with `decomposition.restricted = false`: SMALSE-M's outer
+    /// loop for Gλ = e (measured 0.7–2.3×).
     Floating,
-    /// A body held by contact alone, frictionless or Tresca: TSSN keeps Gλ = e on each Newton
-    /// step's subspace (measured 0.1–0.5×: fewer than a load-driven supported body).
+    /// A body held by contact alone: TSSN keeps Gλ = e on each Newton step's subspace
+    /// (measured 0.1–0.5×: fewer than a load-driven supported body).
     HeldRestricted,
     /// Coulomb friction: the fixed point on the normal multipliers (measured 0.3–1.0×, its
     /// Newton steps replace the Tresca solve's outer iterations).
@@ -438,7 +438,7 @@ struct Pricing<'a, C: Comm> {
 impl<'a, C: Comm> Pricing<'a, C> {
     /// The shared figures of a pricing for `ranks` ranks with the solver settings `solver`.
     /// `restricted`: bodies held by contact alone are solved by TSSN keeping Gλ = e
-    /// (`decomposition.restricted`) where the friction is not Coulomb.
+    /// (`decomposition.restricted`).
     fn new(comm: &'a C, model: &'a Model, solver: &Common, ranks: usize, restricted: bool) -> Self {
         let eps = solver.eps;
         let mesh = &model.mesh;
@@ -459,7 +459,7 @@ impl<'a, C: Comm> Pricing<'a, C> {
             pairs: contact.map_or(0, |c| c.len()),
             unknowns: contact.map_or(Vec::new(), |c| {
                 let loaded = model.loads.iter().any(|&f| f != 0.0);
-                let held = if restricted && !c.is_coulomb() { Unknown::HeldRestricted } else { Unknown::Floating };
+                let held = if restricted { Unknown::HeldRestricted } else { Unknown::Floating };
                 let mut u: Vec<Unknown> = [(!model.floating.is_empty(), held), (c.is_coulomb(), Unknown::Coulomb), (!loaded, Unknown::Displacement)]
                     .into_iter()
                     .filter_map(|(on, u)| on.then_some(u))

@@ -37,8 +37,8 @@ pub struct DecompositionSettings {
     pub penalty: f64,
     /// A body held by contact alone: TSSN keeps Gλ = e itself on each Newton step's subspace W
     /// (the start closed onto it, the Lagrangian's gradient with the rigid amplitudes α the free
-    /// rows fix) instead of SMALSE-M's augmented-Lagrangian loop (Coulomb, and a step whose
-    /// rows cannot hold the body, go to SMALSE-M). Default true; false: SMALSE-M always.
+    /// rows fix) instead of SMALSE-M's augmented-Lagrangian loop (a step whose rows cannot hold
+    /// the body goes to SMALSE-M). Default true; false: SMALSE-M always.
     #[serde(default = "yes")]
     pub restricted: bool,
     /// The inner CG (TSSN's, plain CG's) runs projected onto Ker G ∩ W, W a Newton step's
