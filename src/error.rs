@@ -72,6 +72,15 @@ pub enum Error {
         /// What does not fit.
         msg: String,
     },
+    /// A launcher (`mpirun`, `srun`, a container's exec) that did not run a study's case, with
+    /// its cause.
+    #[error("{what}: {msg}")]
+    Launch {
+        /// The case.
+        what: String,
+        /// The launcher's failure.
+        msg: String,
+    },
     /// An error raised on another MPI rank, forwarded so that every rank stops with it.
     #[error("{0}")]
     Remote(String),
@@ -109,6 +118,10 @@ impl Error {
     pub fn alloc(what: impl Into<String>, bytes: usize) -> Self {
         Error::Memory { what: what.into(), msg: format!("could not allocate {} (out of memory)", human_bytes(bytes as f64)) }
     }
+    /// An [`Error::Launch`] of `what`.
+    pub fn launch(what: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Launch { what: what.into(), msg: msg.into() }
+    }
     /// An [`Error::Output`] on `path`.
     pub fn output(path: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Output { path: path.into(), msg: msg.into() }
@@ -124,6 +137,7 @@ impl Error {
             Error::Numerical { .. } | Error::Solver { .. } => "solver-failures",
             Error::Output { .. } => "writing-results",
             Error::Memory { .. } => "too-large-for-the-machine",
+            Error::Launch { .. } => "running-under-mpi",
             Error::Remote(_) => return None,
         })
     }

@@ -206,14 +206,14 @@ fn case(a: &Args, c: &Case, dir: &std::path::Path) -> Result<Row> {
     }
     cmd.arg("--out").arg(&out).arg("--quiet");
     if let Some((err, status)) = bounded(a, cmd, &dir.join(format!("{name}.stderr")), &name)? {
-        return Err(Error::numerical(format!("case {name}"), failure(a, ranks, status, &err)));
+        return Err(failure(a, &name, ranks, status, &err));
     }
     let json = out.with_extension("json");
     let text = std::fs::read_to_string(&json).map_err(|e| Error::io(json.display().to_string(), e))?;
     let r: Report = serde_json::from_str(&text).map_err(|e| Error::Parse { file: json.display().to_string(), msg: e.to_string() })?;
     // a launcher that starts P separate 1-rank programs (srun without PMI support) shows here
     if r.ranks != ranks {
-        return Err(Error::numerical(
+        return Err(Error::launch(
             format!("case {name}"),
             format!("the report says {} rank(s), not {ranks}: does {} {} start one MPI job?", r.ranks, a.launcher_key, a.launcher.join(" ")),
         ));
@@ -291,7 +291,7 @@ fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<
             }
             group(libc::SIGKILL);
             let _ = child.wait();
-            return Err(Error::numerical(format!("case {name}"), format!("no result after {} s (--case-timeout): stopped {}", a.timeout, launcher())));
+            return Err(Error::launch(format!("case {name}"), format!("no result after {} s (--case-timeout): stopped {}", a.timeout, launcher())));
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -303,12 +303,12 @@ fn bounded(a: &Args, mut cmd: Command, log: &Path, name: &str) -> Result<Option<
     Ok(Some((std::fs::read_to_string(log).unwrap_or_default(), status)))
 }
 
-/// The one line a failed case ends with: the solver's own `error: …` line where it wrote one;
-/// else the launcher's exit status, the command (launcher and exec) and the launcher's most
-/// telling line ([`telling_line`]), not its whole banner.
-fn failure(a: &Args, ranks: usize, status: ExitStatus, stderr: &str) -> String {
+/// The one line a failed case ends with: the solver's own `error: …` line where it wrote one
+/// (its own section link kept); else the launcher's exit status, the command (launcher and
+/// exec) and the launcher's most telling line ([`telling_line`]), not its whole banner.
+fn failure(a: &Args, name: &str, ranks: usize, status: ExitStatus, stderr: &str) -> Error {
     if let Some(own) = stderr.lines().find_map(|l| l.strip_prefix("error: ")) {
-        return own.to_string();
+        return Error::Remote(format!("case {name}: {own}"));
     }
     use std::os::unix::process::ExitStatusExt;
     let exit = match (status.code(), status.signal()) {
@@ -318,7 +318,7 @@ fn failure(a: &Args, ranks: usize, status: ExitStatus, stderr: &str) -> String {
     };
     let command = shell_words::join([&a.launcher[..], &["-n".into(), ranks.to_string()], &a.mpirun_args, &a.exec].concat());
     let line = telling_line(stderr).unwrap_or("no message on stderr");
-    format!("the launcher failed ({exit}; {command} solve …): {line}")
+    Error::launch(format!("case {name}"), format!("the launcher failed ({exit}; {command} solve …): {line}"))
 }
 
 /// What names a launcher's failure, most telling first: the failing system call of a missing
