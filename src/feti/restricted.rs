@@ -58,6 +58,8 @@ pub struct Held<'a, 'c, C: Comm> {
     lambda_e: Vec<f64>,
     current: RefCell<Option<Rc<Step>>>,
     counter: ProductCounter,
+    /// The singularity probe v and ‖(GGᵀ)⁻¹v‖ ([`Held::singular`]), made once.
+    probe: (Vec<f64>, f64),
 }
 
 impl<'a, 'c, C: Comm> Held<'a, 'c, C> {
@@ -66,21 +68,21 @@ impl<'a, 'c, C: Comm> Held<'a, 'c, C> {
     pub fn new(dual: &'a TfetiDual<'c, C>) -> Self {
         let lambda_e = dual.dist.owned_part(&dual.lambda_hat);
         let d = dual.d_hat.clone();
-        Held { dual, d, lambda_e, current: RefCell::new(None), counter: ProductCounter::default() }
+        let n = dual.coarse.dim();
+        let v: Vec<f64> = (0..n).map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0).collect();
+        let mut y = v.clone();
+        dual.coarse.full_solve(&dual.dist, &mut y);
+        let probe = (v, norm(&y).max(f64::MIN_POSITIVE));
+        Held { dual, d, lambda_e, current: RefCell::new(None), counter: ProductCounter::default(), probe }
     }
 
     /// Whether W's GΠGᵀ is singular to round-off (its rows hold a rigid motion by nothing, e.g.
     /// Coulomb pairs whose tangents are all fixed: the factorization then succeeds on round-off
     /// pivots): ‖(GΠGᵀ)⁻¹v‖ over ‖(GGᵀ)⁻¹v‖ beyond [`SINGULAR`] for a fixed v.
     fn singular(&self, chol: &Cholesky) -> bool {
-        let n = chol.n();
-        let v: Vec<f64> = (0..n).map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0).collect();
-        let (mut x, mut y) = (v.clone(), v);
+        let mut x = self.probe.0.clone();
         chol.solve_in_place(&mut x);
-        self.dual.coarse.full_solve(self.dist(), &mut y);
-        let norm = |a: &[f64]| a.iter().map(|t| t * t).sum::<f64>().sqrt();
-        let ratio = norm(&x) / norm(&y).max(f64::MIN_POSITIVE);
-        !(ratio <= SINGULAR)
+        !(norm(&x) / self.probe.1 <= SINGULAR)
     }
 
     fn dist(&self) -> &Distribution<'c, C> {
@@ -255,4 +257,9 @@ fn first_w<C: Comm>(held: &Held<'_, '_, C>, x0: &[f64]) {
     }
     // a singular GΠGᵀ leaves W at every row
     let _ = qp::Coarse::restrict(held, &free, &[]);
+}
+
+/// The Euclidean norm of a replicated coarse vector.
+fn norm(a: &[f64]) -> f64 {
+    a.iter().map(|t| t * t).sum::<f64>().sqrt()
 }

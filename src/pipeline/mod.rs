@@ -707,10 +707,12 @@ fn report<C: Comm>(comm: &C, ls: &LoadedScene, model: &Model, sol: &Solution, ou
         }),
         solver: match (outcome, sol.tfeti.as_ref().and_then(|f| f.cg.as_ref())) {
             (Some(o), _) => Some(SolverReport {
-                // a Coulomb solve names its way unless it was the fixed point on the method
+                // a Coulomb solve names its way unless it was the fixed point on the method; a
+                // body held by contact alone solved without SMALSE-M's loop ran TSSN itself
                 method: match o.info.coulomb {
                     Some(CoulombSolve::Newton) => "coulomb-newton".into(),
                     Some(CoulombSolve::Lagged) => "coulomb-lagged".into(),
+                    _ if dec.projector == crate::scene::Projector::Orthogonal && sol.tfeti.as_ref().is_some_and(|f| f.smalse.is_none()) => "tssn".into(),
                     _ => solver.method().name().into(),
                 },
                 dual_dim: o.dim,

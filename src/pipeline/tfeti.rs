@@ -472,7 +472,12 @@ pub(crate) fn solve_from<C: Comm>(
     let orthogonal = ls.scene.decomposition.projector == Projector::Orthogonal;
     let mu = contact.filter(|c| c.is_coulomb()).map(|c| c.coefficients(&dual.dist.pairs));
     let name = if contact.is_some() { s.params.method().name() } else { "cg" };
-    let what = if orthogonal { format!("SMALSE-M ({name})") } else { name.to_string() };
+    let restricted = ls.scene.decomposition.restricted && !model.floating.is_empty() && contact.is_some();
+    let what = match (orthogonal, restricted) {
+        (true, true) => "TSSN (Gλ = e kept on each Newton step)".to_string(),
+        (true, false) => format!("SMALSE-M ({name})"),
+        _ => name.to_string(),
+    };
     let projected = super::projected(s.params.method(), super::DualKind::of(ls, model));
     let dim = dual.dim();
     let figures = Figures { rows, clusters: clusters.len(), corner_rows: clusters.corner_rows(), coarse_dim, nnz_c, coarse_explicit_bytes };
