@@ -176,11 +176,15 @@ pub fn build(
     }
     // tied interfaces: Σ c·u_node,k = 0 per row and component, on the first copy of each node
     // (a prescribed DOF's part moves to c, as for contact rows); a row with no free DOF left
-    // holds nothing and is left out
+    // holds nothing and is left out, and so is the component a Dirichlet condition prescribes at
+    // the row's slave node: the multiplier space has no function where the slave trace is held
+    // (the mortar's Dirichlet boundary), and such rows repeat the Dirichlet rows through the
+    // master's held nodes (a quadratic slave edge's 7 rows against a linear master's 5 free
+    // nodes left B without full row rank)
     let mut tie_rows = 0;
-    for coupling in &ties.coupling {
+    for (coupling, &slave) in ties.coupling.iter().zip(&ties.slave) {
         for k in 0..3 {
-            if coupling.iter().all(|&(v, _)| prescribed.contains_key(&(v, k))) {
+            if prescribed.contains_key(&(slave, k)) || coupling.iter().all(|&(v, _)| prescribed.contains_key(&(v, k))) {
                 continue;
             }
             let row = c.len();
