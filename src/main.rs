@@ -611,6 +611,7 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
         Cmd::Calibrate => calibrate(comm),
         Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, checkpoint, resume, memory } => {
             memory.apply();
+            tresca_feti::output::tmpfiles::note_resume_command(resume_words(&scene, &set, out.as_deref(), export_fclib.as_deref()));
             if let Some(p) = export_fclib {
                 set.push(format!("output.export_fclib={}", toml::Value::String(p.display().to_string())));
             }
@@ -719,6 +720,24 @@ fn bench_coarse<C: Comm>(comm: &C, args: &tresca_feti::studies::coarse_cost::Arg
         println!("{line}");
     })?;
     Ok(())
+}
+
+/// The words of `tresca-feti solve` that resume this run from a checkpoint (before `--resume`):
+/// the scene, every `--set` as given, `--out`, `--export-fclib` and `--checkpoint` (so the
+/// resumed run goes on writing them).
+fn resume_words(scene: &std::path::Path, set: &[String], out: Option<&std::path::Path>, fclib: Option<&std::path::Path>) -> Vec<String> {
+    let mut w = vec!["tresca-feti".to_string(), "solve".into(), scene.display().to_string()];
+    for s in set {
+        w.extend(["--set".into(), s.clone()]);
+    }
+    if let Some(o) = out {
+        w.extend(["--out".into(), o.display().to_string()]);
+    }
+    if let Some(f) = fclib {
+        w.extend(["--export-fclib".into(), f.display().to_string()]);
+    }
+    w.push("--checkpoint".into());
+    w
 }
 
 fn print_summary(s: &pipeline::Summary) {

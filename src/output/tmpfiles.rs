@@ -18,9 +18,12 @@ pub struct Files {
     pub written: Vec<PathBuf>,
     /// The last checkpoint written: (its step, the path's steps, the scene, the file).
     pub checkpoint: Option<(usize, usize, PathBuf, PathBuf)>,
+    /// The command that repeats this run up to `--resume` (its scene, `--set`s, `--out`),
+    /// as [`note_resume_command`] gave it; empty: `tresca-feti solve SCENE`.
+    pub resume: Vec<String>,
 }
 
-static TRACKED: Mutex<Files> = Mutex::new(Files { temps: Vec::new(), written: Vec::new(), checkpoint: None });
+static TRACKED: Mutex<Files> = Mutex::new(Files { temps: Vec::new(), written: Vec::new(), checkpoint: None, resume: Vec::new() });
 
 /// The list, even if a thread panicked while holding it (a list of paths stays valid).
 fn list() -> MutexGuard<'static, Files> {
@@ -49,6 +52,20 @@ impl Files {
 /// Records that the checkpoint `file` of `scene` now holds step `step` of `steps`.
 pub fn note_checkpoint(step: usize, steps: usize, scene: &Path, file: &Path) {
     list().checkpoint = Some((step, steps, scene.to_path_buf(), file.to_path_buf()));
+}
+
+/// Records the words of the command that resumes this run (`tresca-feti solve SCENE --set …
+/// --out … --checkpoint`, without `--resume`): a resumed run must repeat the `--set`s (the
+/// checkpoint holds the scene's digest after them) and `--out` (or it writes elsewhere).
+pub fn note_resume_command(words: Vec<String>) {
+    list().resume = words;
+}
+
+/// The one line that says how to resume from checkpoint `file` (shell-quoted).
+fn resume_line(words: &[String], scene: &Path, file: &Path) -> String {
+    let mut w: Vec<String> = if words.is_empty() { vec!["tresca-feti".into(), "solve".into(), scene.display().to_string()] } else { words.to_vec() };
+    w.extend(["--resume".into(), file.display().to_string()]);
+    shell_words::join(w)
 }
 
 /// Holds the list for the caller's renames: the signal thread waits until they are done.
@@ -86,7 +103,7 @@ pub fn remove_on_signal(loud: bool) -> std::io::Result<()> {
             // error is said)
             if let (true, true, Some((k, n, scene, file))) = (loud, files.written.is_empty(), &files.checkpoint) {
                 // the checkpoint's renames run under the list: the last one is whole
-                eprintln!("stopped by {name} after step {k} of {n}; resume with: tresca-feti solve {} --resume {}", scene.display(), file.display());
+                eprintln!("stopped by {name} after step {k} of {n}; resume with: {}", resume_line(&files.resume, scene, file));
             } else if loud && !files.temps.is_empty() {
                 eprintln!("error: interrupted by {name}; removed {} temporary file(s), no result written", files.temps.len());
             } else if loud && !files.written.is_empty() {
