@@ -35,7 +35,10 @@ pub fn report(path: &Path, format: Option<MeshFormat>) -> Result<String> {
     let def = MeshDef { file: path.to_path_buf(), volume: None, format, translate: None };
     let file = path.display().to_string();
     let Some(fmt) = def.resolved_format() else {
-        return Err(Error::mesh(&file, "unknown mesh format: the extension is none of .msh, .inp, .med, .exo, .e, .ex2; give --format (abaqus, gmsh, med, exodus)"));
+        return Err(Error::mesh(
+            &file,
+            "unknown mesh format: the extension is none of .msh, .inp, .med, .exo, .e, .ex2; give --format (abaqus, gmsh, med, exodus)",
+        ));
     };
     let volumes = match fmt {
         MeshFormat::Abaqus => abaqus::volumes(path)?,
@@ -55,7 +58,8 @@ pub fn report(path: &Path, format: Option<MeshFormat>) -> Result<String> {
     let whole = bodies.next().expect("the whole file asked for, read");
 
     let mut s = String::new();
-    let how = if format.is_some() { "--format".to_string() } else { format!("from the extension .{}", path.extension().and_then(|e| e.to_str()).unwrap_or("")) };
+    let how =
+        if format.is_some() { "--format".to_string() } else { format!("from the extension .{}", path.extension().and_then(|e| e.to_str()).unwrap_or("")) };
     let _ = writeln!(s, "file: {file}");
     let _ = writeln!(s, "format: {} ({how})", format_name(fmt));
     match &whole {
