@@ -1,7 +1,8 @@
 //! `tresca-feti mesh FILE`: the volumes and faces it lists are those a scene gets. For every
 //! listed volume a scene of one body made of it goes through `tresca-feti check`, whose face
 //! list (names and facets) must be the listing's, in both directions; the starter scene parses
-//! as TOML and holds the listed volumes; a file without volumes, a missing and a malformed file.
+//! as TOML and holds the listed volumes; a file without volumes, a missing and a malformed file;
+//! the tutorial pastes the real listing.
 
 mod common;
 
@@ -155,4 +156,15 @@ fn missing_and_malformed_files_are_one_line_errors() {
         assert!(stderr.starts_with("error: ") && stderr.contains(f.to_str().unwrap()), "{stderr}");
         assert!(o.stdout.is_empty());
     }
+}
+
+#[test]
+fn the_tutorials_listing_is_what_the_program_prints() {
+    let doc = std::fs::read_to_string(root().join("docs/tutorial.md")).unwrap();
+    let command = "```sh\ntresca-feti mesh mesh/two_blocks.inp\n```\n\n```\n";
+    let at = doc.find(command).expect("docs/tutorial.md shows `tresca-feti mesh mesh/two_blocks.inp`") + command.len();
+    let printed = doc[at..].split("\n```").next().unwrap();
+    let o = std::process::Command::new(common::BIN).args(["mesh", "mesh/two_blocks.inp"]).current_dir(root()).output().unwrap();
+    assert!(o.status.success());
+    assert_eq!(printed.trim_end(), String::from_utf8_lossy(&o.stdout).trim_end(), "docs/tutorial.md's listing is not what the program prints");
 }
