@@ -297,6 +297,20 @@ enum Cmd {
         #[arg(long, value_parser = at_least_one, default_value_t = 20)]
         repeat: usize,
     },
+    /// What is in a mesh file: the names a scene's `mesh = { file, volume }` and `body.FACE` take.
+    ///
+    /// Prints the file's format (from its extension, as the scene's `mesh` key takes it, or
+    /// --format), its nodes and cells by kind, every volume the `volume` key accepts (Gmsh
+    /// physical volumes, Abaqus element sets and instances, MED groups of volume cells, Exodus
+    /// element blocks) with its cells and the faces a body made of it gets, and a starter scene
+    /// with one [[body]] per volume. Needs no MPI: run it as one process.
+    Mesh {
+        /// The mesh file: Gmsh .msh, Abaqus .inp, MED .med or Exodus II .exo/.e/.ex2.
+        file: PathBuf,
+        /// The file's format, where its extension does not name it.
+        #[arg(long, value_name = "gmsh|abaqus|med|exodus", value_parser = pipeline::inspect::parse_format)]
+        format: Option<tresca_feti::scene::MeshFormat>,
+    },
     /// Validate a scene without solving it.
     ///
     /// Prints the resolved scene (every default filled in), the mesh, faces, DOF counts, applied load, contact pairs, the decomposition chosen by
@@ -609,6 +623,15 @@ fn run<C: Comm>(comm: &C, cmd: Cmd) -> ExitCode {
     }
     let result = match cmd {
         Cmd::Calibrate => calibrate(comm),
+        Cmd::Mesh { file, format } => {
+            // rank 0 reads and prints; every rank exits with its error
+            let text = if comm.is_root() { pipeline::inspect::report(&file, format) } else { Ok(String::new()) };
+            comm.agree(text).map(|text| {
+                if comm.is_root() {
+                    print!("{text}");
+                }
+            })
+        }
         Cmd::Solve { scene: SceneFile { scene, mut set }, out, quiet, export_fclib, checkpoint, resume, memory } => {
             memory.apply();
             tresca_feti::output::tmpfiles::note_resume_command(resume_words(&scene, &set, out.as_deref(), export_fclib.as_deref()));

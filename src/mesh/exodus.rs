@@ -85,6 +85,27 @@ pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<Bod
     Ok(volumes.iter().map(|&v| build(&nc, v).map_err(|m| Error::mesh(&file, m))).collect())
 }
 
+/// The names the `volume` of a body may take in the Exodus II file `path`: its element blocks
+/// of volume elements (read or not), each by its `eb_names` entry or else as `block_<id>`, in
+/// file order, a name shared by several blocks once (they make one body). The error is the
+/// file's, as [`read_many`] gives it.
+pub fn volumes(path: &Path) -> Result<Vec<String>> {
+    let file = path.display().to_string();
+    let nc = Nc::open(path).map_err(|e| match e {
+        Opened::Io(e) => Error::io(&file, e),
+        Opened::Msg(m) => Error::mesh(&file, m),
+    })?;
+    let blocks = blocks(&nc).map_err(|m| Error::mesh(&file, m))?;
+    let mut names: Vec<String> = Vec::new();
+    // blocks of one name make one body
+    for b in blocks.into_iter().filter(|b| b.ty != Ty::Ignored) {
+        if !names.iter().any(|n| n.eq_ignore_ascii_case(&b.name)) {
+            names.push(b.name);
+        }
+    }
+    Ok(names)
+}
+
 /// Node and element counts and the file's size, from the variables' shapes (nothing of the
 /// mesh is read); `None` when the file cannot be opened as Exodus. For the memory estimate.
 pub fn counts(path: &Path) -> Option<(u64, u64, u64)> {

@@ -122,13 +122,14 @@ pub fn read(path: &Path, volume: Option<&str>) -> Result<BodyGeometry> {
 /// The bodies of the MED file `path` with the given volume groups (`None`: every volume cell),
 /// from one read of the file; the file's errors fail all, a body's own errors only that body.
 pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<BodyGeometry>>> {
-    let err = |msg: String| Error::mesh(path.display().to_string(), msg);
-    if let Err(e) = std::fs::metadata(path) {
-        return Err(Error::io(path.display().to_string(), e));
-    }
-    let file = File::open(path).map_err(|e| err(format!("not a readable MED file (HDF5): {}", one_line(&e.to_string()))))?;
-    let med = Med::load(&file).map_err(err)?;
-    Ok(volumes.iter().map(|&v| med.build(v).map_err(err)).collect())
+    let med = Med::open(path)?;
+    Ok(volumes.iter().map(|&v| med.build(v).map_err(|msg| Error::mesh(path.display().to_string(), msg))).collect())
+}
+
+/// The names the `volume` of a body may take in the MED file `path`: its groups of volume
+/// cells, sorted. The error is the file's, as [`read_many`] gives it.
+pub fn volumes(path: &Path) -> Result<Vec<String>> {
+    Ok(Med::open(path)?.group_names(true))
 }
 
 /// Node, cell and byte counts of a MED file from its `NBR` attributes; `None` when it cannot be
@@ -175,6 +176,16 @@ fn mesh_step(file: &File) -> std::result::Result<(String, Group), String> {
 }
 
 impl Med {
+    /// Opens and loads the MED file `path`; errors name it.
+    fn open(path: &Path) -> Result<Med> {
+        let err = |msg: String| Error::mesh(path.display().to_string(), msg);
+        if let Err(e) = std::fs::metadata(path) {
+            return Err(Error::io(path.display().to_string(), e));
+        }
+        let file = File::open(path).map_err(|e| err(format!("not a readable MED file (HDF5): {}", one_line(&e.to_string()))))?;
+        Med::load(&file).map_err(err)
+    }
+
     /// Coordinates, cell blocks and element families of `file`.
     fn load(file: &File) -> std::result::Result<Med, String> {
         fn h5(what: &str) -> impl Fn(::hdf5::Error) -> String + '_ {
@@ -236,7 +247,7 @@ impl Med {
             return Err(match volume {
                 None => format!("holds no volume cells; supported: {MED_SUPPORTED}"),
                 Some(g) => {
-                    let known = self.group_names(true);
+                    let known: Vec<String> = self.group_names(true).iter().map(|g| format!("\"{g}\"")).collect();
                     let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
                     format!("no group of volume cells named \"{g}\" (groups of volume cells: {known})")
                 }
@@ -245,15 +256,14 @@ impl Med {
         Ok(out)
     }
 
-    /// The names (quoted, sorted) of the groups holding volume cells (`volume`) or face cells.
+    /// The names (sorted) of the groups holding volume cells (`volume`) or face cells.
     fn group_names(&self, volume: bool) -> Vec<String> {
         let mut names: Vec<String> = Vec::new();
         for block in self.blocks.iter().filter(|b| matches!(b.ty, Ty::Cell(..)) == volume) {
             for f in &block.fam {
                 for g in self.groups.get(f).into_iter().flatten() {
-                    let q = format!("\"{g}\"");
-                    if !names.contains(&q) {
-                        names.push(q);
+                    if !names.contains(g) {
+                        names.push(g.clone());
                     }
                 }
             }

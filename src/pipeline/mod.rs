@@ -16,6 +16,7 @@ mod check;
 mod checkpoint;
 pub(crate) mod finish;
 pub mod forecast;
+pub mod inspect;
 pub mod memory;
 pub(crate) mod monitor;
 mod monolithic;

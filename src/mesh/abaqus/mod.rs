@@ -97,6 +97,15 @@ pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u
     Ok(volumes.iter().map(|&v| deck.build(v).map_err(|f| f.into_error(path, &lines))).collect())
 }
 
+/// The names the `volume` of a body may take in the input file `path`: its element sets that
+/// hold volume elements (with `*PART`/`*INSTANCE`, each instance and its parts' sets as
+/// `instance.set`), in order of definition. The error is the file's, as [`read_many`] gives it.
+pub fn volumes(path: &Path) -> Result<Vec<String>> {
+    let mut lines = Vec::new();
+    load(path, 0, &mut lines, None, &|_, _| ())?;
+    Ok(Deck::parse(&lines)?.volume_sets().into_iter().map(str::to_string).collect())
+}
+
 /// Node, element and byte counts of an input file and the files it includes, from one cheap
 /// pass over their lines (data lines under `*NODE` and `*ELEMENT`); `None` when the file
 /// cannot be read. For the memory estimate before the mesh is read.
@@ -686,10 +695,15 @@ impl Deck {
 
     /// "no element set named …" with the sets of volume elements.
     fn unknown_set(&self, name: &str) -> String {
-        let vol: HashSet<u64> = self.elems.iter().filter(|e| matches!(e.ty, Ty::Cell(_) | Ty::Solid)).map(|e| e.label).collect();
-        let known: Vec<String> = self.elsets.list.iter().filter(|s| s.labels.iter().any(|l| vol.contains(l))).map(|s| format!("\"{}\"", s.name)).collect();
+        let known: Vec<String> = self.volume_sets().iter().map(|s| format!("\"{s}\"")).collect();
         let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
         format!("no element set named \"{name}\" (element sets of volume elements: {known})")
+    }
+
+    /// The element sets holding volume elements (read or not), in order of definition.
+    fn volume_sets(&self) -> Vec<&str> {
+        let vol: HashSet<u64> = self.elems.iter().filter(|e| matches!(e.ty, Ty::Cell(_) | Ty::Solid)).map(|e| e.label).collect();
+        self.elsets.list.iter().filter(|s| s.labels.iter().any(|l| vol.contains(l))).map(|s| s.name.as_str()).collect()
     }
 
     /// The named faces: element-based surfaces, then sets of surface elements, merged by name.

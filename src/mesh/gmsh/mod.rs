@@ -58,12 +58,22 @@ pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<Bod
 /// its total is what has arrived).
 pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u64, u64)) -> Result<Vec<Result<BodyGeometry>>> {
     let file = path.display().to_string();
-    let bytes = read_bytes(path, progress).map_err(|e| match e {
-        Error::Memory { msg, .. } => Error::memory(&file, msg),
-        e => e,
-    })?;
-    let parsed = Parsed::new(&bytes).map_err(|msg| Error::mesh(&file, msg))?;
+    let parsed = Parsed::read(path, progress)?;
     Ok(volumes.iter().map(|&v| parsed.build(v).map_err(|msg| Error::mesh(&file, msg))).collect())
+}
+
+/// The names the `volume` of a body may take in the Gmsh file `path`: its physical volumes (a
+/// nameless one by its number), in order of their numbers, each name once. The error is the
+/// file's, as [`read_many`] gives it.
+pub fn volumes(path: &Path) -> Result<Vec<String>> {
+    let parsed = Parsed::read(path, &|_, _| ())?;
+    let mut names: Vec<String> = Vec::new();
+    for n in known_volumes(&parsed.msh, &parsed.names).into_values() {
+        if !names.contains(&n) {
+            names.push(n);
+        }
+    }
+    Ok(names)
 }
 
 /// The whole file, its buffer reserved first: a file larger than the memory left is an error,
@@ -195,6 +205,16 @@ struct Parsed {
 }
 
 impl Parsed {
+    /// Reads and parses the file `path`; errors name it.
+    fn read(path: &Path, progress: &dyn Fn(u64, u64)) -> Result<Self> {
+        let file = path.display().to_string();
+        let bytes = read_bytes(path, progress).map_err(|e| match e {
+            Error::Memory { msg, .. } => Error::memory(&file, msg),
+            e => e,
+        })?;
+        Parsed::new(&bytes).map_err(|msg| Error::mesh(&file, msg))
+    }
+
     /// Parses the bytes of a whole file.
     fn new(bytes: &[u8]) -> Result<Self, String> {
         let encoding = check_header(bytes)?;
@@ -512,12 +532,7 @@ fn selected_volumes(msh: &Msh, names: &HashMap<(i32, i32), String>, volume: Opti
     };
     let volumes = msh.data.entities.as_ref().map_or(&[][..], |e| e.volumes.as_slice());
     let vol_groups: HashMap<i32, &[i32]> = volumes.iter().map(|v| (v.tag, v.physical_tags.as_slice())).collect();
-    let mut known: BTreeMap<i32, String> = names.iter().filter(|((d, _), _)| *d == 3).map(|((_, t), n)| (*t, n.clone())).collect();
-    for v in volumes {
-        for &t in &v.physical_tags {
-            known.entry(t).or_insert_with(|| group_name(names, 3, t));
-        }
-    }
+    let known = known_volumes(msh, names);
     let wanted: HashSet<i32> = known.iter().filter(|(_, n)| n.as_str() == name).map(|(t, _)| *t).collect();
     if wanted.is_empty() {
         let list: Vec<String> = known.values().map(|n| format!("\"{n}\"")).collect();
@@ -525,6 +540,19 @@ fn selected_volumes(msh: &Msh, names: &HashMap<(i32, i32), String>, volume: Opti
         return Err(format!("no physical volume named \"{name}\" (known: {list})"));
     }
     Ok(Some(vol_groups.iter().filter(|(_, g)| g.iter().any(|t| wanted.contains(t))).map(|(&e, _)| e).collect()))
+}
+
+/// The physical volumes of the file by number: those `$PhysicalNames` names, and those the
+/// volume entities carry (a nameless one named by its number).
+fn known_volumes(msh: &Msh, names: &HashMap<(i32, i32), String>) -> BTreeMap<i32, String> {
+    let volumes = msh.data.entities.as_ref().map_or(&[][..], |e| e.volumes.as_slice());
+    let mut known: BTreeMap<i32, String> = names.iter().filter(|((d, _), _)| *d == 3).map(|((_, t), n)| (*t, n.clone())).collect();
+    for v in volumes {
+        for &t in &v.physical_tags {
+            known.entry(t).or_insert_with(|| group_name(names, 3, t));
+        }
+    }
+    known
 }
 
 /// The elements of the file: the cells of the body (other 3D types for the diagnostics) and
