@@ -37,6 +37,46 @@ fn two_blocks_from_abaqus_solve_as_from_gmsh() {
     assert_eq!((ca.contact, ca.stick, ca.slip), (cg.contact, cg.stick, cg.slip));
 }
 
+/// A node set is a face (what Abaqus/CAE writes for the set a boundary condition names): the
+/// model with its clamped face `lower_left` given as an `*NSET` of that face's nodes (no surface
+/// of the name) solves bit for bit as the model with the surface.
+#[test]
+fn a_node_set_holds_a_body_as_its_surface_does() {
+    let dir = tmpdir("nset");
+    let text = std::fs::read_to_string(root().join("mesh/two_blocks.inp")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let labels = |line: &str| -> Vec<u64> { line.split(',').filter_map(|t| t.trim().parse().ok()).collect() };
+    // the surface elements of the element set lower_left, and their nodes
+    let at = lines.iter().position(|l| l.eq_ignore_ascii_case("*ELSET,ELSET=lower_left")).expect("the set");
+    let elems: Vec<u64> = labels(lines[at + 1]);
+    assert_eq!(elems.len(), 9);
+    let mut nodes: Vec<u64> = lines
+        .iter()
+        .filter(|l| !l.starts_with('*'))
+        .map(|l| labels(l))
+        .filter(|v| v.len() == 5 && elems.contains(&v[0]))
+        .flat_map(|v| v[1..].to_vec())
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    assert_eq!(nodes.len(), 16, "a 3 × 3 face");
+    let mut edited: Vec<String> = lines.iter().enumerate().filter(|(i, _)| *i != at && *i != at + 1).map(|(_, l)| l.to_string()).collect();
+    edited.push("*NSET, NSET=fixed_nodes".into());
+    edited.extend(nodes.chunks(8).map(|c| c.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")));
+    let mesh = dir.join("nset.inp");
+    std::fs::write(&mesh, edited.join("\n") + "\n").unwrap();
+    let with_surface = dir.join("surface.toml");
+    std::fs::write(&with_surface, abaqus_scene(&root().join("mesh/two_blocks.inp"))).unwrap();
+    let with_nset = dir.join("nset.toml");
+    let scene = abaqus_scene(&mesh);
+    assert!(scene.contains("\"lower.lower_left\""));
+    std::fs::write(&with_nset, scene.replace("\"lower.lower_left\"", "\"lower.fixed_nodes\"")).unwrap();
+    let a = solve(&with_surface, &[], &dir.join("surface.h5"));
+    let b = solve(&with_nset, &[], &dir.join("nset.h5"));
+    assert!(common::max_abs(&a.solution.displacement) > 0.0);
+    assert_eq!(a.solution.displacement, b.solution.displacement);
+}
+
 #[test]
 fn format_key_and_extension() {
     let dir = tmpdir("format");

@@ -61,6 +61,21 @@ pub fn find_boundary_facet<'a>(boundary: &'a Boundary, corners: &[usize]) -> Opt
     boundary.get(&corner_key(corners))
 }
 
+/// The boundary facets in cell order (each cell's facets in its face order): the list that many
+/// node sets are filtered from (one pass over the cells, not one per set).
+pub fn boundary_in_cell_order(cells: &[Cell], boundary: &Boundary) -> Vec<Facet> {
+    let mut list = Vec::with_capacity(boundary.len());
+    for (c, cell) in cells.iter().enumerate() {
+        for f in 0..cell.kind.faces().len() {
+            let q = cell.facet(c, f);
+            if boundary.contains_key(&q.key()) {
+                list.push(q);
+            }
+        }
+    }
+    list
+}
+
 /// The boundary facets, in cell order (a deterministic order), all of whose nodes lie in `set`:
 /// the face a node set (Abaqus `*SURFACE, TYPE=NODE`, an Exodus node set) makes.
 pub fn facets_on_nodes(cells: &[Cell], boundary: &Boundary, set: &HashSet<usize>) -> Vec<Facet> {

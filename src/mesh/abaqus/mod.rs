@@ -38,7 +38,9 @@
 //!   same corners, as the Gmsh importer reads a physical surface.
 //!
 //! - every `*SURFACE, TYPE=NODE`: the body's boundary facets whose nodes all lie in the
-//!   surface's nodes (weights ignored). Node sets alone do not make faces.
+//!   surface's nodes (weights ignored);
+//! - every `*NSET` (Abaqus/CAE writes one for each set a boundary condition names): the body's
+//!   boundary facets whose nodes all lie in the set, merged with a surface of the same name.
 
 mod assembly;
 
@@ -782,6 +784,18 @@ impl Deck {
             }
             add(&set.name, list);
         }
+        // every node set (what Abaqus/CAE writes for a picked face that a boundary condition
+        // holds): the boundary facets all of whose nodes lie in it, merged with a surface of the
+        // same name, as an Exodus node set
+        if !self.nsets.list.is_empty() {
+            let ordered = super::topology::boundary_in_cell_order(cells, &boundary);
+            for set in &self.nsets.list {
+                let nodes: HashSet<usize> = set.labels.iter().filter_map(to_local).collect();
+                if !nodes.is_empty() {
+                    add(&set.name, ordered.iter().filter(|q| q.nodes().iter().all(|v| nodes.contains(v))).copied().collect());
+                }
+            }
+        }
         Ok(named.into_faces())
     }
 }
@@ -893,7 +907,9 @@ mod tests {
         assert_eq!(face("skin").len(), 10);
         let upper = read(&d.join("a.inp"), Some("UPPER")).unwrap();
         assert_eq!((upper.nodes.len(), upper.cells.len()), (8, 1));
-        assert_eq!(upper.faces.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["top", "skin"]);
+        // `*Node, nset=all`: the node set of every node is the whole skin
+        assert_eq!(upper.faces.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["top", "skin", "all"]);
+        assert_eq!(face("all").len(), 10);
         assert_eq!(counts(&d.join("a.inp")).map(|c| (c.0, c.1)), Some((12, 2)));
     }
 
@@ -921,6 +937,33 @@ mod tests {
         assert!(upper.iter().all(|q| q.nodes().iter().all(|&v| g.nodes[v][2] >= 1.0)));
         let e = err(&text.replace("topn, 1.0", "nowhere, 1.0"));
         assert!(e.contains("nowhere") && e.contains("line 37"), "{e}");
+    }
+
+    /// Every `*NSET` is a face: the boundary facets on its nodes (a set of the top's nodes gives
+    /// the top, merged with a surface of its name; a set of the upper cell's nodes its five
+    /// boundary facets; a set of nodes that bound no facet, nothing); in an instance, `inst.set`.
+    #[test]
+    fn node_sets_are_the_boundary_facets_on_their_nodes() {
+        let d = tmp("nsets");
+        let text = format!(
+            "{TWO_HEX}*NSET, NSET=topn\n9, 10, 11, 12\n*NSET, NSET=upper_cell, GENERATE\n5, 12, 1\n*NSET, NSET=corners\n1, 12\n*NSET, NSET=top\n9, 10, 11\n"
+        );
+        let g = read(&write(&d, "n.inp", &text), None).unwrap();
+        let keys = |n: &str| -> Vec<[usize; 4]> {
+            let mut k: Vec<[usize; 4]> = g.faces.iter().find(|(f, _)| f == n).unwrap_or_else(|| panic!("no face {n}")).1.iter().map(|q| q.key()).collect();
+            k.sort_unstable();
+            k
+        };
+        assert_eq!(keys("topn").len(), 1);
+        assert_eq!(keys("topn"), keys("top"), "the surface top and the node set topn are one facet");
+        // `top` as a node set of three of the four nodes adds no facet to the surface `top`
+        assert_eq!(g.faces.iter().filter(|(f, _)| f == "top").count(), 1);
+        let upper = keys("upper_cell");
+        assert_eq!(upper.len(), 5);
+        assert!(g.faces.iter().all(|(f, _)| f != "corners"), "two nodes bound no facet");
+        let p = read(&write(&d, "p.inp", CUBE_PARTS), Some("c")).unwrap();
+        let face = |n: &str| p.faces.iter().find(|(f, _)| f == n).map(|(_, q)| q.iter().map(|q| q.key()).collect::<Vec<_>>());
+        assert_eq!(face("c.base"), face("c.bottom"), "the part's node set, placed with its instance");
     }
 
     /// A unit cube as a part, placed twice: translated by (1, 0, 0) then turned 90° about z,
