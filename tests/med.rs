@@ -38,6 +38,29 @@ fn same_solution(tag: &str, msh: &str, med: &str) {
     assert_eq!((cm.contact, cm.stick, cm.slip), (cg.contact, cg.stick, cg.slip));
 }
 
+/// Groups of nodes are faces (code_aster's GROUP_NO): `mesh/two_blocks_node_groups.med`
+/// (`mesh/make_med_node_groups.py`: the two-block model written again by meshio, MED 3.0, with
+/// the node groups "clamp" = the nodes of face lower_left and "press_nodes" = those of
+/// upper_top) clamped on `lower.clamp` and pressed on `upper.press_nodes` solves bit for bit as
+/// the model on its face groups.
+#[test]
+fn groups_of_nodes_are_faces() {
+    let dir = tmpdir("med-node-groups");
+    let faces = dir.join("faces.toml");
+    std::fs::write(&faces, scene_from(&root().join("mesh/two_blocks.msh"))).unwrap();
+    let nodes = dir.join("nodes.toml");
+    let scene = scene_from(&root().join("mesh/two_blocks_node_groups.med"));
+    assert!(scene.contains("\"lower.lower_left\"") && scene.contains("\"upper.upper_top\""));
+    std::fs::write(&nodes, scene.replace("\"lower.lower_left\"", "\"lower.clamp\"").replace("\"upper.upper_top\"", "\"upper.press_nodes\"")).unwrap();
+    let a = solve(&faces, &[], &dir.join("faces.h5"));
+    let b = solve(&nodes, &[], &dir.join("nodes.h5"));
+    assert!(common::max_abs(&a.solution.displacement) > 0.0);
+    assert_eq!(b.solution.displacement, a.solution.displacement);
+    let g = med::read(&root().join("mesh/two_blocks_node_groups.med"), Some("lower")).unwrap();
+    let count = |n: &str| g.faces.iter().find(|(f, _)| f == n).map(|(_, q)| q.len());
+    assert_eq!((count("clamp"), count("lower_left")), (Some(9), Some(9)));
+}
+
 #[test]
 fn two_blocks_from_med_solve_as_from_gmsh() {
     same_solution("hex8", "mesh/two_blocks.msh", "mesh/two_blocks.med");

@@ -22,7 +22,9 @@
 //! P15 0 2 1 3 5 4 8 6 12 7 14 13 11 9 10; face types keep their order.
 //!
 //! Faces: every group holding face cells that bound the body is the face `body.<group>`; a
-//! family in several groups puts its cells in each.
+//! family in several groups puts its cells in each. Every group of nodes (`NOE/FAM` with
+//! `/FAS/<m>/NOEUD`, code_aster's `GROUP_NO`) is a face too: the body's boundary facets all of
+//! whose nodes lie in it, merged with a group of faces of the same name.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -110,6 +112,10 @@ struct Med {
     blocks: Vec<Block>,
     /// Element family number → its groups.
     groups: HashMap<i64, Vec<String>>,
+    /// Each node's family number (`NOE/FAM`; empty when the file has none) and node family
+    /// number → its groups (`/FAS/<mesh>/NOEUD`).
+    node_fam: Vec<i64>,
+    node_groups: HashMap<i64, Vec<String>>,
 }
 
 /// Reads the cells of group `volume` (every volume cell of the file when `None`) from the MED
@@ -230,8 +236,16 @@ impl Med {
             }
             blocks.push(Block { name: t, ty, nodes, fam });
         }
-        let groups = families(file, &name)?;
-        Ok(Med { coords, blocks, groups })
+        let groups = families(file, &name, "ELEME")?;
+        let node_groups = families(file, &name, "NOEUD")?;
+        let node_fam: Vec<i64> = match step.dataset("NOE/FAM") {
+            Ok(d) if !node_groups.is_empty() => d.read_raw().map_err(h5("NOE/FAM"))?,
+            _ => Vec::new(),
+        };
+        if !node_fam.is_empty() && node_fam.len() != n {
+            return Err(format!("NOE/FAM holds {} family numbers for {n} nodes", node_fam.len()));
+        }
+        Ok(Med { coords, blocks, groups, node_fam, node_groups })
     }
 
     /// The volume cells of group `name` (every one when `None`): (block, cell) pairs.
@@ -330,16 +344,40 @@ impl Med {
                 }
             }
         }
+        // every group of nodes (code_aster's GROUP_NO): the boundary facets all of whose nodes
+        // lie in it, merged with a group of faces of the same name
+        if !self.node_fam.is_empty() {
+            let mut members: BTreeMap<&str, std::collections::HashSet<usize>> = BTreeMap::new();
+            for (i, f) in self.node_fam.iter().enumerate() {
+                for g in self.node_groups.get(f).into_iter().flatten() {
+                    if local[i] != usize::MAX {
+                        members.entry(g.as_str()).or_default().insert(local[i]);
+                    }
+                }
+            }
+            if !members.is_empty() {
+                let ordered = super::topology::boundary_in_cell_order(cells, &boundary);
+                for (g, set) in members {
+                    for q in ordered.iter().filter(|q| q.nodes().iter().all(|v| set.contains(v))) {
+                        let (list, seen) = faces.entry(g).or_default();
+                        if seen.insert((q.elem, q.key())) {
+                            list.push(*q);
+                        }
+                    }
+                }
+            }
+        }
         faces.into_iter().map(|(n, (list, _))| (n.to_string(), list)).collect()
     }
 }
 
-/// Element family number → group names, from `/FAS/<mesh>/ELEME`.
-fn families(file: &File, mesh: &str) -> std::result::Result<HashMap<i64, Vec<String>>, String> {
+/// Family number → group names, from `/FAS/<mesh>/<kind>` (`ELEME`: cell families, `NOEUD`:
+/// node families).
+fn families(file: &File, mesh: &str, kind: &str) -> std::result::Result<HashMap<i64, Vec<String>>, String> {
     let mut out = HashMap::new();
-    let Ok(eleme) = file.group(&format!("FAS/{mesh}/ELEME")) else { return Ok(out) };
+    let Ok(eleme) = file.group(&format!("FAS/{mesh}/{kind}")) else { return Ok(out) };
     let h5 = |what: String| move |e: ::hdf5::Error| format!("cannot read {what}: {}", one_line(&e.to_string()));
-    for fam in eleme.member_names().map_err(h5(format!("FAS/{mesh}/ELEME")))? {
+    for fam in eleme.member_names().map_err(h5(format!("FAS/{mesh}/{kind}")))? {
         let g = eleme.group(&fam).map_err(h5(format!("family {fam}")))?;
         let num: i64 = g.attr("NUM").and_then(|a| a.read_scalar()).map_err(h5(format!("family {fam} NUM")))?;
         let Ok(nom) = g.dataset("GRO/NOM") else { continue };
