@@ -128,6 +128,18 @@ pub fn files(path: &Path) -> Vec<PathBuf> {
 const READ: [&str; 13] =
     ["NODE", "ELEMENT", "ELSET", "NSET", "SURFACE", "INCLUDE", "HEADING", "PART", "END PART", "ASSEMBLY", "END ASSEMBLY", "INSTANCE", "END INSTANCE"];
 
+/// Keywords that make or move mesh data: skipped, the mesh would be read wrong, so a file with
+/// one is refused naming it (the others not read describe no mesh).
+const CHANGES_THE_MESH: [(&str, &str); 7] = [
+    ("NGEN", "generates nodes"),
+    ("NFILL", "generates nodes"),
+    ("NCOPY", "copies nodes"),
+    ("NMAP", "maps node coordinates"),
+    ("ELGEN", "generates elements"),
+    ("ELCOPY", "copies elements"),
+    ("SYSTEM", "puts the following nodes in a local coordinate system"),
+];
+
 /// The keywords skipped in an input file and the files it includes (not describing the mesh:
 /// `*MATERIAL`, `*STEP`, `*BOUNDARY`, …), each with how often it occurs, in order of first
 /// occurrence; `*SURFACE` of a type not read counts as `SURFACE, TYPE=…`.
@@ -578,7 +590,12 @@ impl Deck {
                     _ => Block::Skip,
                 }
             }
-            _ => Block::Skip,
+            _ => {
+                if let Some((_, why)) = CHANGES_THE_MESH.iter().find(|(k, _)| *k == name) {
+                    return Err(Fail::at(i, format!("*{name} {why}, which the reader does not do: skipping it would misread the mesh (write the mesh out in full, e.g. from Abaqus/CAE)")));
+                }
+                Block::Skip
+            }
         })
     }
 
@@ -1019,6 +1036,11 @@ mod tests {
         let e = err("*PART, NAME=p\n*NODE\n1, 0, 0, 0\n");
         assert!(e.contains("line 1") && e.contains("*END PART"), "{e}");
         assert!(!e.contains('\n'));
+        // keywords that make or move mesh data are refused, not skipped
+        for (kw, what) in [("*NGEN, NSET=row", "generates nodes"), ("*Elgen, elset=more", "generates elements"), ("*SYSTEM", "local coordinate system")] {
+            let e = err(&TWO_HEX.replace("*Elset, elset=upper", &format!("{kw}\n1, 2\n*Elset, elset=upper")));
+            assert!(e.contains(what) && e.contains("line 21") && !e.contains('\n'), "{kw}: {e}");
+        }
     }
 
     /// The edge nodes' corner pairs (0-based) as Abaqus numbers them (Abaqus Analysis User's
