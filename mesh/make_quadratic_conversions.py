@@ -1,6 +1,7 @@
 """Gmsh's own Abaqus and MED exports of the quadratic fixtures (cube_hex20.msh, cube_hex27.msh,
-prism_wedge15.msh): cube_hex20.inp, prism_wedge15.inp (C3D20, C3D15: Gmsh converts the node
-order to Abaqus's on writing), cube_hex20.med, cube_hex27.med, prism_wedge15.med (H20, H27,
+prism_wedge15.msh) and of the hexahedral-dominant hex_pyr_tet.msh: cube_hex20.inp,
+prism_wedge15.inp (C3D20, C3D15: Gmsh converts the node order to Abaqus's on writing),
+hex_pyr_tet.inp (C3D8, C3D5, C3D4; no .med of it), cube_hex20.med, cube_hex27.med, prism_wedge15.med (H20, H27,
 P15 with QU8, QU9, TR6 faces, MED's node orders). Gmsh writes the 27-node hexahedron to
 Abaqus with its own node order, not read here, so no cube_hex27.inp. Gmsh prints the .inp's
 coordinates to 14 significant digits; they are rewritten here at full precision (the
@@ -12,9 +13,10 @@ import gmsh
 
 gmsh.initialize()
 gmsh.option.setNumber("General.Terminal", 0)
-for name, inp in [("cube_hex20", True), ("cube_hex27", False), ("prism_wedge15", True)]:
+for name, inp in [("cube_hex20", True), ("cube_hex27", False), ("prism_wedge15", True), ("hex_pyr_tet", True)]:
     gmsh.open(f"{name}.msh")
-    gmsh.write(f"{name}.med")
+    if name != "hex_pyr_tet":
+        gmsh.write(f"{name}.med")
     if inp:
         gmsh.option.setNumber("Mesh.SaveGroupsOfElements", 1)
         gmsh.write(f"{name}.inp")

@@ -77,6 +77,46 @@ fn a_node_set_holds_a_body_as_its_surface_does() {
     assert_eq!(a.solution.displacement, b.solution.displacement);
 }
 
+/// Pyramids from Abaqus (`C3D5`): `mesh/hex_pyr_tet.inp`, Gmsh's Abaqus export of the
+/// hexahedral-dominant `mesh/hex_pyr_tet.msh` (hexahedra, pyramids, tetrahedra; full-precision
+/// coordinates), reads as the same nodes, cells and faces as the `.msh` for each volume, and a
+/// body of it clamped and pressed solves bit for bit as from the `.msh`.
+#[test]
+fn pyramids_read_and_solve_as_from_gmsh() {
+    use tresca_feti::mesh::{abaqus, gmsh, CellKind};
+    for volume in ["upper", "lower"] {
+        let a = abaqus::read(&root().join("mesh/hex_pyr_tet.inp"), Some(volume)).unwrap();
+        let g = gmsh::read(&root().join("mesh/hex_pyr_tet.msh"), Some(volume)).unwrap();
+        assert_eq!(a.nodes, g.nodes, "{volume}: nodes");
+        let cells = |b: &tresca_feti::mesh::BodyGeometry| b.cells.iter().map(|c| (c.kind, c.nodes().to_vec())).collect::<Vec<_>>();
+        assert_eq!(cells(&a), cells(&g), "{volume}: cells");
+        assert_eq!(a.cells.iter().filter(|c| c.kind == CellKind::Pyr5).count(), 16, "{volume}: pyramids");
+        for (name, facets) in &g.faces {
+            let other = a.faces.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{volume}: no face {name} from the .inp"));
+            let keys = |f: &[tresca_feti::mesh::Facet]| {
+                let mut k: Vec<[usize; 4]> = f.iter().map(|q| q.key()).collect();
+                k.sort_unstable();
+                k
+            };
+            assert_eq!(keys(&other.1), keys(facets), "{volume}: face {name}");
+        }
+    }
+    let dir = tmpdir("pyramids");
+    let scene = |mesh: &str| {
+        format!(
+            "[[material]]\nname = \"m\"\nE = 1000.0\nnu = 0.3\n[[body]]\nname = \"b\"\nmaterial = \"m\"\nmesh = {{ file = \"{}\", volume = \"upper\" }}\n\
+             [[dirichlet]]\nface = \"b.upper_bottom\"\n[[traction]]\nface = \"b.upper_top\"\np = [0.1, 0.0, -1.0]\n",
+            root().join(mesh).display()
+        )
+    };
+    let (inp, msh) = (dir.join("inp.toml"), dir.join("msh.toml"));
+    std::fs::write(&inp, scene("mesh/hex_pyr_tet.inp")).unwrap();
+    std::fs::write(&msh, scene("mesh/hex_pyr_tet.msh")).unwrap();
+    let (a, g) = (solve(&inp, &[], &dir.join("inp.h5")), solve(&msh, &[], &dir.join("msh.h5")));
+    assert!(common::max_abs(&g.solution.displacement) > 0.0);
+    assert_eq!(a.solution.displacement, g.solution.displacement);
+}
+
 #[test]
 fn format_key_and_extension() {
     let dir = tmpdir("format");

@@ -50,7 +50,7 @@ use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
 /// The element types read, for messages.
-const EXODUS_SUPPORTED: &str = "HEX8, HEX20, HEX27, TETRA4, TETRA10, WEDGE6, WEDGE15";
+const EXODUS_SUPPORTED: &str = "HEX8, HEX20, HEX27, TETRA4, TETRA10, WEDGE6, WEDGE15, PYRAMID5";
 
 /// The program's node `k` of a 20- or 27-node hexahedron is the Exodus HEX20/HEX27's node
 /// `HEX27_TO_OURS[k]` (0-based; Exodus: edge nodes 9–12 on the bottom edges 1-2, 2-3, 3-4,

@@ -11,9 +11,9 @@
 //! - `/FAS/<m>/ELEME/<family>`: attribute `NUM` (the family number) and `GRO/NOM`, the names of
 //!   the groups the family belongs to (80 bytes each, padded with spaces or NULs).
 //!
-//! Cell types: `TE4`, `T10`, `HE8`, `H20`, `H27`, `PE6`, `P15` (volumes), `TR3`, `QU4`, `TR6`,
-//! `QU8`, `QU9` (faces); points and edges (`PO1`, `SE2`, `SE3`, `SE4`) are skipped; any other
-//! type in the file (`PY5`, `P18`, …) is refused naming it. MED numbers a cell's corners the
+//! Cell types: `TE4`, `T10`, `HE8`, `H20`, `H27`, `PE6`, `P15`, `PY5` (volumes), `TR3`, `QU4`,
+//! `TR6`, `QU8`, `QU9` (faces); points and edges (`PO1`, `SE2`, `SE3`, `SE4`) are skipped; any
+//! other type in the file (`P13`, `P18`, …) is refused naming it. MED numbers a cell's corners the
 //! other way round from Gmsh (its reference cells have a negative Jacobian in the program's
 //! convention, [`super::cell`]); the node orders are converted as Gmsh's own MED reader does
 //! (`med2mshNodeIndex` of its `GModelIO_MED.cpp`: the program's node k is MED's node
@@ -38,7 +38,7 @@ use super::{BodyGeometry, Cell, CellKind, Facet};
 use crate::error::{Error, Result};
 
 /// The volume cell types read, in MED's names, for messages.
-const MED_SUPPORTED: &str = "TE4, T10, HE8, H20, H27, PE6, P15 (volumes), TR3, QU4, TR6, QU8, QU9 (faces)";
+const MED_SUPPORTED: &str = "TE4, T10, HE8, H20, H27, PE6, P15, PY5 (volumes), TR3, QU4, TR6, QU8, QU9 (faces)";
 
 /// What a MED cell type is to this reader.
 #[derive(Clone, Copy, Debug, PartialEq)]

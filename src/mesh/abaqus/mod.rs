@@ -18,12 +18,12 @@
 //! Volume elements: `C3D8`, `C3D8R`, `C3D8I`, `C3D8H`, `C3D8RH`, `C3D8IH` (read as 8-node
 //! hexahedra: the program's own integration, not Abaqus's reduced or incompatible-mode one),
 //! `C3D4`/`C3D4H`, `C3D10`/`C3D10H`/`C3D10M`/`C3D10MH`, `C3D6`/`C3D6H` (wedges),
-//! `C3D20`/`C3D20R`/`C3D20H`/`C3D20RH` (20-node hexahedra) and `C3D15`/`C3D15H` (15-node
-//! wedges). Abaqus's corner orders are the program's ([`super::cell`]); the 10-node
+//! `C3D20`/`C3D20R`/`C3D20H`/`C3D20RH` (20-node hexahedra), `C3D15`/`C3D15H` (15-node
+//! wedges) and `C3D5`/`C3D5H` (pyramids). Abaqus's corner orders are the program's ([`super::cell`]); the 10-node
 //! tetrahedron's last two edge nodes (Abaqus: 9 on edge 2–4, 10 on edge 3–4) are swapped on
 //! reading, and the edge nodes of C3D20 and C3D15 (bottom edges, top edges, then vertical
 //! edges) are put in Gmsh's order ([`C3D20_TO_OURS`], [`C3D15_TO_OURS`]). Other solid types
-//! (`C3D27`, whose face-node order is not checked here, `C3D5`, …) in the body are an error
+//! (`C3D27`, whose face-node order is not checked here, `C3D13`, …) in the body are an error
 //! naming them. Faces S1–S6 of C3D20 and S1–S5 of C3D15 are 8-node quadrilaterals and 6-node
 //! triangles with their edge nodes.
 //!
@@ -64,7 +64,7 @@ const MAX_DEPTH: usize = 16;
 const MAX_GENERATE: u64 = 100_000_000;
 
 /// The volume element types read, in Abaqus's names, for messages.
-const ABAQUS_SUPPORTED: &str = "C3D8 (C3D8R, C3D8I, C3D8H), C3D4, C3D10 (C3D10M), C3D6, C3D20 (C3D20R, C3D20H), C3D15";
+const ABAQUS_SUPPORTED: &str = "C3D8 (C3D8R, C3D8I, C3D8H), C3D4, C3D10 (C3D10M), C3D6, C3D20 (C3D20R, C3D20H), C3D15, C3D5";
 
 /// The program's node `k` of a 20-node hexahedron is the C3D20's node `C3D20_TO_OURS[k]`
 /// (0-based; Abaqus: edge nodes 9–12 on the bottom edges 1-2, 2-3, 3-4, 4-1, 13–16 on the top
