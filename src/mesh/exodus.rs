@@ -85,11 +85,11 @@ pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<Bod
     Ok(volumes.iter().map(|&v| build(&nc, v).map_err(|m| Error::mesh(&file, m))).collect())
 }
 
-/// The names the `volume` of a body may take in the Exodus II file `path`: its element blocks
-/// of volume elements (read or not), each by its `eb_names` entry or else as `block_<id>`, in
-/// file order, a name shared by several blocks once (they make one body). The error is the
-/// file's, as [`read_many`] gives it.
-pub fn volumes(path: &Path) -> Result<Vec<String>> {
+/// The names the `volume` of a body may take in the Exodus II file `path` (its element blocks
+/// of volume elements, read or not, each by its `eb_names` entry or else as `block_<id>`, in
+/// file order, a name shared by several blocks once: they make one body) and the bodies
+/// ([`super::Survey`]), from one read. The error is the file's, as [`read_many`] gives it.
+pub fn survey(path: &Path) -> Result<super::Survey> {
     let file = path.display().to_string();
     let nc = Nc::open(path).map_err(|e| match e {
         Opened::Io(e) => Error::io(&file, e),
@@ -103,7 +103,8 @@ pub fn volumes(path: &Path) -> Result<Vec<String>> {
             names.push(b.name);
         }
     }
-    Ok(names)
+    let bodies = std::iter::once(None).chain(names.iter().map(|n| Some(n.as_str()))).map(|v| build(&nc, v).map_err(|m| Error::mesh(&file, m))).collect();
+    Ok((names, bodies))
 }
 
 /// Node and element counts and the file's size, from the variables' shapes (nothing of the

@@ -132,10 +132,17 @@ pub fn read_many(path: &Path, volumes: &[Option<&str>]) -> Result<Vec<Result<Bod
     Ok(volumes.iter().map(|&v| med.build(v).map_err(|msg| Error::mesh(path.display().to_string(), msg))).collect())
 }
 
-/// The names the `volume` of a body may take in the MED file `path`: its groups of volume
-/// cells, sorted. The error is the file's, as [`read_many`] gives it.
-pub fn volumes(path: &Path) -> Result<Vec<String>> {
-    Ok(Med::open(path)?.group_names(true))
+/// The names the `volume` of a body may take in the MED file `path` (its groups of volume
+/// cells, sorted) and the bodies ([`super::Survey`]), from one read. The error is the file's,
+/// as [`read_many`] gives it.
+pub fn survey(path: &Path) -> Result<super::Survey> {
+    let med = Med::open(path)?;
+    let names = med.group_names(true);
+    let bodies = std::iter::once(None)
+        .chain(names.iter().map(|n| Some(n.as_str())))
+        .map(|v| med.build(v).map_err(|msg| Error::mesh(path.display().to_string(), msg)))
+        .collect();
+    Ok((names, bodies))
 }
 
 /// Node, cell and byte counts of a MED file from its `NBR` attributes; `None` when it cannot be

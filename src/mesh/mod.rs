@@ -21,6 +21,11 @@ use crate::error::{Error, Result};
 
 pub use cell::{Cell, CellKind, Facet, FacetKind, HEX20_EDGES, HEX27_FACES, MAX_CELL_DOFS, MAX_CELL_NODES, WEDGE15_EDGES};
 
+/// What a mesh file offers a scene, from one parse: the names a body's `volume` may take and
+/// the bodies of every volume cell together (first) and of each name, in that order (each its
+/// own error where it cannot be a body).
+pub type Survey = (Vec<String>, Vec<Result<BodyGeometry>>);
+
 /// An empty vector with room for `n` items, or the error naming `what` and the bytes asked for
 /// (instead of the allocator's abort).
 pub fn try_vec<T>(what: &str, n: usize) -> Result<Vec<T>> {

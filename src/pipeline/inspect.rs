@@ -1,7 +1,7 @@
 //! `tresca-feti mesh FILE`: what a mesh file offers a scene. Owns the listing of a file's
 //! format, its volume cells, the volumes a body's `mesh.volume` accepts with the faces each such
-//! body gets (`body.FACE`), and a starter scene. The names come from the readers' own
-//! `volumes` and the bodies from their `read_many`, so the listing is what a scene gets.
+//! body gets (`body.FACE`), and a starter scene. The names and the bodies come from the
+//! readers' own `survey` (one parse, their `read_many`'s build), so the listing is what a scene gets.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -40,21 +40,14 @@ pub fn report(path: &Path, format: Option<MeshFormat>) -> Result<String> {
             "unknown mesh format: the extension is none of .msh, .inp, .med, .exo, .e, .ex2; give --format (abaqus, gmsh, med, exodus)",
         ));
     };
-    let volumes = match fmt {
-        MeshFormat::Abaqus => abaqus::volumes(path)?,
-        MeshFormat::Gmsh => gmsh::volumes(path)?,
-        MeshFormat::Med => med::volumes(path)?,
-        MeshFormat::Exodus => exodus::volumes(path)?,
+    // the names and the bodies (every volume cell first, then each volume) from one parse
+    let (volumes, bodies) = match fmt {
+        MeshFormat::Abaqus => abaqus::survey(path)?,
+        MeshFormat::Gmsh => gmsh::survey(path)?,
+        MeshFormat::Med => med::survey(path)?,
+        MeshFormat::Exodus => exodus::survey(path)?,
     };
-    // every volume cell (a body without `volume`) first, then each volume: one parse
-    let wanted: Vec<Option<&str>> = std::iter::once(None).chain(volumes.iter().map(|v| Some(v.as_str()))).collect();
-    let mut bodies = match fmt {
-        MeshFormat::Abaqus => abaqus::read_many(path, &wanted)?,
-        MeshFormat::Gmsh => gmsh::read_many(path, &wanted)?,
-        MeshFormat::Med => med::read_many(path, &wanted)?,
-        MeshFormat::Exodus => exodus::read_many(path, &wanted)?,
-    }
-    .into_iter();
+    let mut bodies = bodies.into_iter();
     let whole = bodies.next().expect("the whole file asked for, read");
 
     let mut s = String::new();

@@ -99,13 +99,17 @@ pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u
     Ok(volumes.iter().map(|&v| deck.build(v).map_err(|f| f.into_error(path, &lines))).collect())
 }
 
-/// The names the `volume` of a body may take in the input file `path`: its element sets that
-/// hold volume elements (with `*PART`/`*INSTANCE`, each instance and its parts' sets as
-/// `instance.set`), in order of definition. The error is the file's, as [`read_many`] gives it.
-pub fn volumes(path: &Path) -> Result<Vec<String>> {
+/// The names the `volume` of a body may take in the input file `path` (its element sets that
+/// hold volume elements; with `*PART`/`*INSTANCE`, each instance and its parts' sets as
+/// `instance.set`; in order of definition) and the bodies ([`super::Survey`]), from one parse.
+/// The error is the file's, as [`read_many`] gives it.
+pub fn survey(path: &Path) -> Result<super::Survey> {
     let mut lines = Vec::new();
     load(path, 0, &mut lines, None, &|_, _| ())?;
-    Ok(Deck::parse(&lines)?.volume_sets().into_iter().map(str::to_string).collect())
+    let deck = Deck::parse(&lines)?;
+    let names: Vec<String> = deck.volume_sets().into_iter().map(str::to_string).collect();
+    let bodies = std::iter::once(None).chain(names.iter().map(|n| Some(n.as_str()))).map(|v| deck.build(v).map_err(|f| f.into_error(path, &lines))).collect();
+    Ok((names, bodies))
 }
 
 /// Node, element and byte counts of an input file and the files it includes, from one cheap

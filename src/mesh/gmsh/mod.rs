@@ -62,10 +62,11 @@ pub fn read_many_with(path: &Path, volumes: &[Option<&str>], progress: &dyn Fn(u
     Ok(volumes.iter().map(|&v| parsed.build(v).map_err(|msg| Error::mesh(&file, msg))).collect())
 }
 
-/// The names the `volume` of a body may take in the Gmsh file `path`: its physical volumes (a
-/// nameless one by its number), in order of their numbers, each name once. The error is the
-/// file's, as [`read_many`] gives it.
-pub fn volumes(path: &Path) -> Result<Vec<String>> {
+/// The names the `volume` of a body may take in the Gmsh file `path` (its physical volumes, a
+/// nameless one by its number, in order of their numbers, each name once) and the bodies
+/// ([`super::Survey`]), from one parse. The error is the file's, as [`read_many`] gives it.
+pub fn survey(path: &Path) -> Result<super::Survey> {
+    let file = path.display().to_string();
     let parsed = Parsed::read(path, &|_, _| ())?;
     let mut names: Vec<String> = Vec::new();
     for n in known_volumes(&parsed.msh, &parsed.names).into_values() {
@@ -73,7 +74,8 @@ pub fn volumes(path: &Path) -> Result<Vec<String>> {
             names.push(n);
         }
     }
-    Ok(names)
+    let bodies = std::iter::once(None).chain(names.iter().map(|n| Some(n.as_str()))).map(|v| parsed.build(v).map_err(|msg| Error::mesh(&file, msg))).collect();
+    Ok((names, bodies))
 }
 
 /// The whole file, its buffer reserved first: a file larger than the memory left is an error,
