@@ -25,6 +25,13 @@ use crate::linalg::sparse::SymCsc;
 /// The largest group of rows whose block of BΔBᵀ is inverted densely.
 pub const DENSE_MAX: usize = 256;
 
+/// The largest group of rows whose singular block (rows that repeat each other) is taken by its
+/// dense pseudo-inverse; a larger one is an error.
+pub const PSEUDO_MAX: usize = 2048;
+
+/// Eigenvalues of a singular group's block below this fraction of its largest are its null space.
+const PSEUDO_TOL: f64 = 1e-12;
+
 /// The inverse of one group's block of BΔBᵀ.
 enum GroupInverse {
     /// Row-major k × k.
@@ -99,9 +106,13 @@ impl Scaling {
         for rows in members.into_values() {
             let k = rows.len();
             if k > DENSE_MAX {
-                let chol = sparse_block(&rows, &block).ok_or_else(|| singular(&rows))?;
-                dense.push((rows, GroupInverse::Sparse(chol)));
-                continue;
+                if let Some(chol) = sparse_block(&rows, &block) {
+                    dense.push((rows, GroupInverse::Sparse(chol)));
+                    continue;
+                }
+                if k > PSEUDO_MAX {
+                    return Err(singular(&rows));
+                }
             }
             let m: Vec<f64> = (0..k * k).map(|p| block.get(&(rows[p / k], rows[p % k])).copied().unwrap_or(0.0)).collect();
             let scale = m.iter().map(|v| v.abs()).fold(0.0, f64::max);
@@ -112,7 +123,10 @@ impl Scaling {
                 }
                 continue;
             }
-            let inv = inverse(&m, k).ok_or_else(|| singular(&rows))?;
+            // rows that repeat each other (e.g. mortar rows at slave nodes a Dirichlet face holds,
+            // acting on fewer free master DOFs than there are rows): the pseudo-inverse on the
+            // rows' range, where the dual's residual lies when the constraints are consistent
+            let inv = inverse(&m, k).or_else(|| pseudo_inverse(&m, k)).ok_or_else(|| singular(&rows))?;
             dense.push((rows, GroupInverse::Dense(inv)));
         }
         let mut all: Vec<usize> = dense.iter().flat_map(|g| g.0.iter().copied()).collect();
@@ -193,9 +207,41 @@ fn inverse(m: &[f64], k: usize) -> Option<Vec<f64>> {
     Some((0..k * k).map(|p| inv[(p / k, p % k)]).collect())
 }
 
+/// The pseudo-inverse of the symmetric positive semidefinite k × k block `m` (row-major):
+/// U diag(1/sᵢ) Uᵀ over the eigenvalues above [`PSEUDO_TOL`] × the largest; `None` where the
+/// block has a negative eigenvalue beyond that tolerance or none above it.
+fn pseudo_inverse(m: &[f64], k: usize) -> Option<Vec<f64>> {
+    let a = faer::Mat::<f64>::from_fn(k, k, |i, j| m[i * k + j]);
+    let eig = a.self_adjoint_eigen(faer::Side::Lower).ok()?;
+    let (vals, vecs) = (eig.S(), eig.U());
+    let top = (0..k).map(|i| vals[i].abs()).fold(0.0, f64::max);
+    if !(top > 0.0) || (0..k).any(|i| vals[i] < -PSEUDO_TOL * top) {
+        return None;
+    }
+    let kept: Vec<usize> = (0..k).filter(|&i| vals[i] > PSEUDO_TOL * top).collect();
+    Some((0..k * k).map(|p| kept.iter().map(|&e| vecs[(p / k, e)] * vecs[(p % k, e)] / vals[e]).sum()).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pseudo-inverse of a singular Gram matrix (rows that repeat each other) is one:
+    /// M M⁺ M = M and M⁺ M M⁺ = M⁺.
+    #[test]
+    fn pseudo_inverse_of_repeated_rows() {
+        // B: 3 rows over 2 columns, the third the sum of the first two
+        let b = [[1.0, 0.5], [0.25, 2.0], [1.25, 2.5]];
+        let k = 3;
+        let m: Vec<f64> = (0..k * k).map(|p| (0..2).map(|j| b[p / k][j] * b[p % k][j]).sum()).collect();
+        let pinv = pseudo_inverse(&m, k).expect("a pseudo-inverse");
+        let mul = |x: &[f64], y: &[f64]| -> Vec<f64> { (0..k * k).map(|p| (0..k).map(|q| x[p / k * k + q] * y[q * k + p % k]).sum()).collect() };
+        let (mpm, pmp) = (mul(&mul(&m, &pinv), &m), mul(&mul(&pinv, &m), &pinv));
+        let scale = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(mpm.iter().zip(&m).all(|(x, y)| (x - y).abs() <= 1e-12 * scale), "M M⁺ M ≠ M");
+        let pscale = pinv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(pmp.iter().zip(&pinv).all(|(x, y)| (x - y).abs() <= 1e-12 * pscale), "M⁺ M M⁺ ≠ M⁺");
+    }
 
     /// (BΔBᵀ)⁻¹ as applied equals the dense inverse of BΔBᵀ on the seed scene with contact
     /// (non-trivial groups at the contact nodes, prescribed DOFs among them), for unit and
