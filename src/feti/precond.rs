@@ -126,7 +126,10 @@ impl Scaling {
             // rows that repeat each other (e.g. mortar rows at slave nodes a Dirichlet face holds,
             // acting on fewer free master DOFs than there are rows): the pseudo-inverse on the
             // rows' range, where the dual's residual lies when the constraints are consistent
-            let inv = inverse(&m, k).or_else(|| pseudo_inverse(&m, k)).ok_or_else(|| singular(&rows))?;
+            // (a factorization of a singular block can succeed on round-off pivots: an inverse
+            // beyond 1/PSEUDO_TOL of the block's scale is taken as singular too)
+            let regular = inverse(&m, k).filter(|inv| inv.iter().fold(0.0f64, |a, v| a.max(v.abs())) * scale * PSEUDO_TOL <= 1.0);
+            let inv = regular.or_else(|| pseudo_inverse(&m, k)).ok_or_else(|| singular(&rows))?;
             dense.push((rows, GroupInverse::Dense(inv)));
         }
         let mut all: Vec<usize> = dense.iter().flat_map(|g| g.0.iter().copied()).collect();
@@ -227,13 +230,16 @@ mod tests {
     use super::*;
 
     /// The pseudo-inverse of a singular Gram matrix (rows that repeat each other) is one:
-    /// M M⁺ M = M and M⁺ M M⁺ = M⁺.
+    /// M M⁺ M = M and M⁺ M M⁺ = M⁺ (faer's LLᵀ of this M succeeds on a round-off pivot: its
+    /// inverse's entries are beyond 1/[`PSEUDO_TOL`] of M's, which the scaling takes as singular).
     #[test]
     fn pseudo_inverse_of_repeated_rows() {
         // B: 3 rows over 2 columns, the third the sum of the first two
         let b = [[1.0, 0.5], [0.25, 2.0], [1.25, 2.5]];
         let k = 3;
         let m: Vec<f64> = (0..k * k).map(|p| (0..2).map(|j| b[p / k][j] * b[p % k][j]).sum()).collect();
+        let big = inverse(&m, k).map_or(f64::INFINITY, |inv| inv.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+        assert!(big * m.iter().fold(0.0f64, |a, v| a.max(v.abs())) * PSEUDO_TOL > 1.0, "the LLᵀ inverse is not taken: {big:e}");
         let pinv = pseudo_inverse(&m, k).expect("a pseudo-inverse");
         let mul = |x: &[f64], y: &[f64]| -> Vec<f64> { (0..k * k).map(|p| (0..k).map(|q| x[p / k * k + q] * y[q * k + p % k]).sum()).collect() };
         let (mpm, pmp) = (mul(&mul(&m, &pinv), &m), mul(&mul(&pinv, &m), &pinv));
