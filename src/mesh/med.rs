@@ -365,10 +365,14 @@ impl Med {
             if !members.is_empty() {
                 let ordered = super::topology::boundary_in_cell_order(cells, &boundary);
                 for (g, set) in members {
-                    for q in ordered.iter().filter(|q| q.nodes().iter().all(|v| set.contains(v))) {
-                        let (list, seen) = faces.entry(g).or_default();
+                    let on = super::topology::on_nodes(&ordered, &set);
+                    if on.is_empty() {
+                        continue;
+                    }
+                    let (list, seen) = faces.entry(g).or_default();
+                    for q in on {
                         if seen.insert((q.elem, q.key())) {
-                            list.push(*q);
+                            list.push(q);
                         }
                     }
                 }

@@ -79,16 +79,13 @@ pub fn boundary_in_cell_order(cells: &[Cell], boundary: &Boundary) -> Vec<Facet>
 /// The boundary facets, in cell order (a deterministic order), all of whose nodes lie in `set`:
 /// the face a node set (Abaqus `*SURFACE, TYPE=NODE`, an Exodus node set) makes.
 pub fn facets_on_nodes(cells: &[Cell], boundary: &Boundary, set: &HashSet<usize>) -> Vec<Facet> {
-    let mut list = Vec::new();
-    for (c, cell) in cells.iter().enumerate() {
-        for f in 0..cell.kind.faces().len() {
-            let q = cell.facet(c, f);
-            if q.nodes().iter().all(|v| set.contains(v)) && boundary.contains_key(&q.key()) {
-                list.push(q);
-            }
-        }
-    }
-    list
+    on_nodes(&boundary_in_cell_order(cells, boundary), set)
+}
+
+/// The facets of `ordered` (a [`boundary_in_cell_order`] list) all of whose nodes lie in `set`,
+/// in its order: one node set's face, for a reader with many sets.
+pub fn on_nodes(ordered: &[Facet], set: &HashSet<usize>) -> Vec<Facet> {
+    ordered.iter().filter(|q| q.nodes().iter().all(|v| set.contains(v))).copied().collect()
 }
 
 /// Named faces gathered from a file's surfaces and sets: merged by name (case-insensitive, the

@@ -813,7 +813,7 @@ impl Deck {
             for set in &self.nsets.list {
                 let nodes: HashSet<usize> = set.labels.iter().filter_map(to_local).collect();
                 if !nodes.is_empty() {
-                    add(&set.name, ordered.iter().filter(|q| q.nodes().iter().all(|v| nodes.contains(v))).copied().collect());
+                    add(&set.name, super::topology::on_nodes(&ordered, &nodes));
                 }
             }
         }
